@@ -1,0 +1,49 @@
+# Dependencies come from Debian 12 packages (scripts/setup.sh installs them).
+find_package(Threads REQUIRED)
+find_package(TBB CONFIG REQUIRED)             # libtbb-dev: parallel batches
+find_package(fmt CONFIG REQUIRED)             # libfmt-dev: formatting
+find_package(CLI11 CONFIG REQUIRED)           # libcli11-dev: command line
+find_package(tomlplusplus CONFIG REQUIRED)    # libtomlplusplus-dev: TOML with source positions
+find_path(RANDOM123_INCLUDE_DIR Random123/philox.h REQUIRED)  # librandom123-dev: Philox streams
+add_library(ssslab_random123 INTERFACE)
+target_include_directories(ssslab_random123 SYSTEM INTERFACE ${RANDOM123_INCLUDE_DIR})
+if(SSSLAB_BUILD_TESTS)
+  find_package(GTest CONFIG REQUIRED)         # libgtest-dev, libgmock-dev
+endif()
+if(SSSLAB_BUILD_BENCHMARKS)
+  find_package(benchmark CONFIG QUIET)        # libbenchmark-dev
+  if(NOT benchmark_FOUND)
+    message(STATUS "Google Benchmark not found: micro-benchmarks disabled (apt-get install libbenchmark-dev)")
+  endif()
+endif()
+
+# Optional parts. They are detected here so that `ssslab --version` reports what this build can
+# do; the modules that use them say so when a scene or experiment needs a missing part.
+set(SSSLAB_HAVE_OPENVDB OFF)
+if(SSSLAB_WITH_OPENVDB)
+  if(EXISTS /usr/lib/x86_64-linux-gnu/cmake/OpenVDB/FindOpenVDB.cmake OR
+     EXISTS /usr/lib/cmake/OpenVDB/FindOpenVDB.cmake)
+    set(SSSLAB_HAVE_OPENVDB ON)
+  else()
+    message(STATUS "OpenVDB not found: heterogeneous media disabled (apt-get install libopenvdb-dev libboost-iostreams-dev)")
+  endif()
+endif()
+set(SSSLAB_HAVE_GL OFF)
+if(SSSLAB_WITH_GL)
+  find_path(SSSLAB_OSMESA_INCLUDE GL/osmesa.h)
+  find_path(SSSLAB_EGL_INCLUDE EGL/egl.h)
+  if(SSSLAB_OSMESA_INCLUDE OR SSSLAB_EGL_INCLUDE)
+    set(SSSLAB_HAVE_GL ON)
+  else()
+    message(STATUS "OSMesa/EGL not found: OpenGL renderer disabled (apt-get install libosmesa6-dev libegl-dev)")
+  endif()
+endif()
+set(SSSLAB_HAVE_MPI OFF)
+if(SSSLAB_WITH_MPI)
+  find_package(MPI QUIET COMPONENTS CXX)
+  if(MPI_CXX_FOUND)
+    set(SSSLAB_HAVE_MPI ON)
+  else()
+    message(STATUS "MPI not found: multi-process runs disabled (apt-get install libopenmpi-dev)")
+  endif()
+endif()

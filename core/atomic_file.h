@@ -1,0 +1,40 @@
+// Results are written atomically: to a temporary name in the target directory, then renamed, so
+// that a reader (or a rerun after a kill) never sees a half-written file (design.md, "Bad input").
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace ssslab {
+
+/// Write `content` to `path` through a temporary file and an atomic rename. Creates the parent
+/// directory if needed. Throws IoError.
+void write_file_atomic(const std::filesystem::path& path, std::string_view content);
+
+/// Several files that appear together or not at all: each is staged under a temporary name and
+/// all are renamed by commit(). If the transaction is destroyed without commit() (an exception,
+/// an error found late), the staged files are removed and no output is left behind.
+class OutputTransaction {
+  public:
+    OutputTransaction() = default;
+    OutputTransaction(const OutputTransaction&) = delete;
+    OutputTransaction& operator=(const OutputTransaction&) = delete;
+    ~OutputTransaction();
+
+    void stage(const std::filesystem::path& path, std::string_view content);
+    /// Rename every staged file to its final name.
+    void commit();
+    const std::vector<std::filesystem::path>& paths() const { return finals_; }
+
+  private:
+    std::vector<std::filesystem::path> temps_;
+    std::vector<std::filesystem::path> finals_;
+    bool committed_ = false;
+};
+
+/// Read a whole file (binary). Throws IoError.
+std::string read_file(const std::filesystem::path& path);
+
+}  // namespace ssslab

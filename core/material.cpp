@@ -1,0 +1,135 @@
+#include "core/material.h"
+
+#include "core/config.h"
+
+#include <algorithm>
+#include <cctype>
+
+namespace ssslab {
+
+namespace {
+
+Medium make(const char* name, std::array<double, 3> sa, std::array<double, 3> ss, double eta) {
+    Medium m;
+    m.name = name;
+    m.sigma_a_per_cm = sa;
+    m.sigma_s_per_cm = ss;
+    m.g = {0.0, 0.0, 0.0};
+    m.eta = eta;
+    m.thickness_cm = 1e8;
+    return m;
+}
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+}
+
+}  // namespace
+
+const std::vector<MaterialPreset>& freude14_materials() {
+    // [Freude14 Table 6.2], sigma in 1/cm, g = 0, thickness 1e8 cm.
+    static const char* kSrc = "Freude14 Table 6.2 (Jensen et al. 2001), 1/cm";
+    static const std::vector<MaterialPreset> presets = {
+        {"Apple", make("Apple", {0.03, 0.034, 0.46}, {22.9, 23.9, 19.7}, 1.3), kSrc},
+        {"Chicken1", make("Chicken1", {0.15, 0.77, 1.9}, {1.5, 2.1, 3.8}, 1.3), kSrc},
+        {"Chicken2", make("Chicken2", {0.18, 0.88, 2.0}, {1.9, 2.5, 3.2}, 1.3), kSrc},
+        {"Cream", make("Cream", {0.002, 0.028, 0.163}, {73.8, 54.7, 31.5}, 1.3), kSrc},
+        {"Ketchup", make("Ketchup", {0.61, 9.7, 14.5}, {1.8, 0.7, 0.3}, 1.3), kSrc},
+        {"Marble", make("Marble", {0.021, 0.041, 0.071}, {21.9, 26.2, 30.0}, 1.5), kSrc},
+        {"Potato", make("Potato", {0.024, 0.09, 1.2}, {6.8, 7.0, 5.5}, 1.3), kSrc},
+        {"Skimmilk", make("Skimmilk", {0.014, 0.025, 0.142}, {7.0, 12.2, 19.0}, 1.3), kSrc},
+        {"Skin1", make("Skin1", {0.32, 1.7, 4.8}, {7.4, 8.8, 10.1}, 1.3), kSrc},
+        {"Skin2", make("Skin2", {0.13, 0.7, 1.45}, {10.9, 15.9, 17.9}, 1.3), kSrc},
+        {"Wholemilk", make("Wholemilk", {0.011, 0.024, 0.14}, {25.5, 32.1, 37.7}, 1.3), kSrc},
+    };
+    return presets;
+}
+
+const std::vector<std::string>& freude14_main_materials() {
+    static const std::vector<std::string> names = {"Apple", "Marble", "Ketchup", "Skin1",
+                                                   "Wholemilk"};
+    return names;
+}
+
+std::optional<Medium> find_material(const std::string& name) {
+    const std::string key = lower(name);
+    for (const auto& p : freude14_materials())
+        if (lower(p.name) == key) return p.medium;
+    return std::nullopt;
+}
+
+std::string material_names() {
+    std::string s;
+    for (const auto& p : freude14_materials()) s += (s.empty() ? "" : ", ") + std::string(p.name);
+    return s;
+}
+
+namespace {
+
+// Read a length-dependent RGB quantity given either per mm or per cm; returns it per cm.
+std::optional<std::array<double, 3>> coefficient_per_cm(ConfigTable& t, const std::string& base) {
+    const std::string mm = base + "_per_mm", cm = base + "_per_cm";
+    if (t.has(mm) && t.has(cm)) t.fail(cm, "give " + base + " once, per mm or per cm, not both");
+    if (auto v = t.optional_rgb(mm, Range::nonnegative())) {
+        for (double& x : *v) x *= 10.0;  // 1/mm -> 1/cm
+        return v;
+    }
+    return t.optional_rgb(cm, Range::nonnegative());
+}
+
+std::optional<double> length_cm(ConfigTable& t, const std::string& base, Range r) {
+    const std::string mm = base + "_mm", cm = base + "_cm";
+    if (t.has(mm) && t.has(cm)) t.fail(cm, "give " + base + " once, in mm or in cm, not both");
+    if (auto v = t.optional_number(mm, r)) return *v / 10.0;
+    return t.optional_number(cm, r);
+}
+
+}  // namespace
+
+Medium medium_from_config(ConfigTable& t) {
+    Medium m;
+    const bool explicit_coeffs = t.has("sigma_a_per_mm") || t.has("sigma_a_per_cm") ||
+                                 t.has("sigma_s_per_mm") || t.has("sigma_s_per_cm");
+    if (t.has("preset")) {
+        const std::string name = t.string("preset");
+        auto p = find_material(name);
+        if (!p) {
+            std::string best;
+            int best_d = 1 << 30;
+            for (const auto& q : freude14_materials()) {
+                const int d = edit_distance(lower(name), lower(q.name));
+                if (d < best_d) best_d = d, best = q.name;
+            }
+            std::string msg = "unknown material \"" + name + "\"";
+            if (best_d <= 3) msg += " (did you mean \"" + best + "\"?)";
+            t.fail("preset", msg + "; known materials: " + material_names());
+        }
+        if (explicit_coeffs)
+            t.fail("preset", "give either a preset or explicit coefficients, not both");
+        m = *p;
+    } else {
+        if (!explicit_coeffs)
+            t.fail("preset",
+                   "expected `preset = \"<name>\"` (one of " + material_names() +
+                       ") or explicit sigma_a_per_mm/_per_cm, sigma_s_per_mm/_per_cm, g, eta");
+        m.name = t.string("name", "custom");
+        auto sa = coefficient_per_cm(t, "sigma_a");
+        auto ss = coefficient_per_cm(t, "sigma_s");
+        if (!sa) t.fail("sigma_a_per_mm", "missing: sigma_a_per_mm or sigma_a_per_cm (RGB)");
+        if (!ss) t.fail("sigma_s_per_mm", "missing: sigma_s_per_mm or sigma_s_per_cm (RGB)");
+        m.sigma_a_per_cm = *sa;
+        m.sigma_s_per_cm = *ss;
+        m.g = t.optional_rgb("g", Range::closed(-1.0, 1.0)).value_or(std::array<double, 3>{});
+        m.eta = t.number("eta", Range::positive());
+        m.thickness_cm = 1e8;
+    }
+    if (auto d = length_cm(t, "thickness", Range::positive())) m.thickness_cm = *d;
+    m.eta_above = t.number("eta_above", 1.0, Range::positive());
+    m.eta_below = t.number("eta_below", 1.0, Range::positive());
+    t.record("thickness_cm", m.thickness_cm);
+    return m;
+}
+
+}  // namespace ssslab

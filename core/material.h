@@ -1,0 +1,69 @@
+// Homogeneous scattering media per RGB channel, and the measured materials of the papers.
+//
+// Units: coefficients are stored per centimetre (MCML's unit) and the unit is in every field
+// name. Configs state their unit in the key (sigma_a_per_mm or sigma_a_per_cm); conversion
+// happens only in medium_from_config().
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ssslab {
+
+class ConfigTable;
+
+/// One RGB channel index: 0 = R, 1 = G, 2 = B.
+inline constexpr const char* kChannelNames[3] = {"R", "G", "B"};
+
+/// A homogeneous slab of scattering medium, per RGB channel.
+struct Medium {
+    std::string name;
+    std::array<double, 3> sigma_a_per_cm{};  ///< absorption coefficient [1/cm]
+    std::array<double, 3> sigma_s_per_cm{};  ///< scattering coefficient [1/cm]
+    std::array<double, 3> g{};               ///< Henyey-Greenstein anisotropy [-]
+    double eta = 1.0;                        ///< index of refraction of the medium [-]
+    double eta_above = 1.0;                  ///< ambient index above (light comes from here)
+    double eta_below = 1.0;                  ///< ambient index below
+    double thickness_cm = 1e8;               ///< slab thickness [cm]; 1e8 is "quasi-infinite"
+
+    /// Single-scattering albedo sigma_s / (sigma_a + sigma_s).
+    double albedo(int c) const {
+        return sigma_s_per_cm[c] / (sigma_a_per_cm[c] + sigma_s_per_cm[c]);
+    }
+    /// Mean free path 1 / (sigma_a + sigma_s') with sigma_s' = sigma_s (1 - g) [cm]
+    /// (Freude14 §6.1 uses 1/sigma_t' with g = 0).
+    double mfp_cm(int c) const {
+        return 1.0 / (sigma_a_per_cm[c] + sigma_s_per_cm[c] * (1.0 - g[c]));
+    }
+};
+
+/// A named measured material.
+struct MaterialPreset {
+    const char* name;
+    Medium medium;
+    const char* source;  ///< where the numbers come from
+};
+
+/// The eleven measured materials of [Freude14 Table 6.2] (Jensen et al. 2001 measurements,
+/// converted to 1/cm; g = 0 so sigma_s is the reduced scattering coefficient; thickness 1e8 cm,
+/// quasi-infinite). Marble has eta = 1.5, all others 1.3. JimenezSupp §G lists the same numbers in
+/// 1/mm.
+const std::vector<MaterialPreset>& freude14_materials();
+
+/// The five main materials of Freude14 ch. 6 (Apple, Marble, Ketchup, Skin1, Wholemilk).
+const std::vector<std::string>& freude14_main_materials();
+
+/// Look up a preset by name (case-insensitive). nullopt if unknown.
+std::optional<Medium> find_material(const std::string& name);
+/// The preset names, comma-separated, for error messages.
+std::string material_names();
+
+/// Read a medium from a config table: either `preset = "Skin1"` (optionally with `thickness_cm`
+/// or `thickness_mm`, `eta_above`, `eta_below`), or explicit coefficients with their unit in the
+/// key: sigma_a_per_mm / sigma_a_per_cm, sigma_s_per_mm / sigma_s_per_cm, g (in [-1, 1]; the
+/// original MCML rejects g < 0, ssslab's engines do not), eta.
+Medium medium_from_config(ConfigTable& t);
+
+}  // namespace ssslab

@@ -1,0 +1,82 @@
+// Batch-means statistics: every Monte Carlo estimate in ssslab carries its standard error.
+//
+// A run is split into batches of independent samples (photons). For each element i of a tally,
+// the batch sums S_b (over n_b samples) are folded in batch order into
+//     sum_i = sum_b S_b,    q_i = sum_b S_b^2 / n_b,
+// from which the mean per sample is mu = sum / N (N = sum_b n_b) and, since Var(S_b) = n_b
+// sigma^2 for i.i.d. samples, the per-sample variance estimate is
+//     sigma^2 = (q - N mu^2) / (B - 1),     SE(mu) = sigma / sqrt(N).
+// Batches may differ in size (a final partial batch). Folding in batch order makes the result
+// independent of which thread computed which batch.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace ssslab {
+
+class BatchAccumulator {
+  public:
+    BatchAccumulator() = default;
+    explicit BatchAccumulator(size_t size) { resize(size); }
+
+    void resize(size_t size) {
+        sum_.assign(size, 0.0);
+        q_.assign(size, 0.0);
+        n_ = 0;
+        batches_ = 0;
+    }
+    size_t size() const { return sum_.size(); }
+
+    /// Fold in one batch: `s` holds size() batch sums over `n` samples.
+    void add_batch(const double* s, std::uint64_t n) {
+        const double inv_n = 1.0 / static_cast<double>(n);
+        for (size_t i = 0; i < sum_.size(); ++i) {
+            sum_[i] += s[i];
+            q_[i] += s[i] * s[i] * inv_n;
+        }
+        n_ += n;
+        ++batches_;
+    }
+
+    std::uint64_t samples() const { return n_; }
+    std::uint64_t batches() const { return batches_; }
+
+    double mean(size_t i) const { return n_ ? sum_[i] / static_cast<double>(n_) : 0.0; }
+    /// Standard error of mean(i); 0 with fewer than two batches.
+    double standard_error(size_t i) const {
+        if (batches_ < 2) return 0.0;
+        const double N = static_cast<double>(n_);
+        const double mu = sum_[i] / N;
+        const double ss = q_[i] - N * mu * mu;
+        return ss > 0 ? std::sqrt(ss / (static_cast<double>(batches_ - 1) * N)) : 0.0;
+    }
+
+    std::vector<double> means() const {
+        std::vector<double> m(size());
+        for (size_t i = 0; i < size(); ++i) m[i] = mean(i);
+        return m;
+    }
+    std::vector<double> standard_errors() const {
+        std::vector<double> m(size());
+        for (size_t i = 0; i < size(); ++i) m[i] = standard_error(i);
+        return m;
+    }
+
+    // Raw state, for checkpoints.
+    std::vector<double>& raw_sum() { return sum_; }
+    std::vector<double>& raw_q() { return q_; }
+    const std::vector<double>& raw_sum() const { return sum_; }
+    const std::vector<double>& raw_q() const { return q_; }
+    void set_counts(std::uint64_t samples, std::uint64_t batches) {
+        n_ = samples;
+        batches_ = batches;
+    }
+
+  private:
+    std::vector<double> sum_, q_;
+    std::uint64_t n_ = 0, batches_ = 0;
+};
+
+}  // namespace ssslab

@@ -1,0 +1,203 @@
+// `ssslab profile`: R_d(r) per RGB channel with standard errors, to CSV.
+#include "core/atomic_file.h"
+#include "core/config.h"
+#include "core/error.h"
+#include "core/material.h"
+#include "core/progress.h"
+#include "core/provenance.h"
+#include "experiments/cli/commands.h"
+#include "experiments/cli/common.h"
+#include "experiments/cli/profile_job.h"
+#include "mcml/profile.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+namespace ssslab::cli {
+
+namespace fs = std::filesystem;
+
+ProfileJob read_profile_job(const std::string& config_path, const std::string& material,
+                            const CommonOptions& c, const std::string& unit_flag) {
+    ProfileJob job;
+    job.doc = config_path.empty() ? ConfigDocument::empty("<command line>")
+                                  : ConfigDocument::parse_file(config_path);
+    ConfigTable root = job.doc->root();
+    if (!material.empty()) {
+        if (root.has("material"))
+            throw InputError({config_path, 0, 0}, "--material",
+                             "give the material either with --material or in [material], not both");
+        job.medium = find_material(material).value_or(Medium{});
+        if (job.medium.name.empty())
+            throw InputError(
+                {"<command line>", 0, 0}, "--material",
+                "unknown material \"" + material + "\"; known materials: " + material_names());
+        ConfigTable mt = root.table_or_empty("material");
+        mt.record("preset", job.medium.name);
+        mt.record("thickness_cm", job.medium.thickness_cm);
+    } else {
+        ConfigTable mt = root.table_or_empty("material");
+        if (!root.has("material"))
+            throw InputError({config_path.empty() ? "<command line>" : config_path, 0, 0},
+                             "material",
+                             "no material: give --material <name> (one of " + material_names() +
+                                 ") or a [material] table in --config");
+        job.medium = medium_from_config(mt);
+    }
+    job.seed = static_cast<std::uint64_t>(root.integer("seed", 1, Range::nonnegative()));
+    if (c.seed) {
+        job.seed = *c.seed;
+        root.record("seed", static_cast<std::int64_t>(job.seed));
+    }
+
+    ConfigTable grid = root.table_or_empty("grid");
+    job.grid = mcml::freude14_grid(job.medium);
+    std::string rule = "Freude14 Table 6.1 (dr = min MFP / 20, nr = ceil(32 max MFP / dr))";
+    if (grid.has("dr_mm") && grid.has("dr_cm"))
+        grid.fail("dr_cm", "give dr once, in mm or in cm, not both");
+    if (auto v = grid.optional_number("dr_mm", Range::positive()))
+        job.grid.dr_cm = *v / 10.0, rule = "config";
+    if (auto v = grid.optional_number("dr_cm", Range::positive()))
+        job.grid.dr_cm = *v, rule = "config";
+    if (auto v = grid.optional_integer("nr", Range::closed(1, 1e7)))
+        job.grid.nr = static_cast<int>(*v), rule = "config";
+    grid.record("dr_cm", job.grid.dr_cm);
+    grid.record("nr", static_cast<std::int64_t>(job.grid.nr));
+    grid.record("rule", rule);
+
+    ConfigTable budget = root.table_or_empty("budget");
+    job.budget.photons = budget.optional_integer("photons", Range::closed(1, 9e18));
+    job.budget.seconds = budget.optional_number("seconds", Range::positive());
+    job.budget.rel_error = budget.optional_number("rel_error", Range::open(0, 1));
+    job.batch = budget.integer("batch_photons", 0, Range::nonnegative());
+    if (c.photons) job.budget.photons = c.photons, budget.record("photons", *c.photons);
+    if (c.seconds) job.budget.seconds = c.seconds, budget.record("seconds", *c.seconds);
+    if (c.rel_error) job.budget.rel_error = c.rel_error, budget.record("rel_error", *c.rel_error);
+    if (c.batch) job.batch = c.batch, budget.record("batch_photons", c.batch);
+    if (!job.budget.photons && !job.budget.seconds && !job.budget.rel_error) {
+        job.budget.photons = mcml::kFreude14Photons;
+        budget.record("photons", mcml::kFreude14Photons);
+    }
+
+    ConfigTable output = root.table_or_empty("output");
+    const std::string unit = output.choice("unit", "cm", {"cm", "mm"});
+    job.unit = (unit_flag.empty() ? unit : unit_flag) == "mm" ? LengthUnit::kMm : LengthUnit::kCm;
+    if (!unit_flag.empty()) output.record("unit", unit_flag);
+    root.finish();
+    return job;
+}
+
+int run_profile_job(ProfileJob& job, const fs::path& out, const CommonOptions& c) {
+    const std::atomic<bool>* cancel = install_interrupt_handler();
+    mcml::ProfileOptions po;
+    po.seed = job.seed;
+    po.threads = c.threads;
+    po.budget = job.budget;
+    po.batch_photons = job.batch;
+    po.cancel = cancel;
+    po.checkpoint_prefix = out.string();
+    const double total = job.budget.photons ? static_cast<double>(*job.budget.photons) : 0.0;
+    std::unique_ptr<Progress> progress;
+    int current = -1;
+    po.on_batch = [&](int ch, const mcml::ProgressPoint& p) {
+        if (ch != current) {
+            current = ch;
+            progress = std::make_unique<Progress>(job.medium.name + " " + kChannelNames[ch], total,
+                                                  "photons");
+        }
+        progress->update(static_cast<double>(p.photons),
+                         p.value > 0 ? "rel.err " + std::to_string(p.se / p.value) : "");
+    };
+    mcml::ProfileRun run = mcml::simulate_profile(job.medium, job.grid, po);
+    progress.reset();
+    if (run.interrupted) {
+        std::fprintf(stderr,
+                     "ssslab profile: interrupted; checkpoints saved beside %s; run the same "
+                     "command again to resume\n",
+                     out.string().c_str());
+        return kExitInterrupted;
+    }
+    ConfigTable root = job.doc->root();
+    for (int ch = 0; ch < 3; ++ch) {
+        const mcml::RunResult& r = run.channels[ch];
+        const auto& L = r.layout;
+        ConfigTable t = root.table_or_empty(std::string("result_") + kChannelNames[ch]);
+        t.record("stop_reason", std::string(mcml::to_string(r.reason)));
+        t.record("photons", static_cast<std::int64_t>(r.photons));
+        t.record("batches", static_cast<std::int64_t>(r.batches));
+        t.record("batch_photons", r.batch_photons);
+        t.record("threads", static_cast<std::int64_t>(r.threads));
+        t.record("wall_seconds", r.seconds);
+        t.record("scattering_events_per_photon",
+                 static_cast<double>(r.events) / static_cast<double>(r.photons));
+        t.record("Rsp", r.rsp);
+        t.record("Rd", r.mean(L.rd));
+        t.record("Rd_se", r.se[L.rd]);
+        t.record("Rd_beyond_grid", run.profile.beyond[ch]);
+        t.record("Rd_beyond_grid_se", run.profile.beyond_se[ch]);
+        t.record("A", r.mean(L.a));
+        t.record("A_se", r.se[L.a]);
+        t.record("Tt", r.mean(L.tt));
+        t.record("Tt_se", r.se[L.tt]);
+    }
+    job.doc->add_resolved_section("provenance", provenance(command_line()));
+    OutputTransaction tx;
+    tx.stage(out, run.profile.to_csv(job.unit));
+    tx.stage(out.string() + ".toml",
+             "# ssslab profile: resolved configuration, results per channel, provenance\n" +
+                 job.doc->resolved_toml());
+    tx.commit();
+    if (!c.quiet) {
+        std::printf("%s: %d bins of %.4g %s (%s)\n", out.string().c_str(), job.grid.nr,
+                    job.grid.dr_cm * (job.unit == LengthUnit::kMm ? 10 : 1), unit_name(job.unit),
+                    job.medium.name.c_str());
+        for (int ch = 0; ch < 3; ++ch) {
+            const auto& r = run.channels[ch];
+            std::printf("  %s: Rd %s (beyond grid %.2g), %llu photons in %.3g s, stopped by %s\n",
+                        kChannelNames[ch], pm(r.mean(r.layout.rd), r.se[r.layout.rd]).c_str(),
+                        run.profile.beyond[ch], static_cast<unsigned long long>(r.photons),
+                        r.seconds, mcml::to_string(r.reason));
+        }
+    }
+    return 0;
+}
+
+namespace {
+
+struct ProfileArgs {
+    std::string config, material, unit;
+    CommonOptions common;
+};
+
+int run_profile(ProfileArgs& a) {
+    ProfileJob job = read_profile_job(a.config, a.material, a.common, a.unit);
+    const fs::path out = a.common.out.empty()
+                             ? fs::path("results") / "profiles" / (job.medium.name + ".csv")
+                             : fs::path(a.common.out);
+    return run_profile_job(job, out, a.common);
+}
+
+}  // namespace
+
+void register_profile(CLI::App& app, std::function<int()>& action) {
+    auto a = std::make_shared<ProfileArgs>();
+    CLI::App* sub = app.add_subcommand(
+        "profile",
+        "Diffuse reflectance profile R_d(r) per RGB channel with standard errors (MCML engine, "
+        "Freude14 Table 6.1 set-up by default), written to CSV with the resolved configuration "
+        "and provenance beside it (<out>.toml)");
+    sub->add_option("-m,--material", a->material,
+                    "Measured material of Freude14 Table 6.2: " + material_names());
+    sub->add_option("-c,--config", a->config,
+                    "TOML config: [material] (preset or sigma_a_per_mm/_per_cm, sigma_s_..., g, "
+                    "eta, thickness_mm/_cm), [grid] (dr_mm/dr_cm, nr), [budget] (photons, "
+                    "seconds, rel_error, batch_photons), [output] (unit), seed")
+        ->check(CLI::ExistingFile);
+    sub->add_option("--unit", a->unit, "Length unit of the CSV: cm (default) or mm")
+        ->check(CLI::IsMember({"cm", "mm"}));
+    add_common_options(*sub, a->common, "Output CSV (default results/profiles/<material>.csv)");
+    sub->callback([a, &action] { action = [a] { return run_profile(*a); }; });
+}
+
+}  // namespace ssslab::cli

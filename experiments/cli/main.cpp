@@ -1,0 +1,58 @@
+#include "core/error.h"
+#include "core/provenance.h"
+#include "experiments/cli/commands.h"
+#include "experiments/cli/common.h"
+
+#include <cstdio>
+#include <exception>
+
+namespace ssslab::cli {
+
+int main(int argc, char** argv) {
+    set_command_line(argc, argv);
+    CLI::App app{
+        "ssslab: a research validation framework for subsurface scattering.\n"
+        "Monte Carlo ground truth (MCML port) and the approximations renderers use, scored "
+        "against it.\nRun `ssslab <command> --help` for each command.",
+        "ssslab"};
+    app.set_version_flag("--version", version_report());
+    app.require_subcommand(0, 1);
+    std::function<int()> action;
+    register_run(app, action);
+    register_mcml(app, action);
+    register_profile(app, action);
+    register_materials(app, action);
+    register_bench(app, action);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    }
+    if (!action) {
+        // No subcommand: the main job on its built-in default.
+        std::vector<const char*> args = {argv[0], "run"};
+        app.clear();
+        app.parse(static_cast<int>(args.size()), const_cast<char**>(args.data()));
+    }
+    try {
+        return action();
+    } catch (const InputError& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        return 2;
+    } catch (const InfeasibleError& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 2;
+    } catch (const IoError& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 3;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "internal error: %s\n", e.what());
+        return 1;
+    }
+}
+
+}  // namespace ssslab::cli
+
+int main(int argc, char** argv) {
+    return ssslab::cli::main(argc, argv);
+}

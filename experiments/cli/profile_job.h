@@ -1,0 +1,34 @@
+// A profile computation read from a config and the command line (shared by `profile` and `run`).
+#pragma once
+
+#include "core/config.h"
+#include "core/material.h"
+#include "core/profile.h"
+#include "experiments/cli/common.h"
+#include "mcml/profile.h"
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace ssslab::cli {
+
+struct ProfileJob {
+    std::shared_ptr<ConfigDocument> doc;  ///< holds the resolved configuration
+    Medium medium;
+    std::uint64_t seed = 1;
+    mcml::ProfileGrid grid;
+    mcml::Budget budget;
+    std::int64_t batch = 0;
+    LengthUnit unit = LengthUnit::kCm;
+};
+
+/// Read a job from an optional TOML config, an optional --material, and the common options
+/// (which override the config). Validates everything before any work starts.
+ProfileJob read_profile_job(const std::string& config_path, const std::string& material,
+                            const CommonOptions& c, const std::string& unit_flag);
+
+/// Simulate and write <out> (CSV) and <out>.toml atomically. Returns the exit status.
+int run_profile_job(ProfileJob& job, const std::filesystem::path& out, const CommonOptions& c);
+
+}  // namespace ssslab::cli

@@ -1,0 +1,413 @@
+#include "mcml/engine.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/rng.h"
+#include "core/stats.h"
+#include "mcml/mci.h"
+#include "mcml/ran3.h"
+#include "mcml/tally_sinks.h"
+#include "mcml/transport.h"
+
+#include <tbb/concurrent_queue.h>
+#include <tbb/info.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+
+namespace ssslab::mcml {
+
+namespace {
+
+// Bump when a change alters the numbers the default engine produces for a given seed.
+constexpr const char* kEngineVersion = "mcml-default-1";
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// ---- checkpoints: a small binary file written atomically -------------------------------------
+
+constexpr char kMagic[8] = {'S', 'S', 'S', 'L', 'C', 'K', 'P', '1'};
+
+struct Checkpoint {
+    std::string fingerprint;
+    std::uint64_t photons = 0, batches = 0, events = 0;
+    double seconds = 0;
+    std::vector<double> sum, q;
+    std::vector<ProgressPoint> history;
+};
+
+template <class T>
+void put(std::string& out, const T& v) {
+    out.append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+
+void put_vec(std::string& out, const std::vector<double>& v) {
+    put<std::uint64_t>(out, v.size());
+    out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(double));
+}
+
+void save_checkpoint(const std::string& path, const Checkpoint& c) {
+    std::string out(kMagic, 8);
+    put<std::uint64_t>(out, c.fingerprint.size());
+    out += c.fingerprint;
+    put(out, c.photons);
+    put(out, c.batches);
+    put(out, c.events);
+    put(out, c.seconds);
+    put_vec(out, c.sum);
+    put_vec(out, c.q);
+    put<std::uint64_t>(out, c.history.size());
+    for (const auto& p : c.history) put(out, p);
+    write_file_atomic(path, out);
+}
+
+class Cursor {
+  public:
+    Cursor(const std::string& data, const std::string& path) : d_(data), path_(path) {}
+    template <class T>
+    T get() {
+        need(sizeof(T));
+        T v;
+        std::memcpy(&v, d_.data() + pos_, sizeof(T));
+        pos_ += sizeof(T);
+        return v;
+    }
+    std::vector<double> get_vec() {
+        const auto n = get<std::uint64_t>();
+        need(n * sizeof(double));
+        std::vector<double> v(n);
+        std::memcpy(v.data(), d_.data() + pos_, n * sizeof(double));
+        pos_ += n * sizeof(double);
+        return v;
+    }
+    std::string get_str() {
+        const auto n = get<std::uint64_t>();
+        need(n);
+        std::string s = d_.substr(pos_, n);
+        pos_ += n;
+        return s;
+    }
+    void need(size_t n) const {
+        if (pos_ + n > d_.size())
+            throw InputError({path_, 0, 0}, "", "checkpoint file is truncated or corrupt");
+    }
+
+  private:
+    const std::string& d_;
+    const std::string& path_;
+    size_t pos_ = 8;
+};
+
+std::optional<Checkpoint> load_checkpoint(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) return std::nullopt;
+    const std::string data = read_file(path);
+    if (data.size() < 8 || std::memcmp(data.data(), kMagic, 8) != 0)
+        throw InputError({path, 0, 0}, "", "not an ssslab MCML checkpoint");
+    Cursor c(data, path);
+    Checkpoint k;
+    k.fingerprint = c.get_str();
+    k.photons = c.get<std::uint64_t>();
+    k.batches = c.get<std::uint64_t>();
+    k.events = c.get<std::uint64_t>();
+    k.seconds = c.get<double>();
+    k.sum = c.get_vec();
+    k.q = c.get_vec();
+    const auto nh = c.get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < nh; ++i) k.history.push_back(c.get<ProgressPoint>());
+    return k;
+}
+
+// Simulate one batch of photons into `tally` (cleared first) and reduce it.
+void simulate_batch(const RunSpec& run, const TallyLayout& layout, RngStream& rng,
+                    std::int64_t photons, double rsp, RawTally& tally) {
+    tally.clear();
+    if (layout.mode == TallyMode::kFull) {
+        FullSink<false> sink(run, layout, tally.v.data());
+        Transport<false, RngStream, FullSink<false>> tr(run, rng, sink);
+        tr.trace_interleaved(photons, rsp);
+        sink.flush();
+        tally.events = tr.events();
+    } else {
+        ProfileSink sink(run, layout, tally.v.data());
+        Transport<false, RngStream, ProfileSink> tr(run, rng, sink);
+        tr.trace_interleaved(photons, rsp);
+        tally.events = tr.events();
+    }
+    reduce(run, tally.v, layout);
+}
+
+// The budget quantity: the larger of Rd and Tt (per photon) and its standard error.
+void budget_quantity(const BatchAccumulator& acc, const TallyLayout& l, double& value, double& se) {
+    const double rd = acc.mean(l.rd), tt = acc.mean(l.tt);
+    const size_t i = rd >= tt ? l.rd : l.tt;
+    value = acc.mean(i);
+    se = acc.standard_error(i);
+}
+
+}  // namespace
+
+const char* to_string(StopReason r) {
+    switch (r) {
+        case StopReason::kPhotons:
+            return "photons";
+        case StopReason::kTime:
+            return "time";
+        case StopReason::kRelError:
+            return "rel_error";
+        case StopReason::kInterrupted:
+            return "interrupted";
+    }
+    return "?";
+}
+
+std::int64_t default_batch_photons(const Budget& budget, std::int64_t run_photons) {
+    const bool count_only = !budget.seconds && !budget.rel_error;
+    const std::int64_t n = budget.photons ? *budget.photons : (count_only ? run_photons : 0);
+    if (n <= 0) return 1000;
+    if (n >= 32000) return std::max<std::int64_t>(1000, (n + 999) / 1000);
+    return std::max<std::int64_t>(1, (n + 31) / 32);
+}
+
+std::string checkpoint_fingerprint(const RunSpec& run, const EngineOptions& o,
+                                   std::int64_t batch_photons) {
+    std::string s = kEngineVersion;
+    s += "\nseed=" + std::to_string(o.seed) + " stream=" + std::to_string(o.stream) +
+         " batch=" + std::to_string(batch_photons) +
+         " mode=" + (o.mode == TallyMode::kFull ? "full" : "profile") + "\n";
+    RunSpec r = run;
+    r.photons = 1;  // the budget may change between a run and its resumption
+    s += format_mci({r});
+    return s;
+}
+
+RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
+    check_run(run, /*compat=*/false);
+    RunResult res;
+    res.layout = TallyLayout::make(run, opt.mode);
+    const TallyLayout& layout = res.layout;
+    res.rsp = specular_reflectance(run.layers);
+    res.batch_photons =
+        opt.batch_photons > 0 ? opt.batch_photons : default_batch_photons(opt.budget, run.photons);
+    res.threads = opt.threads > 0 ? opt.threads : tbb::info::default_concurrency();
+
+    const Budget& b = opt.budget;
+    std::int64_t total = b.photons ? *b.photons : ((b.seconds || b.rel_error) ? 0 : run.photons);
+    const std::uint64_t bp = static_cast<std::uint64_t>(res.batch_photons);
+    const std::uint64_t max_batches =
+        total > 0 ? (static_cast<std::uint64_t>(total) + bp - 1) / bp : ~std::uint64_t(0);
+    auto batch_size = [&](std::uint64_t index) -> std::int64_t {
+        if (total <= 0) return res.batch_photons;
+        const std::uint64_t start = index * bp;
+        return static_cast<std::int64_t>(std::min<std::uint64_t>(bp, total - start));
+    };
+
+    BatchAccumulator acc(layout.size);
+    const std::string fingerprint = checkpoint_fingerprint(run, opt, res.batch_photons);
+    double resumed_seconds = 0.0;
+    if (!opt.checkpoint_path.empty()) {
+        if (auto ck = load_checkpoint(opt.checkpoint_path)) {
+            if (ck->fingerprint != fingerprint || ck->sum.size() != layout.size)
+                throw InputError({opt.checkpoint_path, 0, 0}, "",
+                                 "checkpoint belongs to a different run (input, seed or batch "
+                                 "size differ); remove it to start afresh");
+            acc.raw_sum() = std::move(ck->sum);
+            acc.raw_q() = std::move(ck->q);
+            acc.set_counts(ck->photons, ck->batches);
+            res.events = ck->events;
+            resumed_seconds = ck->seconds;
+            res.history = std::move(ck->history);
+            res.resumed = true;
+        }
+    }
+
+    struct Work {
+        std::uint64_t index = 0;
+        std::int64_t photons = 0;
+        RawTally tally;
+        explicit Work(const TallyLayout& l) : tally(l) {}
+    };
+    const size_t tokens = static_cast<size_t>(2 * res.threads);
+    std::vector<std::unique_ptr<Work>> pool;
+    tbb::concurrent_queue<Work*> free_list;
+    for (size_t i = 0; i < tokens; ++i) {
+        pool.push_back(std::make_unique<Work>(layout));
+        free_list.push(pool.back().get());
+    }
+
+    const auto t0 = Clock::now();
+    auto last_checkpoint = t0;
+    std::uint64_t next = acc.batches();
+    bool stop = next >= max_batches;
+    if (stop) res.reason = StopReason::kPhotons;
+    std::atomic<bool> stop_flag{stop};
+
+    auto write_checkpoint = [&]() {
+        Checkpoint ck;
+        ck.fingerprint = fingerprint;
+        ck.photons = acc.samples();
+        ck.batches = acc.batches();
+        ck.events = res.events;
+        ck.seconds = resumed_seconds + seconds_since(t0);
+        ck.sum = acc.raw_sum();
+        ck.q = acc.raw_q();
+        ck.history = res.history;
+        save_checkpoint(opt.checkpoint_path, ck);
+    };
+
+    tbb::task_arena arena(res.threads);
+    arena.execute([&] {
+        tbb::parallel_pipeline(
+            tokens,
+            tbb::make_filter<
+                void,
+                Work*>(tbb::filter_mode::serial_in_order, [&](tbb::flow_control& fc) -> Work* {
+                if (stop_flag.load(std::memory_order_relaxed) || next >= max_batches ||
+                    (opt.cancel && opt.cancel->load(std::memory_order_relaxed))) {
+                    fc.stop();
+                    return nullptr;
+                }
+                Work* w = nullptr;
+                if (!free_list.try_pop(w)) {
+                    pool.push_back(std::make_unique<Work>(layout));
+                    w = pool.back().get();
+                }
+                w->index = next++;
+                w->photons = batch_size(w->index);
+                return w;
+            }) & tbb::make_filter<Work*, Work*>(tbb::filter_mode::parallel, [&](Work* w) -> Work* {
+                RngStream rng(opt.seed, rng_domain::kMcml + opt.stream, w->index);
+                simulate_batch(run, layout, rng, w->photons, res.rsp, w->tally);
+                return w;
+            }) & tbb::make_filter<Work*, void>(tbb::filter_mode::serial_in_order, [&](Work* w) {
+                if (!stop_flag.load(std::memory_order_relaxed)) {
+                    acc.add_batch(w->tally.v.data(), static_cast<std::uint64_t>(w->photons));
+                    res.events += w->tally.events;
+                    ProgressPoint p{acc.samples(), resumed_seconds + seconds_since(t0), 0.0, 0.0};
+                    budget_quantity(acc, layout, p.value, p.se);
+                    res.history.push_back(p);
+                    if (opt.on_batch) opt.on_batch(p);
+                    if (acc.batches() >= max_batches) {
+                        res.reason = StopReason::kPhotons;
+                        stop_flag = true;
+                    } else if (b.seconds && p.seconds >= *b.seconds) {
+                        res.reason = StopReason::kTime;
+                        stop_flag = true;
+                    } else if (b.rel_error &&
+                               acc.batches() >=
+                                   static_cast<std::uint64_t>(opt.min_batches_for_error) &&
+                               p.value > 0 && p.se <= *b.rel_error * p.value) {
+                        res.reason = StopReason::kRelError;
+                        stop_flag = true;
+                    } else if (b.rel_error && !b.seconds && !b.photons && acc.batches() >= 10000 &&
+                               p.value == 0) {
+                        throw InfeasibleError(
+                            "a relative-error budget cannot be met: no photon has left "
+                            "the medium in 10000 batches (Rd = Tt = 0)");
+                    }
+                    if (!opt.checkpoint_path.empty() && !stop_flag &&
+                        seconds_since(last_checkpoint) >= opt.checkpoint_seconds) {
+                        write_checkpoint();
+                        last_checkpoint = Clock::now();
+                    }
+                }
+                free_list.push(w);
+            }));
+    });
+
+    res.seconds = resumed_seconds + seconds_since(t0);
+    const bool finished = stop_flag.load();
+    if (!finished) res.reason = StopReason::kInterrupted;
+    if (!opt.checkpoint_path.empty()) {
+        if (finished) {
+            std::error_code ec;
+            std::filesystem::remove(opt.checkpoint_path, ec);
+        } else {
+            write_checkpoint();
+        }
+    }
+    res.photons = acc.samples();
+    res.batches = acc.batches();
+    res.values = acc.means();
+    res.divisor = 1.0;
+    res.se = acc.standard_errors();
+    return res;
+}
+
+RunResult run_compat(const RunSpec& run, Ran3& rng, const Budget& budget,
+                     const std::atomic<bool>* cancel,
+                     const std::function<void(const ProgressPoint&)>& on_batch) {
+    check_run(run, /*compat=*/true);
+    RunResult res;
+    res.layout = TallyLayout::make(run, TallyMode::kFull);
+    const TallyLayout& layout = res.layout;
+    res.rsp = specular_reflectance(run.layers);
+    res.threads = 1;
+    const std::int64_t total = budget.photons ? *budget.photons : run.photons;
+    res.batch_photons = default_batch_photons(Budget{total, {}, {}}, total);
+
+    RawTally global(layout), batch(layout);
+    FullSink<true> sink(run, layout, global.v.data(), batch.v.data());
+    Transport<true, Ran3, FullSink<true>> tr(run, rng, sink);
+    BatchAccumulator acc(layout.size);
+    const auto t0 = Clock::now();
+    std::int64_t in_batch = 0, done = 0;
+    res.reason = StopReason::kPhotons;
+    while (done < total) {
+        tr.trace(res.rsp);
+        ++done;
+        if (++in_batch == res.batch_photons || done == total) {
+            reduce(run, batch.v, layout);
+            acc.add_batch(batch.v.data(), static_cast<std::uint64_t>(in_batch));
+            batch.clear();
+            in_batch = 0;
+            ProgressPoint p{acc.samples(), seconds_since(t0), 0.0, 0.0};
+            budget_quantity(acc, layout, p.value, p.se);
+            res.history.push_back(p);
+            if (on_batch) on_batch(p);
+            if (done == total) break;
+            if (budget.seconds && p.seconds >= *budget.seconds) {
+                res.reason = StopReason::kTime;
+                break;
+            }
+            if (budget.rel_error && acc.batches() >= 16 && p.value > 0 &&
+                p.se <= *budget.rel_error * p.value) {
+                res.reason = StopReason::kRelError;
+                break;
+            }
+            if (cancel && cancel->load(std::memory_order_relaxed)) {
+                res.reason = StopReason::kInterrupted;
+                break;
+            }
+        }
+    }
+    reduce(run, global.v, layout);
+    res.seconds = seconds_since(t0);
+    res.photons = static_cast<std::uint64_t>(done);
+    res.batches = acc.batches();
+    res.events = tr.events();
+    res.values = std::move(global.v);
+    res.divisor = static_cast<double>(done);
+    res.se = acc.standard_errors();
+    return res;
+}
+
+McoResult mco_values(const RunSpec& run, const RunResult& r, bool compat) {
+    return scale_full(run, r.values, r.layout, r.divisor, compat ? kMcmlPi : kPi, r.rsp);
+}
+
+McoResult mco_standard_errors(const RunSpec& run, const RunResult& r, bool compat) {
+    return scale_full(run, r.se, r.layout, 1.0, compat ? kMcmlPi : kPi, 0.0);
+}
+
+}  // namespace ssslab::mcml

@@ -1,0 +1,102 @@
+// Running MCML: the default engine (counter-based streams, oneTBB, batch statistics, budgets,
+// checkpoints) and the compatibility engine (the original's ran3 and call order).
+#pragma once
+
+#include "mcml/run_spec.h"
+#include "mcml/tally.h"
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ssslab::mcml {
+
+class Ran3;
+
+/// When to stop. Any combination; the run stops at the first limit reached. With none given, the
+/// run's own photon count is used.
+struct Budget {
+    std::optional<std::int64_t> photons;
+    std::optional<double> seconds;    ///< wall time
+    std::optional<double> rel_error;  ///< relative standard error of the larger of Rd and Tt
+};
+
+enum class StopReason { kPhotons, kTime, kRelError, kInterrupted };
+const char* to_string(StopReason r);
+
+/// One point of a run's progress, recorded after every batch (for error-vs-time plots).
+struct ProgressPoint {
+    std::uint64_t photons;
+    double seconds;
+    double value;  ///< the budget quantity (Rd or Tt, per photon)
+    double se;     ///< its standard error
+};
+
+struct EngineOptions {
+    std::uint64_t seed = 1;
+    /// Stream domain: runs sharing a seed must differ here (e.g. the RGB channel).
+    std::uint64_t stream = 0;
+    int threads = 0;                 ///< 0: all hardware threads
+    std::int64_t batch_photons = 0;  ///< 0: default_batch_photons()
+    TallyMode mode = TallyMode::kFull;
+    Budget budget;
+    /// Resume from and save to this file (empty: no checkpoints). A checkpoint is written every
+    /// `checkpoint_seconds`, and when the run is interrupted; it is removed when the run ends.
+    std::string checkpoint_path;
+    double checkpoint_seconds = 30.0;
+    /// Set asynchronously (e.g. by a signal handler) to stop after the batches in flight.
+    const std::atomic<bool>* cancel = nullptr;
+    /// Batches needed before a relative-error target may stop the run.
+    int min_batches_for_error = 16;
+    /// Called in batch order after each batch (progress display).
+    std::function<void(const ProgressPoint&)> on_batch;
+};
+
+/// Batch size used when none is given: depends only on the photon budget (never on threads), so
+/// results are reproducible: N/1000 photons (at least 1000) for N >= 32000; N/32 below; 1000 when
+/// the budget is a time or an error.
+std::int64_t default_batch_photons(const Budget& budget, std::int64_t run_photons);
+
+/// Result of a run, in raw (unscaled) tally units.
+struct RunResult {
+    TallyLayout layout;
+    /// `values / divisor` is the per-photon estimate: raw sums and the photon count in
+    /// compatibility mode (so scaling matches the original bit for bit), means and 1 otherwise.
+    std::vector<double> values;
+    double divisor = 1.0;
+    std::vector<double> se;  ///< per-photon standard errors from batch statistics
+    double rsp = 0.0;
+    std::uint64_t photons = 0, batches = 0, events = 0;
+    std::int64_t batch_photons = 0;
+    double seconds = 0.0;
+    int threads = 1;
+    StopReason reason = StopReason::kPhotons;
+    bool resumed = false;  ///< continued from a checkpoint
+    std::vector<ProgressPoint> history;
+
+    double mean(size_t i) const { return values[i] / divisor; }
+};
+
+/// The default engine. Deterministic for any thread count: batch b uses the stream
+/// (seed, kMcml + stream, b) and batches are folded into the statistics in batch order.
+RunResult run_default(const RunSpec& run, const EngineOptions& options);
+
+/// The compatibility engine: one thread, photons in the original order from `rng`; tallies
+/// summed exactly as MCML 1.2.2 sums them. Standard errors come from consecutive photon batches.
+RunResult run_compat(const RunSpec& run, Ran3& rng, const Budget& budget,
+                     const std::atomic<bool>* cancel = nullptr,
+                     const std::function<void(const ProgressPoint&)>& on_batch = {});
+
+/// Scale a full-layout result to the .mco quantities, and its standard errors.
+McoResult mco_values(const RunSpec& run, const RunResult& r, bool compat);
+McoResult mco_standard_errors(const RunSpec& run, const RunResult& r, bool compat);
+
+/// Everything that determines a default-mode result (run, seed, stream, batch size, tally mode,
+/// engine version): a checkpoint is resumed only if its fingerprint matches.
+std::string checkpoint_fingerprint(const RunSpec& run, const EngineOptions& o,
+                                   std::int64_t batch_photons);
+
+}  // namespace ssslab::mcml

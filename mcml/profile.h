@@ -1,0 +1,51 @@
+// Radial reflectance profiles of homogeneous media with the MCML engine: the ground truth of the
+// kernel work [Freude14 §6.1, Table 6.1].
+#pragma once
+
+#include "core/material.h"
+#include "core/profile.h"
+#include "mcml/engine.h"
+
+#include <array>
+#include <functional>
+#include <string>
+
+namespace ssslab::mcml {
+
+struct ProfileGrid {
+    double dr_cm = 0;
+    int nr = 0;
+};
+
+/// [Freude14 Table 6.1]: dr = min over RGB of MFP / 20, nr = ceil(32 max MFP / dr), with
+/// MFP = 1 / (sigma_a + sigma_s').
+ProfileGrid freude14_grid(const Medium& m);
+
+struct ProfileOptions {
+    std::uint64_t seed = 1;
+    int threads = 0;
+    Budget budget;  ///< per channel; with none, 1e7 photons per channel [Freude14 Table 6.1]
+    std::int64_t batch_photons = 0;
+    /// Checkpoint files are <prefix>.<R|G|B>.ckpt (empty: none).
+    std::string checkpoint_prefix;
+    const std::atomic<bool>* cancel = nullptr;
+    std::function<void(int channel, const ProgressPoint&)> on_batch;
+};
+
+inline constexpr std::int64_t kFreude14Photons = 10'000'000;
+
+struct ProfileRun {
+    Medium medium;
+    ProfileGrid grid;
+    std::array<RunResult, 3> channels;
+    bool interrupted = false;
+    RadialProfile profile;  ///< filled unless interrupted
+};
+
+/// Simulate the three channels one after the other (each on all threads), stream = channel.
+ProfileRun simulate_profile(const Medium& m, const ProfileGrid& grid, const ProfileOptions& o);
+
+/// R_d(r) of one channel's profile-mode result, MCML's scaling: weight / (2 pi (i + 1/2) dr^2).
+void fill_profile(const RunResult& r, const ProfileGrid& grid, int channel, RadialProfile& p);
+
+}  // namespace ssslab::mcml

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages ssslab needs. As root it installs what is missing; otherwise it
+# prints the exact apt-get line to run and exits non-zero if anything is missing.
+#
+#   scripts/setup.sh          build and test dependencies
+#   scripts/setup.sh --dev    also the developer tools CI uses (clang-format)
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build git pkg-config
+  libtbb-dev            # oneTBB: parallel photon batches
+  libfmt-dev            # fmt: formatting
+  libcli11-dev          # CLI11: the command line
+  libtomlplusplus-dev   # toml++: TOML configs with source positions for error messages
+  librandom123-dev      # Random123: counter-based Philox streams
+  libgtest-dev libgmock-dev  # GoogleTest
+  libbenchmark-dev      # Google Benchmark: micro-benchmarks
+  zlib1g-dev            # zlib: reading the gzipped MCML reference outputs in the tests
+)
+if [[ "${1:-}" == "--dev" ]]; then
+  packages+=(clang-format)
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [[ ${#missing[@]} -eq 0 ]]; then
+  echo "setup: all ${#packages[@]} packages are installed"
+  exit 0
+fi
+
+if [[ $(id -u) -eq 0 ]]; then
+  echo "setup: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "setup: missing packages. Run as root:"
+  echo "  apt-get update && apt-get install -y --no-install-recommends ${missing[*]}"
+  exit 1
+fi

@@ -1,0 +1,164 @@
+#include "testing.h"
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+#include <sys/wait.h>
+
+namespace ssslab::testing {
+
+namespace fs = std::filesystem;
+
+std::string data_path(const std::string& rel) {
+    return std::string(SSSLAB_TEST_DATA_DIR) + "/" + rel;
+}
+std::string ssslab_binary() {
+    return SSSLAB_BINARY;
+}
+
+TempDir::TempDir() {
+    std::random_device rd;
+    for (int attempt = 0; attempt < 100; ++attempt) {
+        const fs::path p = fs::temp_directory_path() /
+                           ("ssslab-test-" + std::to_string(rd()) + std::to_string(attempt));
+        std::error_code ec;
+        if (fs::create_directory(p, ec)) {
+            path_ = p;
+            return;
+        }
+    }
+    throw std::runtime_error("cannot create a temporary directory");
+}
+
+TempDir::~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+}
+
+fs::path TempDir::write(const std::string& name, const std::string& content) const {
+    const fs::path p = path_ / name;
+    fs::create_directories(p.parent_path());
+    std::ofstream(p, std::ios::binary) << content;
+    return p;
+}
+
+std::vector<std::string> TempDir::files() const {
+    std::vector<std::string> out;
+    for (const auto& e : fs::recursive_directory_iterator(path_))
+        if (e.is_regular_file()) out.push_back(fs::relative(e.path(), path_).string());
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+namespace {
+std::string shell_quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+}  // namespace
+
+std::string read_text(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+CommandResult run_ssslab(const std::vector<std::string>& args, const fs::path& cwd) {
+    TempDir io;
+    std::string cmd =
+        "cd " + shell_quote(cwd.string()) + " && SSSLAB_PROGRESS=0 " + shell_quote(ssslab_binary());
+    for (const auto& a : args) cmd += " " + shell_quote(a);
+    cmd += " </dev/null >" + shell_quote((io / "out").string()) + " 2>" +
+           shell_quote((io / "err").string());
+    const int status = std::system(cmd.c_str());
+    CommandResult r;
+    if (WIFEXITED(status))
+        r.exit_code = WEXITSTATUS(status);
+    else if (WIFSIGNALED(status))
+        r.exit_code = 128 + WTERMSIG(status);
+    r.out = read_text(io / "out");
+    r.err = read_text(io / "err");
+    return r;
+}
+
+std::string gunzip_file(const std::string& path) {
+    gzFile f = gzopen(path.c_str(), "rb");
+    if (!f) throw std::runtime_error("cannot open " + path);
+    std::string out;
+    char buf[1 << 16];
+    int n;
+    while ((n = gzread(f, buf, sizeof buf)) > 0) out.append(buf, static_cast<size_t>(n));
+    gzclose(f);
+    return out;
+}
+
+std::string lines_from(const std::string& text, int first) {
+    size_t pos = 0;
+    for (int line = 1; line < first && pos != std::string::npos; ++line) {
+        pos = text.find('\n', pos);
+        if (pos != std::string::npos) ++pos;
+    }
+    return pos == std::string::npos ? std::string() : text.substr(pos);
+}
+
+double test_scale() {
+    if (const char* s = std::getenv("SSSLAB_TEST_SCALE")) return std::max(1e-3, std::atof(s));
+    return 1.0;
+}
+
+double normal_quantile(double p) {
+    // Bisection on the CDF 0.5 erfc(-x / sqrt 2): slow but exact to double precision.
+    double lo = -40, hi = 40;
+    for (int i = 0; i < 200; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        if (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+double chi2_critical(double dof, double alpha) {
+    const double z = normal_quantile(1.0 - alpha);
+    const double a = 2.0 / (9.0 * dof);
+    const double t = 1.0 - a + z * std::sqrt(a);
+    return dof * t * t * t;
+}
+
+double sidak(double alpha, int tests) {
+    return 1.0 - std::pow(1.0 - alpha, 1.0 / tests);
+}
+
+double chi2_statistic(const std::vector<double>& observed, const std::vector<double>& expected,
+                      int& dof) {
+    double chi2 = 0, o = 0, e = 0;
+    int cells = 0;
+    for (size_t i = 0; i < observed.size(); ++i) {
+        o += observed[i];
+        e += expected[i];
+        if (e >= 5.0) {
+            chi2 += (o - e) * (o - e) / e;
+            ++cells;
+            o = e = 0;
+        }
+    }
+    if (e > 0) {  // leftover: pool into a last cell
+        chi2 += (o - e) * (o - e) / e;
+        ++cells;
+    }
+    dof = cells - 1;
+    return chi2;
+}
+
+}  // namespace ssslab::testing
