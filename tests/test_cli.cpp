@@ -1,0 +1,141 @@
+// The `ssslab` command line end to end: help, outputs and their provenance, determinism across
+// thread counts, and an interrupted run that resumes to the result of an uninterrupted one.
+#include "core/profile.h"
+#include "testing.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <thread>
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char** environ;
+
+namespace ssslab {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::data_path;
+using testing::run_ssslab;
+
+TEST(Cli, HelpForEveryCommand) {
+    testing::TempDir dir;
+    for (const char* cmd : {"run", "mcml", "profile", "materials", "bench"}) {
+        const auto r = run_ssslab({cmd, "--help"}, dir.path());
+        EXPECT_EQ(r.exit_code, 0) << cmd << ": " << r.err;
+        EXPECT_NE(r.out.find("--help"), std::string::npos) << cmd;
+    }
+    const auto top = run_ssslab({"--help"}, dir.path());
+    EXPECT_EQ(top.exit_code, 0);
+    for (const char* cmd : {"run", "mcml", "profile", "materials", "bench"})
+        EXPECT_NE(top.out.find(cmd), std::string::npos) << cmd;
+    const auto version = run_ssslab({"--version"}, dir.path());
+    EXPECT_EQ(version.exit_code, 0);
+    EXPECT_NE(version.out.find("oneTBB"), std::string::npos) << version.out;
+    EXPECT_TRUE(dir.files().empty());
+}
+
+TEST(Cli, MaterialsListsTheElevenPresets) {
+    testing::TempDir dir;
+    const auto r = run_ssslab({"materials"}, dir.path());
+    ASSERT_EQ(r.exit_code, 0);
+    for (const char* m : {"Apple", "Chicken1", "Chicken2", "Cream", "Ketchup", "Marble", "Potato",
+                          "Skimmilk", "Skin1", "Skin2", "Wholemilk"})
+        EXPECT_NE(r.out.find(m), std::string::npos) << m;
+}
+
+TEST(Cli, ProfileWritesCsvWithResolvedConfigurationBesideIt) {
+    testing::TempDir dir;
+    const auto r = run_ssslab(
+        {"profile", "--material", "Skin1", "--photons", "3000", "--unit", "mm", "--out", "p.csv"},
+        dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(dir.files(), (std::vector<std::string>{"p.csv", "p.csv.toml"}));
+    const RadialProfile p = read_profile_csv((dir / "p.csv").string());
+    EXPECT_EQ(p.nr, 1236);  // Freude14 Table 6.1 for Skin1
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_GT(p.rd_per_cm2[c][0], 0.0);
+        EXPECT_GT(p.se_per_cm2[c][0], 0.0);
+    }
+    const std::string rec = testing::read_text(dir / "p.csv.toml");
+    for (const char* key :
+         {"preset = 'Skin1'", "seed = 1", "photons = 3000", "rule = ", "[result_R]", "Rd_se",
+          "stop_reason = 'photons'", "[provenance]", "git_revision", "command_line"})
+        EXPECT_NE(rec.find(key), std::string::npos) << key << " in\n" << rec;
+}
+
+TEST(Cli, McmlDefaultModeIsIndependentOfThreads) {
+    testing::TempDir one, two;
+    for (auto* d : {&one, &two}) fs::copy_file(data_path("mcml-1.2.2/a_vdh.mci"), *d / "a.mci");
+    const auto r1 =
+        run_ssslab({"mcml", "a.mci", "--photons", "50000", "--threads", "1"}, one.path());
+    const auto r2 =
+        run_ssslab({"mcml", "a.mci", "--photons", "50000", "--threads", "2"}, two.path());
+    ASSERT_EQ(r1.exit_code, 0) << r1.err;
+    ASSERT_EQ(r2.exit_code, 0) << r2.err;
+    for (const char* f : {"a_vdh.mco", "a_vdh_stderr.mco"})
+        EXPECT_EQ(testing::lines_from(testing::read_text(one / f), 11),
+                  testing::lines_from(testing::read_text(two / f), 11))
+            << f;
+    EXPECT_NE(r1.out.find("Rd 0.09"), std::string::npos) << r1.out;
+}
+
+TEST(Cli, InterruptedRunResumesToTheUninterruptedResult) {
+    testing::TempDir whole, parts;
+    for (auto* d : {&whole, &parts})
+        fs::copy_file(data_path("mcml-1.2.2/b_giov_n15.mci"), *d / "b.mci");
+    const std::vector<std::string> args = {"mcml",      "b.mci", "--photons", "4000000",
+                                           "--threads", "2",     "--batch",   "20000"};
+    const auto full = run_ssslab(args, whole.path());
+    ASSERT_EQ(full.exit_code, 0) << full.err;
+
+    // Start the same run, interrupt it with SIGINT, and check it saved a checkpoint only.
+    const std::string bin = testing::ssslab_binary();
+    std::vector<std::string> argv_s = {bin};
+    argv_s.insert(argv_s.end(), args.begin(), args.end());
+    argv_s.push_back("-q");
+    std::vector<char*> argv;
+    for (auto& s : argv_s) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    const fs::path cwd = fs::current_path();
+    fs::current_path(parts.path());
+    pid_t pid = 0;
+    ASSERT_EQ(posix_spawn(&pid, bin.c_str(), nullptr, nullptr, argv.data(), environ), 0);
+    fs::current_path(cwd);
+    std::this_thread::sleep_for(std::chrono::milliseconds(700));
+    ::kill(pid, SIGINT);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status));
+    ASSERT_EQ(WEXITSTATUS(status), 130) << "the run finished before the interruption";
+    EXPECT_EQ(parts.files(), (std::vector<std::string>{"b.mci", "b_giov_n15.mco.ckpt"}));
+
+    const auto resumed = run_ssslab(args, parts.path());
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    for (const char* f : {"b_giov_n15.mco", "b_giov_n15_stderr.mco"})
+        EXPECT_EQ(testing::lines_from(testing::read_text(whole / f), 11),
+                  testing::lines_from(testing::read_text(parts / f), 11))
+            << f;
+    EXPECT_NE(
+        testing::read_text(parts / "b_giov_n15.mco.toml").find("resumed_from_checkpoint = 'yes'"),
+        std::string::npos);
+    EXPECT_FALSE(fs::exists(parts / "b_giov_n15.mco.ckpt"));
+}
+
+TEST(Cli, RunWithoutArgumentsIsTheDefaultJob) {
+    testing::TempDir dir;
+    const auto r = run_ssslab({"run", "--photons", "2000", "--out", "d"}, dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    for (const char* m : {"Apple", "Marble", "Ketchup", "Skin1", "Wholemilk"}) {
+        EXPECT_TRUE(fs::exists(dir / "d" / (std::string(m) + ".csv"))) << m;
+        EXPECT_TRUE(fs::exists(dir / "d" / (std::string(m) + ".csv.toml"))) << m;
+    }
+}
+
+}  // namespace
+}  // namespace ssslab
