@@ -1,6 +1,7 @@
 // Google Benchmark micro-benchmarks of the MCML engine's inner kernels. The end-to-end figures
 // (photons/ms, ns per event) come from `ssslab bench`.
 #include "core/fastmath.h"
+#include "core/philox.h"
 #include "core/rng.h"
 #include "core/ziggurat.h"
 #include "mcml/transport.h"
@@ -17,6 +18,22 @@ void BM_PhiloxUniform(benchmark::State& state) {
     for (auto _ : state) benchmark::DoNotOptimize(rng.uniform());
 }
 BENCHMARK(BM_PhiloxUniform);
+
+void BM_PhiloxGroup(benchmark::State& state) {
+    std::uint64_t out[16];
+    std::uint32_t c = 0;
+    const bool portable = state.range(0) == 0;
+    for (auto _ : state) {
+        if (portable)
+            philox4x32_10_group_portable(1, 2, c, 3, 4, 5, out);
+        else
+            philox4x32_10_group(1, 2, c, 3, 4, 5, out);
+        benchmark::DoNotOptimize(out);
+        c += 8;
+    }
+    state.SetLabel(portable ? "Random123 scalar" : (philox_uses_avx2() ? "AVX2" : "portable"));
+}
+BENCHMARK(BM_PhiloxGroup)->Arg(0)->Arg(1);
 
 void BM_ExpZiggurat(benchmark::State& state) {
     RngStream rng(1, rng_domain::kTest, 0);

@@ -190,7 +190,29 @@ void ConfigTable::fail_at(const toml::node* n, std::string_view key,
 }
 
 void ConfigTable::fail(std::string_view key, const std::string& message) const {
-    fail_at(find(key), key, message);
+    const toml::node* n = find(key);
+    if (!n && table_) {
+        // A required key is missing: if the table holds a key that is not asked for and is
+        // spelled almost like it, the real error is that misspelling (say so, at its line).
+        const auto u = doc_->used_.find(path_);
+        std::string best;
+        int best_d = 1 << 30, line = 0, column = 0;
+        for (auto&& [k, v] : *table_) {
+            const std::string cand(k.str());
+            if (u != doc_->used_.end() && u->second.count(cand)) continue;
+            const int d = edit_distance(cand, std::string(key));
+            if (d < best_d) {
+                best_d = d, best = cand;
+                line = static_cast<int>(k.source().begin.line);
+                column = static_cast<int>(k.source().begin.column);
+            }
+        }
+        if (!best.empty() && best_d <= std::max<int>(2, static_cast<int>(key.size()) / 3))
+            throw InputError({doc_->name(), line, column}, key_path(best),
+                             "unknown key (did you mean '" + std::string(key) + "'?); " + message,
+                             doc_->source_line(line));
+    }
+    fail_at(n, key, message);
 }
 
 double ConfigTable::to_number(std::string_view key, const toml::node& n, Range range) const {
@@ -236,13 +258,6 @@ std::optional<double> ConfigTable::optional_number(std::string_view key, Range r
     return v;
 }
 
-namespace {
-std::int64_t as_whole(double v, bool& ok) {
-    ok = std::floor(v) == v && std::fabs(v) < 9.0e18;
-    return ok ? static_cast<std::int64_t>(v) : 0;
-}
-}  // namespace
-
 std::int64_t ConfigTable::integer(std::string_view key, Range range) {
     mark(key);
     const toml::node* n = find(key);
@@ -259,9 +274,16 @@ std::int64_t ConfigTable::integer(std::string_view key, std::int64_t fallback, R
         if (n->is_integer()) {
             v = n->as_integer()->get();
         } else if (n->is_floating_point()) {
-            bool ok = false;
-            v = as_whole(n->as_floating_point()->get(), ok);
-            if (!ok) fail_at(n, key, "expected an integer, got a number with a fractional part");
+            const double x = n->as_floating_point()->get();
+            if (!std::isfinite(x)) fail_at(n, key, "expected a finite integer");
+            if (std::floor(x) != x)
+                fail_at(n, key, "expected an integer, got a number with a fractional part");
+            if (!range.contains(x) || std::fabs(x) >= 9.0e18) {
+                std::ostringstream os;
+                os << "expected an integer in " << range.describe() << ", got " << x;
+                fail_at(n, key, os.str());
+            }
+            v = static_cast<std::int64_t>(x);
         } else {
             fail_at(n, key, "expected an integer, got " + type_name(*n));
         }

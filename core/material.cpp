@@ -66,6 +66,16 @@ std::string material_names() {
     return s;
 }
 
+std::string nearest_material(const std::string& name) {
+    std::string best;
+    int best_d = 1 << 30;
+    for (const auto& q : freude14_materials()) {
+        const int d = edit_distance(lower(name), lower(q.name));
+        if (d < best_d) best_d = d, best = q.name;
+    }
+    return best_d <= 3 ? best : std::string();
+}
+
 namespace {
 
 // Read a length-dependent RGB quantity given either per mm or per cm; returns it per cm.
@@ -96,14 +106,9 @@ Medium medium_from_config(ConfigTable& t) {
         const std::string name = t.string("preset");
         auto p = find_material(name);
         if (!p) {
-            std::string best;
-            int best_d = 1 << 30;
-            for (const auto& q : freude14_materials()) {
-                const int d = edit_distance(lower(name), lower(q.name));
-                if (d < best_d) best_d = d, best = q.name;
-            }
             std::string msg = "unknown material \"" + name + "\"";
-            if (best_d <= 3) msg += " (did you mean \"" + best + "\"?)";
+            const std::string near = nearest_material(name);
+            if (!near.empty()) msg += " (did you mean \"" + near + "\"?)";
             t.fail("preset", msg + "; known materials: " + material_names());
         }
         if (explicit_coeffs)

@@ -59,6 +59,8 @@ const std::vector<std::string>& freude14_main_materials();
 std::optional<Medium> find_material(const std::string& name);
 /// The preset names, comma-separated, for error messages.
 std::string material_names();
+/// The preset name nearest to `name` (edit distance at most 3), or "" if none is near.
+std::string nearest_material(const std::string& name);
 
 /// Read a medium from a config table: either `preset = "Skin1"` (optionally with `thickness_cm`
 /// or `thickness_mm`, `eta_above`, `eta_below`), or explicit coefficients with their unit in the

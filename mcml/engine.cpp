@@ -20,13 +20,14 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <stdexcept>
 
 namespace ssslab::mcml {
 
 namespace {
 
 // Bump when a change alters the numbers the default engine produces for a given seed.
-constexpr const char* kEngineVersion = "mcml-default-1";
+constexpr const char* kEngineVersion = "mcml-default-3";
 
 using Clock = std::chrono::steady_clock;
 
@@ -193,6 +194,7 @@ std::string checkpoint_fingerprint(const RunSpec& run, const EngineOptions& o,
 
 RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
     check_run(run, /*compat=*/false);
+    if (opt.stream >= 0x7000) throw std::invalid_argument("run_default: stream >= 0x7000");
     RunResult res;
     res.layout = TallyLayout::make(run, opt.mode);
     const TallyLayout& layout = res.layout;

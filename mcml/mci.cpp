@@ -3,6 +3,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -79,7 +80,7 @@ class Reader {
             }
             if (!dl.tokens.empty()) return dl;
         }
-        fail(static_cast<int>(lines_.size()), 0, entry,
+        fail(std::max(1, static_cast<int>(lines_.size())), 0, "",
              "unexpected end of file: expected " + entry);
     }
 
@@ -219,7 +220,8 @@ MciFile parse_mci(std::string_view text, const std::string& name, const MciOptio
 
         auto ambient = [&](Layer& l, const char* side) {
             const std::string entry = run_tag + "n of the medium " + side;
-            DataLine d = rd.next(std::string("the refractive index of the medium ") + side);
+            DataLine d = rd.next(std::string("the refractive index of the medium ") + side +
+                                 " of run " + std::to_string(r));
             rd.expect_count(d, 1, entry, "1 value (the refractive index)");
             l.n = rd.number(d, 0, entry);
             l.source_line = d.line;

@@ -131,10 +131,13 @@ void check_run(const RunSpec& run, bool compat) {
                                   "integers; use the default mode for larger grids");
     }
     const double cells = static_cast<double>(g.nr) * (2.0 * g.na + g.nz);
-    if (cells > 2e8)
-        throw InfeasibleError(where(run, 0) + "the grid needs " + std::to_string(cells) +
-                              " tally cells (nr x (2 na + nz)); more than 2e8 would not fit in "
-                              "memory. Use fewer bins.");
+    if (cells > 2e8) {
+        std::ostringstream os;
+        os << where(run, 0) << "the grid needs " << cells
+           << " tally cells (nr x (2 na + nz)); more than 2e8 would not fit in memory. Use fewer "
+              "bins.";
+        throw InfeasibleError(os.str());
+    }
 }
 
 }  // namespace ssslab::mcml

@@ -33,6 +33,12 @@ inline constexpr double kRouletteChance = 0.1;     ///< roulette survival (CHANC
 /// cos = (1 + g^2 - ((1 - g^2) / (1 - g + 2 g u))^2) / (2 g), and 2u - 1 for g = 0.
 inline double sample_hg_cos_mcml(double g, double u) {
     double cost;
+    if (std::fabs(g) == 1.0) {
+        // The formula is 0/0 for g = 1, u = 0 and g = -1, u = 1, and ran3 can return 0 and 1:
+        // the original then turns NaN into an array index (undefined behaviour). The limit is
+        // returned instead; for every other draw it is what the formula gives.
+        return g;
+    }
     if (g == 0.0) {
         cost = 2 * u - 1;
     } else {
@@ -139,7 +145,9 @@ inline void spin_direction(double g, double& ux_io, double& uy_io, double& uz_io
         uy_io = sint * (uy * uz * cosp + ux * sinp) / temp + uy * cost;
         uz_io = -sint * cosp * temp + uz * cost;
     } else {
-        const double temp = std::sqrt(1.0 - uz * uz);
+        // sqrt(ux^2 + uy^2) rather than MCML's sqrt(1 - uz^2): near the z axis 1 - uz^2 has lost
+        // most of its digits (at |uz| = 1 - 1e-12 the new direction's length was off by 1e-4).
+        const double temp = std::sqrt(ux * ux + uy * uy);
         const double f = sint / temp;
         ux_io = f * (ux * uz * cosp - uy * sinp) + ux * cost;
         uy_io = f * (uy * uz * cosp + ux * sinp) + uy * cost;

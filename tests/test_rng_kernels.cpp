@@ -1,0 +1,70 @@
+// The counter-based generator: the eight-block Philox4x32-10 (AVX2 where available) against
+// Random123's own implementation, and the counter layout of RngStream.
+#include "core/philox.h"
+#include "core/rng.h"
+
+#include <Random123/philox.h>
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace ssslab {
+namespace {
+
+TEST(Philox, GroupEqualsRandom123BlockByBlock) {
+    std::mt19937_64 pick(42);
+    r123::Philox4x32 gen;
+    for (int trial = 0; trial < 2000; ++trial) {
+        const auto k0 = static_cast<std::uint32_t>(pick()), k1 = static_cast<std::uint32_t>(pick());
+        // Include counters at the top of the 32-bit range.
+        const std::uint32_t c0 =
+            trial % 3 == 0 ? 0xFFFFFFF0u : static_cast<std::uint32_t>(pick()) & ~7u;
+        const auto c1 = static_cast<std::uint32_t>(pick()), c2 = static_cast<std::uint32_t>(pick()),
+                   c3 = static_cast<std::uint32_t>(pick());
+        std::uint64_t fast[16], portable[16];
+        philox4x32_10_group(k0, k1, c0, c1, c2, c3, fast);
+        philox4x32_10_group_portable(k0, k1, c0, c1, c2, c3, portable);
+        for (unsigned i = 0; i < kPhiloxGroup; ++i) {
+            const auto r = gen({{c0 + i, c1, c2, c3}}, {{k0, k1}});
+            const std::uint64_t w0 = (std::uint64_t(r[0]) << 32) | r[1];
+            const std::uint64_t w1 = (std::uint64_t(r[2]) << 32) | r[3];
+            ASSERT_EQ(fast[2 * i], w0) << "trial " << trial << " block " << i;
+            ASSERT_EQ(fast[2 * i + 1], w1);
+            ASSERT_EQ(portable[2 * i], w0);
+            ASSERT_EQ(portable[2 * i + 1], w1);
+        }
+    }
+    RecordProperty("avx2", philox_uses_avx2() ? "yes" : "no");
+}
+
+TEST(Philox, KnownAnswerOfRandom123) {
+    // Random123's kat_vectors: philox4x32 10 rounds, counter and key zero.
+    r123::Philox4x32 gen;
+    const auto r = gen({{0, 0, 0, 0}}, {{0, 0}});
+    EXPECT_EQ(r[0], 0x6627e8d5u);
+    EXPECT_EQ(r[1], 0xe169c58du);
+    EXPECT_EQ(r[2], 0xbc57ac4cu);
+    EXPECT_EQ(r[3], 0x9b00dbd8u);
+    std::uint64_t out[16];
+    philox4x32_10_group(0, 0, 0, 0, 0, 0, out);
+    EXPECT_EQ(out[0], 0x6627e8d5e169c58dull);
+    EXPECT_EQ(out[1], 0xbc57ac4c9b00dbd8ull);
+}
+
+TEST(RngStream, CounterLayoutIsSeedDomainIndex) {
+    const std::uint64_t seed = 0x0123456789abcdefull, index = 0xfedcba9876543210ull;
+    const std::uint32_t domain = rng_domain::kMcml + 2;
+    RngStream s(seed, domain, index);
+    r123::Philox4x32 gen;
+    for (std::uint32_t block = 0; block < 20; ++block) {
+        const auto r =
+            gen({{block, domain << 16, 0x76543210u, 0xfedcba98u}}, {{0x89abcdefu, 0x01234567u}});
+        EXPECT_EQ(s.next_u64(), (std::uint64_t(r[0]) << 32) | r[1]) << block;
+        EXPECT_EQ(s.next_u64(), (std::uint64_t(r[2]) << 32) | r[3]) << block;
+    }
+    EXPECT_EQ(s.words_drawn(), 40u);
+    EXPECT_THROW(RngStream(1, 1u << 16, 0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace ssslab
