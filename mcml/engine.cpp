@@ -137,7 +137,6 @@ void simulate_batch(const RunSpec& run, const TallyLayout& layout, RngStream& rn
         FullSink<false> sink(run, layout, tally.v.data());
         Transport<false, RngStream, FullSink<false>> tr(run, rng, sink);
         tr.trace_interleaved(photons, rsp);
-        sink.flush();
         tally.events = tr.events();
     } else {
         ProfileSink sink(run, layout, tally.v.data());

@@ -37,25 +37,7 @@ class FullSink {
         }
     }
 
-    void absorb(const Photon& p, double dwa) {
-        if constexpr (kCompat) {
-            deposit(p.x, p.y, p.z, dwa);
-        } else {
-            // Deposits are buffered and binned in a tight loop (flush()): the bin index needs a
-            // square root whose latency then overlaps instead of stalling the transport. The
-            // order of the additions is unchanged.
-            deposit(p.x, p.y, p.z, dwa);
-        }
-    }
-
-    /// Bin the buffered absorption deposits; call before reading the tally.
-    void flush() {
-        for (int i = 0; i < n_pending_; ++i) {
-            const Deposit& d = pending_[static_cast<size_t>(i)];
-            deposit(d.x, d.y, d.z, d.w);
-        }
-        n_pending_ = 0;
-    }
+    void absorb(const Photon& p, double dwa) { deposit(p.x, p.y, p.z, dwa); }
     void reflect(const Photon& p) { exit(L_.rd_ra, p, angle_index(-p.uz)); }
     void transmit(const Photon& p) { exit(L_.tt_ra, p, angle_index(p.uz)); }
 
@@ -76,11 +58,6 @@ class FullSink {
     }
 
   private:
-    struct Deposit {
-        double x, y, z, w;
-    };
-    static constexpr int kPending = 64;
-
     void deposit(double x, double y, double z, double dwa) {
         const double izd = kCompat ? z / dz_ : z * inv_dz_;
         const int iz = izd > L_.nz - 1 ? L_.nz - 1 : static_cast<int>(izd);
@@ -109,8 +86,6 @@ class FullSink {
     double* t1_;
     double dz_, dr_, da_, inv_dz_, inv_dr_, inv_da_;
     std::vector<double> cos_bounds_;
-    std::array<Deposit, kPending> pending_{};
-    int n_pending_ = 0;
 };
 
 /// Radial reflectance and transmittance with an overflow bin, and absorption per layer.
@@ -124,7 +99,6 @@ class ProfileSink {
     }
     void reflect(const Photon& p) { t_[L_.rd_r + index(p)] += p.w; }
     void transmit(const Photon& p) { t_[L_.tt_r + index(p)] += p.w; }
-    void flush() {}
 
   private:
     size_t index(const Photon& p) const {

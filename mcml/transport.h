@@ -110,7 +110,8 @@ inline double fresnel_mcml(double n1, double n2, double ca1, double* ca2_ptr) {
 /// mode isotropic scattering (g = 0) draws the new direction directly, since it does not depend
 /// on the old one, and the azimuth comes from sincos_2pi().
 template <bool kCompat, class Rng>
-inline void spin_direction(double g, double& ux_io, double& uy_io, double& uz_io, Rng& rng) {
+[[gnu::always_inline]] inline void spin_direction(double g, double& ux_io, double& uy_io,
+                                                  double& uz_io, Rng& rng) {
     double cost, sint, cosp, sinp;
     const double ux = ux_io, uy = uy_io, uz = uz_io;
     if constexpr (kCompat) {
@@ -200,7 +201,7 @@ class Transport {
     /// compatibility mode traces photons one after the other, as the original.
     void trace_interleaved(std::int64_t n, double rsp) {
         static_assert(!kCompat, "compatibility mode traces photons in the original order");
-        constexpr int kLanes = 4;
+        constexpr int kLanes = 2;
         Photon p[kLanes];
         std::int64_t launched = 0;
         int active = 0;

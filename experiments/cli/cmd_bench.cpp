@@ -56,6 +56,8 @@ mcml::RunSpec skin1_red_run() {
 struct BenchArgs {
     int threads = 0;
     bool quick = false;
+    int repeat = 3;
+    std::string only;
     std::string write_mci;
 };
 
@@ -83,6 +85,7 @@ int run_bench(const BenchArgs& a) {
     std::printf("%-34s %7s %10s %12s %12s %9s %11s\n", "case", "threads", "photons", "photons/ms",
                 "ns/event", "events/ph", "x original");
     for (const auto& c : cases) {
+        if (!a.only.empty() && c.name.find(a.only) == std::string::npos) continue;
         double single = 0.0;
         std::vector<int> counts = {1};
         if (all > 1) counts.push_back(all);
@@ -92,7 +95,12 @@ int run_bench(const BenchArgs& a) {
             o.threads = t;
             o.mode = c.mode;
             o.budget.photons = c.photons;
-            const mcml::RunResult r = mcml::run_default(c.run, o);
+            // Best of `repeat` runs: interference from other processes only ever slows a run.
+            mcml::RunResult r = mcml::run_default(c.run, o);
+            for (int k = 1; k < a.repeat; ++k) {
+                mcml::RunResult again = mcml::run_default(c.run, o);
+                if (again.seconds < r.seconds) r = std::move(again);
+            }
             const double ppms = static_cast<double>(r.photons) / (r.seconds * 1e3);
             const double ns_event = r.seconds * 1e9 / static_cast<double>(r.events);
             char ratio[32] = "-";
@@ -125,6 +133,9 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
         "and all threads");
     sub->add_option("--threads", a->threads, "Threads for the multi-threaded rows (default: all)");
     sub->add_flag("--quick", a->quick, "A tenth of the photons");
+    sub->add_option("--repeat", a->repeat, "Runs per row; the fastest is reported (default 3)")
+        ->check(CLI::PositiveNumber);
+    sub->add_option("--case", a->only, "Only the cases whose name contains this text");
     sub->add_option("--write-mci", a->write_mci,
                     "Write the benchmark inputs as .mci files into this directory (to time the "
                     "original program on the same cases) and exit");
