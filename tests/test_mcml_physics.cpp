@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 
@@ -86,6 +87,7 @@ void expect_finite(const RunResult& r) {
 void expect_within_3se(double value, double se, double expected, const char* what) {
     ASSERT_GT(se, 0.0) << what;
     const double z = (value - expected) / se;
+    std::printf("%s: %.6f +- %.6f vs %.6f (z = %.2f)\n", what, value, se, expected, z);
     EXPECT_LT(std::fabs(z), 3.0) << what << ": " << value << " +- " << se << " vs " << expected
                                  << " (z = " << z << ")";
 }
@@ -166,6 +168,8 @@ TEST(McmlLiterature, DefaultModeAgreesWithTheOriginalProgramBinByBin) {
             add(v.tt_a, se.tt_a, ref.result.tt_a);
         }
         ASSERT_GT(bins, 40);
+        std::printf("%s: chi2 = %.1f over %d bins (critical %.1f)\n", name, chi2, bins,
+                    testing::chi2_critical(bins, alpha));
         EXPECT_LT(chi2, testing::chi2_critical(bins, alpha)) << bins << " bins";
         expect_within_3se(v.rd, se.rd * std::sqrt(var_factor), ref.result.rd, "Rd vs original");
     }
