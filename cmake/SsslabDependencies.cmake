@@ -4,6 +4,8 @@ find_package(TBB CONFIG REQUIRED)             # libtbb-dev: parallel batches
 find_package(fmt CONFIG REQUIRED)             # libfmt-dev: formatting
 find_package(CLI11 CONFIG REQUIRED)           # libcli11-dev: command line
 find_package(tomlplusplus CONFIG REQUIRED)    # libtomlplusplus-dev: TOML with source positions
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(xxhash REQUIRED IMPORTED_TARGET libxxhash)  # libxxhash-dev: artifact content hashes
 find_path(RANDOM123_INCLUDE_DIR Random123/philox.h REQUIRED)  # librandom123-dev: Philox streams
 add_library(ssslab_random123 INTERFACE)
 target_include_directories(ssslab_random123 SYSTEM INTERFACE ${RANDOM123_INCLUDE_DIR})

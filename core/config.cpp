@@ -351,6 +351,23 @@ std::string ConfigTable::choice(std::string_view key, std::string fallback,
     fail(key, msg);
 }
 
+std::vector<std::string> ConfigTable::string_list(std::string_view key) {
+    mark(key);
+    const toml::node* n = find(key);
+    if (!n) fail(key, "required list of strings is missing");
+    if (!n->is_array()) fail_at(n, key, "expected an array of strings, got " + type_name(*n));
+    std::vector<std::string> out;
+    toml::array resolved;
+    for (const toml::node& item : *n->as_array()) {
+        if (!item.is_string())
+            fail_at(&item, key, "expected an array of strings, found " + type_name(item));
+        out.push_back(item.as_string()->get());
+        resolved.push_back(out.back());
+    }
+    resolved_->insert_or_assign(key, std::move(resolved));
+    return out;
+}
+
 std::optional<std::array<double, 3>> ConfigTable::optional_rgb(std::string_view key, Range range) {
     mark(key);
     const toml::node* n = find(key);

@@ -67,6 +67,8 @@ class ConfigTable {
     /// A string from a fixed set of choices (the error lists them).
     std::string choice(std::string_view key, std::string fallback,
                        std::initializer_list<std::string_view> choices);
+    /// A required array of strings (may be empty).
+    std::vector<std::string> string_list(std::string_view key);
     std::optional<double> optional_number(std::string_view key, Range range = Range::any());
     std::optional<std::int64_t> optional_integer(std::string_view key, Range range = Range::any());
     /// Three numbers per RGB channel: an array of three, or one number used for all three.

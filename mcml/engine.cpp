@@ -37,7 +37,7 @@ double seconds_since(Clock::time_point t0) {
 
 // ---- checkpoints: a small binary file written atomically -------------------------------------
 
-constexpr char kMagic[8] = {'S', 'S', 'S', 'L', 'C', 'K', 'P', '1'};
+constexpr char kMagic[8] = {'S', 'S', 'S', 'L', 'C', 'K', 'P', '2'};
 
 struct Checkpoint {
     std::string fingerprint;
@@ -45,6 +45,7 @@ struct Checkpoint {
     double seconds = 0;
     std::vector<double> sum, q;
     std::vector<ProgressPoint> history;
+    std::vector<Snapshot> snapshots;
 };
 
 template <class T>
@@ -69,6 +70,13 @@ void save_checkpoint(const std::string& path, const Checkpoint& c) {
     put_vec(out, c.q);
     put<std::uint64_t>(out, c.history.size());
     for (const auto& p : c.history) put(out, p);
+    put<std::uint64_t>(out, c.snapshots.size());
+    for (const auto& sn : c.snapshots) {
+        put(out, sn.photons);
+        put(out, sn.batches);
+        put(out, sn.seconds);
+        put_vec(out, sn.mean);
+    }
     write_file_atomic(path, out);
 }
 
@@ -100,7 +108,7 @@ class Cursor {
     }
     void need(size_t n) const {
         if (pos_ + n > d_.size())
-            throw InputError({path_, 0, 0}, "", "checkpoint file is truncated or corrupt");
+            throw InputError({path_, 0, 0}, "", "file is truncated or corrupt");
     }
 
   private:
@@ -126,8 +134,19 @@ std::optional<Checkpoint> load_checkpoint(const std::string& path) {
     k.q = c.get_vec();
     const auto nh = c.get<std::uint64_t>();
     for (std::uint64_t i = 0; i < nh; ++i) k.history.push_back(c.get<ProgressPoint>());
+    const auto ns = c.get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < ns; ++i) {
+        Snapshot sn;
+        sn.photons = c.get<std::uint64_t>();
+        sn.batches = c.get<std::uint64_t>();
+        sn.seconds = c.get<double>();
+        sn.mean = c.get_vec();
+        k.snapshots.push_back(std::move(sn));
+    }
     return k;
 }
+
+constexpr char kResultMagic[8] = {'S', 'S', 'S', 'L', 'R', 'E', 'S', '1'};
 
 // Simulate one batch of photons into `tally` (cleared first) and reduce it.
 void simulate_batch(const RunSpec& run, const TallyLayout& layout, RngStream& rng,
@@ -156,6 +175,10 @@ void budget_quantity(const BatchAccumulator& acc, const TallyLayout& l, double& 
 }
 
 }  // namespace
+
+const char* engine_version() {
+    return kEngineVersion;
+}
 
 const char* to_string(StopReason r) {
     switch (r) {
@@ -200,7 +223,9 @@ RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
     res.rsp = specular_reflectance(run.layers);
     res.batch_photons =
         opt.batch_photons > 0 ? opt.batch_photons : default_batch_photons(opt.budget, run.photons);
-    res.threads = opt.threads > 0 ? opt.threads : tbb::info::default_concurrency();
+    // threads = 0: the caller's arena (all cores, shared with whatever else runs in it, e.g. other
+    // runs of an experiment); threads > 0: an arena of its own with that many.
+    res.threads = opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency();
 
     const Budget& b = opt.budget;
     std::int64_t total = b.photons ? *b.photons : ((b.seconds || b.rel_error) ? 0 : run.photons);
@@ -228,6 +253,7 @@ RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
             res.events = ck->events;
             resumed_seconds = ck->seconds;
             res.history = std::move(ck->history);
+            res.snapshots = std::move(ck->snapshots);
             res.resumed = true;
         }
     }
@@ -263,11 +289,11 @@ RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
         ck.sum = acc.raw_sum();
         ck.q = acc.raw_q();
         ck.history = res.history;
+        ck.snapshots = res.snapshots;
         save_checkpoint(opt.checkpoint_path, ck);
     };
 
-    tbb::task_arena arena(res.threads);
-    arena.execute([&] {
+    auto body = [&] {
         tbb::parallel_pipeline(
             tokens,
             tbb::make_filter<
@@ -297,6 +323,9 @@ RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
                     ProgressPoint p{acc.samples(), resumed_seconds + seconds_since(t0), 0.0, 0.0};
                     budget_quantity(acc, layout, p.value, p.se);
                     res.history.push_back(p);
+                    const std::uint64_t nb = acc.batches();
+                    if (opt.snapshots && nb >= 4 && (nb & (nb - 1)) == 0)
+                        res.snapshots.push_back({acc.samples(), nb, p.seconds, acc.means()});
                     if (opt.on_batch) opt.on_batch(p);
                     if (acc.batches() >= max_batches) {
                         res.reason = StopReason::kPhotons;
@@ -324,7 +353,11 @@ RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
                 }
                 free_list.push(w);
             }));
-    });
+    };
+    if (opt.threads > 0)
+        tbb::task_arena(res.threads).execute(body);
+    else
+        body();
 
     res.seconds = resumed_seconds + seconds_since(t0);
     const bool finished = stop_flag.load();
@@ -342,6 +375,9 @@ RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
     res.values = acc.means();
     res.divisor = 1.0;
     res.se = acc.standard_errors();
+    if (opt.snapshots && finished && res.batches > 0 &&
+        (res.snapshots.empty() || res.snapshots.back().batches != res.batches))
+        res.snapshots.push_back({res.photons, res.batches, res.history.back().seconds, res.values});
     return res;
 }
 
@@ -401,6 +437,73 @@ RunResult run_compat(const RunSpec& run, Ran3& rng, const Budget& budget,
     res.divisor = static_cast<double>(done);
     res.se = acc.standard_errors();
     return res;
+}
+
+std::string serialize_result(const RunResult& r) {
+    std::string out(kResultMagic, 8);
+    const TallyLayout& l = r.layout;
+    put<std::int32_t>(out, l.mode == TallyMode::kFull ? 0 : 1);
+    for (int v : {l.nr, l.nz, l.na, l.nl}) put<std::int32_t>(out, v);
+    for (size_t v : {l.rd_ra, l.tt_ra, l.a_rz, l.rd_r, l.tt_r, l.a_layer, l.rd_a, l.tt_a, l.a_z,
+                     l.a_l, l.rd, l.a, l.tt, l.energy, l.primary_size, l.size})
+        put<std::uint64_t>(out, v);
+    put_vec(out, r.values);
+    put(out, r.divisor);
+    put_vec(out, r.se);
+    put(out, r.rsp);
+    for (std::uint64_t v : {r.photons, r.batches, r.events}) put(out, v);
+    put(out, r.batch_photons);
+    put(out, r.seconds);
+    put<std::int32_t>(out, r.threads);
+    put<std::int32_t>(out, static_cast<std::int32_t>(r.reason));
+    put<std::int32_t>(out, r.resumed ? 1 : 0);
+    put<std::uint64_t>(out, r.history.size());
+    for (const auto& p : r.history) put(out, p);
+    put<std::uint64_t>(out, r.snapshots.size());
+    for (const auto& sn : r.snapshots) {
+        put(out, sn.photons);
+        put(out, sn.batches);
+        put(out, sn.seconds);
+        put_vec(out, sn.mean);
+    }
+    return out;
+}
+
+RunResult deserialize_result(const std::string& data, const std::string& name) {
+    if (data.size() < 8 || std::memcmp(data.data(), kResultMagic, 8) != 0)
+        throw InputError({name, 0, 0}, "", "not an ssslab MCML result file");
+    Cursor c(data, name);
+    RunResult r;
+    TallyLayout& l = r.layout;
+    l.mode = c.get<std::int32_t>() == 0 ? TallyMode::kFull : TallyMode::kProfile;
+    for (int* v : {&l.nr, &l.nz, &l.na, &l.nl}) *v = c.get<std::int32_t>();
+    for (size_t* v : {&l.rd_ra, &l.tt_ra, &l.a_rz, &l.rd_r, &l.tt_r, &l.a_layer, &l.rd_a, &l.tt_a,
+                      &l.a_z, &l.a_l, &l.rd, &l.a, &l.tt, &l.energy, &l.primary_size, &l.size})
+        *v = c.get<std::uint64_t>();
+    r.values = c.get_vec();
+    r.divisor = c.get<double>();
+    r.se = c.get_vec();
+    r.rsp = c.get<double>();
+    for (std::uint64_t* v : {&r.photons, &r.batches, &r.events}) *v = c.get<std::uint64_t>();
+    r.batch_photons = c.get<std::int64_t>();
+    r.seconds = c.get<double>();
+    r.threads = c.get<std::int32_t>();
+    r.reason = static_cast<StopReason>(c.get<std::int32_t>());
+    r.resumed = c.get<std::int32_t>() != 0;
+    const auto nh = c.get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < nh; ++i) r.history.push_back(c.get<ProgressPoint>());
+    const auto ns = c.get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < ns; ++i) {
+        Snapshot sn;
+        sn.photons = c.get<std::uint64_t>();
+        sn.batches = c.get<std::uint64_t>();
+        sn.seconds = c.get<double>();
+        sn.mean = c.get_vec();
+        r.snapshots.push_back(std::move(sn));
+    }
+    if (r.values.size() != l.size || r.se.size() != l.size)
+        throw InputError({name, 0, 0}, "", "result file is inconsistent (tally sizes differ)");
+    return r;
 }
 
 McoResult mco_values(const RunSpec& run, const RunResult& r, bool compat) {

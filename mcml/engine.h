@@ -53,7 +53,21 @@ struct EngineOptions {
     int min_batches_for_error = 16;
     /// Called in batch order after each batch (progress display).
     std::function<void(const ProgressPoint&)> on_batch;
+    /// Record the per-photon means of the whole tally after 4, 8, 16, ... batches and at the
+    /// end (progressive estimates for error-vs-time studies).
+    bool snapshots = false;
 };
+
+/// The per-photon means of a run's tally after some batches.
+struct Snapshot {
+    std::uint64_t photons = 0, batches = 0;
+    double seconds = 0;
+    std::vector<double> mean;
+};
+
+/// Version of the default engine's numbers: it changes whenever a change alters what the engine
+/// produces for a given seed (it is part of every checkpoint and cache key).
+const char* engine_version();
 
 /// Batch size used when none is given: depends only on the photon budget (never on threads), so
 /// results are reproducible: N/1000 photons (at least 1000) for N >= 32000; N/32 below; 1000 when
@@ -76,6 +90,7 @@ struct RunResult {
     StopReason reason = StopReason::kPhotons;
     bool resumed = false;  ///< continued from a checkpoint
     std::vector<ProgressPoint> history;
+    std::vector<Snapshot> snapshots;  ///< with EngineOptions::snapshots
 
     double mean(size_t i) const { return values[i] / divisor; }
 };
@@ -89,6 +104,12 @@ RunResult run_default(const RunSpec& run, const EngineOptions& options);
 RunResult run_compat(const RunSpec& run, Ran3& rng, const Budget& budget,
                      const std::atomic<bool>* cancel = nullptr,
                      const std::function<void(const ProgressPoint&)>& on_batch = {});
+
+/// A finished run as bytes (exact doubles; the tally layout, history and snapshots included), for
+/// caches of results. The run spec is not included: the cache key stands for it.
+std::string serialize_result(const RunResult& r);
+/// Inverse of serialize_result(); `name` names the source in errors (InputError if corrupt).
+RunResult deserialize_result(const std::string& bytes, const std::string& name);
 
 /// Scale a full-layout result to the .mco quantities, and its standard errors.
 McoResult mco_values(const RunSpec& run, const RunResult& r, bool compat);

@@ -16,6 +16,9 @@ packages=(
   libgtest-dev libgmock-dev  # GoogleTest
   libbenchmark-dev      # Google Benchmark: micro-benchmarks
   zlib1g-dev            # zlib: reading the gzipped MCML reference outputs in the tests
+  libxxhash-dev         # xxHash: content hashes that key the artifact cache
+  python3-matplotlib    # plots of the experiment reports (run by Debian's /usr/bin/python3)
+  chromium              # headless check that the HTML reports open and show their plots
 )
 if [[ "${1:-}" == "--dev" ]]; then
   packages+=(clang-format)

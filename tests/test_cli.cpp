@@ -127,14 +127,19 @@ TEST(Cli, InterruptedRunResumesToTheUninterruptedResult) {
     EXPECT_FALSE(fs::exists(parts / "b_giov_n15.mco.ckpt"));
 }
 
-TEST(Cli, RunWithoutArgumentsIsTheDefaultJob) {
+TEST(Cli, RunWithoutArgumentsIsTheDefaultExperiment) {
     testing::TempDir dir;
-    const auto r = run_ssslab({"run", "--photons", "2000", "--out", "d"}, dir.path());
+    const auto dry = run_ssslab({"--dry-run"}, dir.path());  // no command: `run`
+    EXPECT_EQ(dry.exit_code, 0) << dry.err;
+    EXPECT_NE(dry.out.find("experiment freude14-profiles: 18 artifacts"), std::string::npos)
+        << dry.out;
+    const auto r = run_ssslab({"run", "--quick", "-q", "--results", "d"}, dir.path());
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    for (const char* m : {"Apple", "Marble", "Ketchup", "Skin1", "Wholemilk"}) {
-        EXPECT_TRUE(fs::exists(dir / "d" / (std::string(m) + ".csv"))) << m;
-        EXPECT_TRUE(fs::exists(dir / "d" / (std::string(m) + ".csv.toml"))) << m;
-    }
+    for (const char* m : {"Apple", "Marble", "Ketchup", "Skin1", "Wholemilk"})
+        EXPECT_TRUE(
+            fs::exists(dir / "d" / "freude14-profiles" / "profiles" / (std::string(m) + ".csv")))
+            << m;
+    EXPECT_TRUE(fs::exists(dir / "d" / "freude14-profiles" / "report.html"));
 }
 
 }  // namespace

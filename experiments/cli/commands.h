@@ -12,6 +12,7 @@ void register_profile(CLI::App& app, std::function<int()>& action);
 void register_materials(CLI::App& app, std::function<int()>& action);
 void register_bench(CLI::App& app, std::function<int()>& action);
 void register_run(CLI::App& app, std::function<int()>& action);
+void register_check(CLI::App& app, std::function<int()>& action);
 
 /// Parse and run; returns the exit status. Errors in input: 2; I/O: 3; interrupted: 130.
 int main(int argc, char** argv);

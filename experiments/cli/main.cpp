@@ -19,21 +19,25 @@ int main(int argc, char** argv) {
     app.require_subcommand(0, 1);
     std::function<int()> action;
     register_run(app, action);
+    register_check(app, action);
     register_mcml(app, action);
     register_profile(app, action);
     register_materials(app, action);
     register_bench(app, action);
+    // No command: `run` (the main job; options such as --quick or --dry-run go to it).
+    std::vector<std::string> args(argv, argv + argc);
+    const bool top_level_flag =
+        argc > 1 && (args[1] == "--help" || args[1] == "-h" || args[1] == "--version");
+    if (argc == 1 || (args[1].rfind("-", 0) == 0 && !top_level_flag))
+        args.insert(args.begin() + 1, "run");
+    std::vector<char*> av;
+    for (auto& a : args) av.push_back(a.data());
     try {
-        app.parse(argc, argv);
+        app.parse(static_cast<int>(av.size()), av.data());
     } catch (const CLI::ParseError& e) {
         return app.exit(e);
     }
-    if (!action) {
-        // No subcommand: the main job on its built-in default.
-        std::vector<const char*> args = {argv[0], "run"};
-        app.clear();
-        app.parse(static_cast<int>(args.size()), const_cast<char**>(args.data()));
-    }
+    if (!action) return app.exit(CLI::CallForHelp());
     try {
         return action();
     } catch (const InputError& e) {

@@ -1,0 +1,15 @@
+# Write a C++ source that returns the content of a text file (run at build time by
+# ssslab_embed_text, so the embedded copy follows every edit of the file).
+file(READ ${INPUT} content)
+string(FIND "${content}" ")EMBED\"" clash)
+if(NOT clash EQUAL -1)
+  message(FATAL_ERROR "${INPUT} contains the raw-string delimiter )EMBED\"")
+endif()
+set(text "// Generated from ${INPUT} by cmake/EmbedText.cmake.\n#include <string_view>\nnamespace ${NAMESPACE} {\nstd::string_view ${SYMBOL}() {\n    return R\"EMBED(${content})EMBED\";\n}\n}  // namespace ${NAMESPACE}\n")
+if(EXISTS ${OUTPUT})
+  file(READ ${OUTPUT} old)
+  if(old STREQUAL text)
+    return()
+  endif()
+endif()
+file(WRITE ${OUTPUT} "${text}")

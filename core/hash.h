@@ -1,0 +1,48 @@
+// Content hashes: the key of every cached artifact is a hash of everything that determines it
+// (design.md, "Data flow"). The hashed text is canonical: fields are named, numbers are written
+// with every significant digit, so a value read as 1e6 or 1000000 hashes alike and a change in
+// the 17th digit does not go unnoticed. XXH3-128 (libxxhash) is the hash.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace ssslab {
+
+/// Builds the canonical description of an artifact and hashes it.
+class ContentKey {
+  public:
+    explicit ContentKey(std::string_view kind) { text_ = std::string(kind) + "\n"; }
+
+    ContentKey& add(std::string_view name, std::string_view value);
+    ContentKey& add(std::string_view name, const char* value) {
+        return add(name, std::string_view(value));
+    }
+    ContentKey& add(std::string_view name, double value);
+    ContentKey& add(std::string_view name, std::int64_t value);
+    ContentKey& add(std::string_view name, std::uint64_t value);
+    ContentKey& add(std::string_view name, int value) {
+        return add(name, static_cast<std::int64_t>(value));
+    }
+    ContentKey& add(std::string_view name, bool value) {
+        return add(name, value ? "true" : "false");
+    }
+    ContentKey& add(std::string_view name, const std::array<double, 3>& value);
+    ContentKey& add(std::string_view name, const std::vector<double>& value);
+
+    /// The canonical text (for --dry-run --verbose and for debugging a key).
+    const std::string& text() const { return text_; }
+    /// 32 hex digits of XXH3-128 of the canonical text.
+    std::string hex() const;
+
+  private:
+    std::string text_;
+};
+
+/// XXH3-128 of arbitrary bytes as 32 hex digits.
+std::string hash_hex(std::string_view bytes);
+
+}  // namespace ssslab

@@ -1,0 +1,65 @@
+#include "experiments/runner/cache.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+
+#include <unistd.h>
+
+namespace ssslab::runner {
+
+namespace fs = std::filesystem;
+
+std::optional<fs::path> ArtifactCache::find(const std::string& kind, const std::string& key) const {
+    const fs::path dir = root_ / kind / key;
+    std::error_code ec;
+    if (fs::exists(dir / "manifest.toml", ec)) return dir;
+    return std::nullopt;
+}
+
+fs::path ArtifactCache::checkpoint_prefix(const std::string& kind, const std::string& key) const {
+    std::error_code ec;
+    fs::create_directories(root_ / kind, ec);
+    return root_ / kind / (key + ".ckpt");
+}
+
+fs::path ArtifactCache::store(const std::string& kind, const std::string& key,
+                              const std::map<std::string, std::string>& files) const {
+    const fs::path final_dir = root_ / kind / key;
+    const fs::path tmp = root_ / kind / (".tmp-" + key + "-" + std::to_string(::getpid()));
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+    fs::create_directories(tmp, ec);
+    if (ec) throw IoError("cannot create '" + tmp.string() + "': " + ec.message());
+    for (const auto& [name, content] : files) write_file_atomic(tmp / name, content);
+    if (std::rename(tmp.c_str(), final_dir.c_str()) != 0) {
+        const int err = errno;
+        fs::remove_all(tmp, ec);
+        if ((err == ENOTEMPTY || err == EEXIST) && fs::exists(final_dir / "manifest.toml", ec))
+            return final_dir;
+        throw IoError("cannot rename '" + tmp.string() + "' to '" + final_dir.string() +
+                      "': " + std::strerror(err));
+    }
+    return final_dir;
+}
+
+void ArtifactCache::remove_stale_temporaries() const {
+    std::error_code ec;
+    if (!fs::exists(root_, ec)) return;
+    const auto now = fs::file_time_type::clock::now();
+    for (const auto& kind : fs::directory_iterator(root_, ec)) {
+        if (!kind.is_directory()) continue;
+        for (const auto& e : fs::directory_iterator(kind.path(), ec)) {
+            const std::string n = e.path().filename().string();
+            if (n.rfind(".tmp-", 0) != 0) continue;
+            if (now - fs::last_write_time(e.path(), ec) > std::chrono::minutes(1))
+                fs::remove_all(e.path(), ec);
+        }
+    }
+}
+
+}  // namespace ssslab::runner

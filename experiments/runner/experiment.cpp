@@ -1,0 +1,124 @@
+#include "experiments/runner/experiment.h"
+
+#include "core/error.h"
+
+#include <algorithm>
+#include <cctype>
+#include <set>
+
+namespace ssslab::runner {
+
+namespace {
+
+Experiment parse(std::shared_ptr<ConfigDocument> doc) {
+    Experiment e;
+    e.doc = doc;
+    e.source = doc->name();
+    ConfigTable root = doc->root();
+
+    ConfigTable ex = root.require_table("experiment");
+    e.name = ex.string("name");
+    if (e.name.empty() ||
+        e.name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-_.") != std::string::npos ||
+        e.name[0] == '.')
+        ex.fail("name",
+                "expected a name of lower-case letters, digits, '-', '_' and '.' (it names the "
+                "results directory), got \"" +
+                    e.name + "\"");
+    e.title = ex.string("title", e.name);
+    e.description = ex.string("description", "");
+    e.seed = static_cast<std::uint64_t>(ex.integer("seed", 1, Range::nonnegative()));
+
+    ConfigTable mats = root.require_table("materials");
+    std::set<std::string> labels;
+    if (mats.has("presets")) {
+        auto presets = mats.string_list("presets");
+        for (size_t i = 0; i < presets.size(); ++i) {
+            auto m = find_material(presets[i]);
+            if (!m) {
+                std::string msg = "unknown material \"" + presets[i] + "\"";
+                const std::string near = nearest_material(presets[i]);
+                if (!near.empty()) msg += " (did you mean \"" + near + "\"?)";
+                mats.fail("presets", msg + "; known materials: " + material_names());
+            }
+            if (!labels.insert(m->name).second)
+                mats.fail("presets", "material \"" + m->name + "\" is listed twice");
+            e.materials.push_back({m->name, *m});
+        }
+    }
+    for (ConfigTable& c : mats.table_array("custom")) {
+        const std::string label = c.string("name");
+        if (label.empty() || label.find_first_of("/\\ \t\n\"'<>&") != std::string::npos)
+            c.fail("name", "expected a material name without spaces, slashes or quotes");
+        Medium m = medium_from_config(c);
+        m.name = label;
+        if (!labels.insert(label).second)
+            c.fail("name", "material \"" + label + "\" is defined twice");
+        e.materials.push_back({label, m});
+    }
+    if (e.materials.empty())
+        mats.fail("presets", "no materials: give presets = [...] or [[materials.custom]] tables");
+
+    ConfigTable mc = root.table_or_empty("mcml");
+    e.mcml.budget.photons = mc.optional_integer("photons", Range::closed(1, 9e18));
+    e.mcml.budget.seconds = mc.optional_number("seconds", Range::positive());
+    e.mcml.budget.rel_error = mc.optional_number("rel_error", Range::open(0, 1));
+    if (!e.mcml.budget.photons && !e.mcml.budget.seconds && !e.mcml.budget.rel_error) {
+        e.mcml.budget.photons = mcml::kFreude14Photons;
+        mc.record("photons", static_cast<std::int64_t>(mcml::kFreude14Photons));
+    }
+    e.mcml.quick_factor = mc.number("quick_factor", 0.02, Range::left_open(0, 1));
+    e.mcml.batch_photons = mc.integer("batch_photons", 0, Range::nonnegative());
+    ConfigTable grid = mc.table_or_empty("grid");
+    if (grid.has("dr_mm") && grid.has("dr_cm"))
+        grid.fail("dr_cm", "give dr once, in mm or in cm, not both");
+    if (auto v = grid.optional_number("dr_mm", Range::positive())) e.mcml.dr_cm = *v / 10.0;
+    if (auto v = grid.optional_number("dr_cm", Range::positive())) e.mcml.dr_cm = *v;
+    if (auto v = grid.optional_integer("nr", Range::closed(1, 1e7)))
+        e.mcml.nr = static_cast<int>(*v);
+
+    ConfigTable outs = root.require_table("outputs");
+    if (auto t = outs.table("profiles")) {
+        e.profiles.enabled = true;
+        e.profiles.unit =
+            t->choice("unit", "mm", {"mm", "cm"}) == "mm" ? LengthUnit::kMm : LengthUnit::kCm;
+    }
+    if (auto t = outs.table("profile_plots")) {
+        e.profile_plots.enabled = true;
+        e.profile_plots.linear_range_mfp =
+            t->number("linear_range_mfp", 2.0, Range::left_open(0, 1e4));
+    }
+    if (auto t = outs.table("convergence")) {
+        e.convergence.enabled = true;
+        e.convergence.materials = t->string_list("materials");
+        if (e.convergence.materials.empty())
+            t->fail("materials", "expected at least one material of this experiment");
+        for (const auto& m : e.convergence.materials)
+            if (!labels.count(m))
+                t->fail("materials", "\"" + m + "\" is not a material of this experiment");
+        e.convergence.reference_factor =
+            t->number("reference_factor", 4.0, Range::closed(1.0, 1000.0));
+        if (!e.mcml.budget.photons)
+            t->fail("materials",
+                    "a convergence study needs a photon budget in [mcml] (the reference run has "
+                    "reference_factor times as many photons)");
+    }
+    if (!e.profiles.enabled && !e.profile_plots.enabled && !e.convergence.enabled)
+        outs.fail("profiles",
+                  "no outputs: give at least one of [outputs.profiles], "
+                  "[outputs.profile_plots], [outputs.convergence]");
+    root.finish();
+    return e;
+}
+
+}  // namespace
+
+Experiment read_experiment(const std::string& path) {
+    return parse(ConfigDocument::parse_file(path));
+}
+
+Experiment parse_experiment(std::string_view text, const std::string& name) {
+    return parse(ConfigDocument::parse_string(text, name));
+}
+
+}  // namespace ssslab::runner

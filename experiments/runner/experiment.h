@@ -1,0 +1,74 @@
+// Experiment configs (TOML, under experiments/<group>/): what to compute and what to show.
+//
+//   [experiment]      name (results/<name>/), title, description, seed
+//   [materials]       presets = [...] (Freude14 Table 6.2) and/or [[materials.custom]] tables
+//                     (a name plus the keys of a material: sigma_a_per_mm, ..., see
+//                     core/material.h)
+//   [mcml]            the ground-truth engine's budget per RGB channel: photons, seconds or
+//                     rel_error; quick_factor (what --quick multiplies budgets by); batch_photons;
+//                     [mcml.grid] dr_mm / dr_cm and nr (default: Freude14 Table 6.1)
+//   [outputs.profiles]       CSV of R_d(r) per material and a summary table (unit = "mm"|"cm")
+//   [outputs.profile_plots]  linear plot near zero, log plot, r R(r) (linear_range_mfp)
+//   [outputs.convergence]    error against run time for `materials`, against an independent
+//                            reference run with reference_factor times the budget
+// Every error names file:line:column and the key.
+#pragma once
+
+#include "core/config.h"
+#include "core/material.h"
+#include "core/profile.h"
+#include "mcml/engine.h"
+#include "mcml/profile.h"
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ssslab::runner {
+
+struct MaterialEntry {
+    std::string label;  ///< name in tables and file names
+    Medium medium;
+};
+
+struct McmlSetup {
+    mcml::Budget budget;         ///< per RGB channel, before --quick
+    double quick_factor = 0.02;  ///< --quick multiplies photon and time budgets by this
+    std::int64_t batch_photons = 0;
+    std::optional<double> dr_cm;  ///< grid override (else Freude14 Table 6.1)
+    std::optional<int> nr;
+};
+
+struct Experiment {
+    std::string source;  ///< config file (or "<built-in>")
+    std::string name, title, description;
+    std::uint64_t seed = 1;
+    std::vector<MaterialEntry> materials;
+    McmlSetup mcml;
+
+    struct Profiles {
+        bool enabled = false;
+        LengthUnit unit = LengthUnit::kMm;
+    } profiles;
+    struct ProfilePlots {
+        bool enabled = false;
+        double linear_range_mfp = 2.0;  ///< the linear panel spans this many (largest) MFPs
+    } profile_plots;
+    struct Convergence {
+        bool enabled = false;
+        std::vector<std::string> materials;  ///< labels
+        double reference_factor = 4.0;
+    } convergence;
+
+    std::shared_ptr<ConfigDocument> doc;  ///< parsed config; holds the resolved configuration
+};
+
+/// Parse and validate an experiment config. Throws InputError.
+Experiment read_experiment(const std::string& path);
+Experiment parse_experiment(std::string_view text, const std::string& name);
+
+/// The built-in default experiment (experiments/freude14/profiles.toml, embedded at build time).
+std::string_view default_experiment_toml();
+
+}  // namespace ssslab::runner

@@ -1,0 +1,175 @@
+#include "experiments/runner/plots.h"
+
+#include "core/atomic_file.h"
+#include "core/hash.h"
+#include "experiments/runner/cache.h"
+#include "experiments/runner/runner.h"
+
+#include <algorithm>
+
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+#include <sys/wait.h>
+
+namespace ssslab::runner {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+std::string json_string(const std::string& s) {
+    std::string o = "\"";
+    for (char c : s) {
+        if (c == '"' || c == '\\')
+            o += '\\', o += c;
+        else if (c == '\n')
+            o += "\\n";
+        else
+            o += c;
+    }
+    return o + "\"";
+}
+
+int run_shell(const std::string& cmd) {
+    const int status = std::system(cmd.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
+}  // namespace
+
+std::string find_python() {
+    std::vector<std::string> candidates;
+    if (const char* env = std::getenv("SSSLAB_PYTHON")) candidates.emplace_back(env);
+    candidates.emplace_back("/usr/bin/python3");
+    candidates.emplace_back("python3");
+    for (const auto& py : candidates)
+        if (run_shell(quote(py) + " -c 'import matplotlib' >/dev/null 2>&1") == 0) return py;
+    return {};
+}
+
+PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const ArtifactCache& cache,
+                      bool quiet) {
+    PlotResult out;
+    const Experiment& e = r.exp;
+    struct Item {
+        std::string json, key;  // spec entry; cache key
+    };
+    std::vector<Item> items;  // parallel to out.plots
+    auto add = [&](const std::string& json, const std::vector<std::string>& inputs) {
+        std::string content = std::string(plot_script()) + "\n" + json;
+        for (const auto& in : inputs) content += "\n" + in + "\n" + read_file(dir / in);
+        items.push_back({json, hash_hex(content)});
+    };
+    if (e.profile_plots.enabled) {
+        for (const auto& m : e.materials) {
+            double mfp = 0;
+            for (int c = 0; c < 3; ++c) mfp = std::max(mfp, m.medium.mfp_cm(c));
+            const double len = e.profiles.unit == LengthUnit::kMm ? 10.0 : 1.0;
+            const std::string stem = "plots/profile_" + m.label;
+            const std::string csv = "profiles/" + m.label + ".csv";
+            std::ostringstream js;
+            js << "{\"kind\": \"profile\", \"csv\": " << json_string(csv)
+               << ", \"title\": " << json_string(m.label + " (MCML, " + e.name + ")")
+               << ", \"unit\": \"" << unit_name(e.profiles.unit) << "\""
+               << ", \"linear_range\": " << e.profile_plots.linear_range_mfp * mfp * len
+               << ", \"out\": " << json_string(stem) << "}";
+            add(js.str(), {csv});
+            std::ostringstream caption;
+            caption << m.label << ": R_d(r) near zero on a linear scale (the first "
+                    << e.profile_plots.linear_range_mfp
+                    << " mean free paths of the least attenuating channel), over the whole grid "
+                       "on a log scale (as Freude 2014 Fig. 6.1), and 2 pi r R_d(r), whose area "
+                       "is the total diffuse reflectance. Bands: +-2 standard errors.";
+            out.plots.push_back({"profiles", m.label, stem, caption.str()});
+        }
+    }
+    if (e.convergence.enabled) {
+        for (const auto& m : e.convergence.materials) {
+            const std::string stem = "plots/convergence_" + m;
+            const std::string h = "convergence/" + m + "_history.csv";
+            const std::string sn = "convergence/" + m + "_snapshots.csv";
+            std::ostringstream js;
+            js << "{\"kind\": \"convergence\", \"history\": " << json_string(h)
+               << ", \"snapshots\": " << json_string(sn) << ", \"title\": " << json_string(m)
+               << ", \"out\": " << json_string(stem) << "}";
+            add(js.str(), {h, sn});
+            std::ostringstream caption;
+            caption << m << ": error against wall time of the progressive estimates (after every "
+                    << "batch) relative to an independent reference run with "
+                    << e.convergence.reference_factor
+                    << " times the photons; the standard error, the 1/sqrt(t) guide, the "
+                       "reference's own noise floor, and the efficiency 1/(relative variance x "
+                       "time), which is flat for a well-behaved estimator. These runs had every "
+                       "core to themselves.";
+            out.plots.push_back({"convergence", m, stem, caption.str()});
+        }
+    }
+    if (out.plots.empty()) return out;
+
+    // Reuse what was drawn before; draw the rest in one Python process.
+    std::error_code ec;
+    fs::create_directories(dir / "plots", ec);
+    std::vector<size_t> missing;
+    for (size_t k = 0; k < items.size(); ++k) {
+        const auto hit = cache.find("plot", items[k].key);
+        if (!hit) {
+            missing.push_back(k);
+            continue;
+        }
+        for (const char* ext : {".png", ".svg"})
+            fs::copy_file(*hit / (std::string("plot") + ext), dir / (out.plots[k].stem + ext),
+                          fs::copy_options::overwrite_existing);
+    }
+    if (missing.empty()) return out;
+
+    const std::string python = find_python();
+    if (python.empty()) {
+        out.problem =
+            "no Python with matplotlib was found (install python3-matplotlib, or set "
+            "SSSLAB_PYTHON): tables and the report are written without plots";
+        if (!quiet) std::fprintf(stderr, "ssslab run: %s\n", out.problem.c_str());
+        out.plots.clear();
+        return out;
+    }
+    std::ostringstream spec;
+    spec << "{\"root\": " << json_string(dir.string()) << ",\n \"plots\": [";
+    for (size_t i = 0; i < missing.size(); ++i)
+        spec << (i ? ",\n  " : "\n  ") << items[missing[i]].json;
+    spec << "]}\n";
+    const fs::path script = dir / "plots" / ".plot.py";
+    const fs::path spec_file = dir / "plots" / ".spec.json";
+    const fs::path log = dir / "plots" / ".plot.log";
+    write_file_atomic(script, std::string(plot_script()));
+    write_file_atomic(spec_file, spec.str());
+    const int rc =
+        run_shell("MPLBACKEND=Agg " + quote(python) + " " + quote(script.string()) + " " +
+                  quote(spec_file.string()) + " >" + quote(log.string()) + " 2>&1");
+    if (rc != 0) {
+        out.problem = "the plot script failed (exit " + std::to_string(rc) +
+                      "): " + read_file(log).substr(0, 2000);
+        if (!quiet) std::fprintf(stderr, "ssslab run: %s\n", out.problem.c_str());
+        out.plots.clear();
+    } else {
+        for (size_t k : missing) {
+            const std::string& stem = out.plots[k].stem;
+            cache.store("plot", items[k].key,
+                        {{"plot.png", read_file(dir / (stem + ".png"))},
+                         {"plot.svg", read_file(dir / (stem + ".svg"))},
+                         {"manifest.toml", "[plot]\nspec = " + json_string(items[k].json) + "\n"}});
+        }
+    }
+    fs::remove(script, ec);
+    fs::remove(spec_file, ec);
+    fs::remove(log, ec);
+    return out;
+}
+
+}  // namespace ssslab::runner

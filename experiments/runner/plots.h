@@ -1,0 +1,40 @@
+// Plots of an experiment, drawn by scripts/plot.py (embedded in the binary) with matplotlib.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace ssslab::runner {
+
+struct ExperimentRun;
+
+struct PlotFile {
+    std::string section;  ///< "profiles" or "convergence"
+    std::string title;
+    std::string stem;  ///< plots/<name>, without extension (PNG and SVG exist)
+    std::string caption;
+};
+
+struct PlotResult {
+    std::vector<PlotFile> plots;
+    std::string problem;  ///< why there are no plots, if there are none
+};
+
+class ArtifactCache;
+
+/// Draw the plots the experiment asks for into <dir>/plots/ (CSV inputs already in <dir>). A plot
+/// is an artifact too, keyed by the plot script, its options and the content of its input
+/// tables: one drawn before is copied from the cache. Never throws for a missing or failing
+/// plotting tool: the report then says why there are no plots.
+PlotResult make_plots(const ExperimentRun& r, const std::filesystem::path& dir,
+                      const ArtifactCache& cache, bool quiet);
+
+/// A Python interpreter that can import matplotlib: $SSSLAB_PYTHON, Debian's /usr/bin/python3,
+/// or python3 on the PATH. Empty if none.
+std::string find_python();
+
+/// scripts/plot.py, embedded at build time.
+std::string_view plot_script();
+
+}  // namespace ssslab::runner

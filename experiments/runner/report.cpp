@@ -1,0 +1,231 @@
+#include "experiments/runner/report.h"
+
+#include "core/provenance.h"
+#include "experiments/runner/runner.h"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace ssslab::runner {
+
+namespace {
+
+std::string esc(const std::string& s) {
+    std::string o;
+    for (char c : s) {
+        switch (c) {
+            case '&':
+                o += "&amp;";
+                break;
+            case '<':
+                o += "&lt;";
+                break;
+            case '>':
+                o += "&gt;";
+                break;
+            case '"':
+                o += "&quot;";
+                break;
+            default:
+                o += c;
+        }
+    }
+    return o;
+}
+
+std::string num(double v, int digits = 6) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    return buf;
+}
+
+const char* kStyle = R"CSS(
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222;
+       line-height: 1.45; padding: 0 1em; }
+h1 { font-size: 1.6em; margin-bottom: 0.2em; }
+h2 { border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 2em; }
+.meta { color: #555; font-size: 0.92em; }
+table { border-collapse: collapse; font-size: 0.86em; margin: 0.8em 0; }
+th, td { border: 1px solid #ddd; padding: 0.25em 0.55em; text-align: right; }
+th { background: #f3f3f3; }
+td.l, th.l { text-align: left; }
+tr.R td.ch { color: #d62728; } tr.G td.ch { color: #2ca02c; } tr.B td.ch { color: #1f77b4; }
+figure { margin: 1.2em 0; }
+figure img { max-width: 100%; border: 1px solid #eee; }
+figcaption { font-size: 0.9em; color: #444; }
+pre { background: #f7f7f7; padding: 0.8em; overflow-x: auto; font-size: 0.82em; }
+.note { background: #fff8e0; border-left: 4px solid #e0b000; padding: 0.5em 0.8em; }
+code { font-size: 0.95em; }
+)CSS";
+
+// Marks the page once every image has loaded (or failed): the headless-browser test reads it.
+const char* kImageCheck = R"JS(
+<script>
+window.addEventListener('load', function () {
+  var imgs = Array.prototype.slice.call(document.images);
+  var bad = imgs.filter(function (i) { return !i.complete || i.naturalWidth === 0; });
+  document.body.setAttribute('data-images', String(imgs.length));
+  document.body.setAttribute('data-images-ok', bad.length === 0 ? 'yes' : 'no');
+  bad.forEach(function (i) { i.insertAdjacentHTML('afterend',
+      '<p class="note">missing image: ' + i.getAttribute('src') + '</p>'); });
+});
+</script>
+)JS";
+
+const ChannelNode* node(const ExperimentRun& r, const std::string& m, int c, const char* role) {
+    for (const auto& n : r.nodes)
+        if (n.material == m && n.channel == c && n.role == role) return &n;
+    return nullptr;
+}
+
+void figures(std::ostringstream& os, const PlotResult& p, const std::string& section) {
+    for (const auto& f : p.plots) {
+        if (f.section != section) continue;
+        os << "<figure><a href=\"" << esc(f.stem) << ".svg\"><img src=\"" << esc(f.stem)
+           << ".png\" alt=\"" << esc(f.title) << "\"></a><figcaption>" << esc(f.caption)
+           << " (<a href=\"" << esc(f.stem) << ".svg\">SVG</a>)</figcaption></figure>\n";
+    }
+}
+
+}  // namespace
+
+std::string with_error(double value, double se) {
+    if (!(se > 0) || !std::isfinite(se)) return num(value);
+    const int digits = std::max(0, 1 - static_cast<int>(std::floor(std::log10(se))));
+    char buf[80];
+    if (digits > 12)
+        std::snprintf(buf, sizeof buf, "%.3g &plusmn; %.2g", value, se);
+    else
+        std::snprintf(buf, sizeof buf, "%.*f &plusmn; %.*f", digits, value, digits, se);
+    return buf;
+}
+
+std::string render_report(const ExperimentRun& r, const ReportContent& c) {
+    const Experiment& e = r.exp;
+    std::ostringstream os;
+    os << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>"
+       << esc(e.title) << "</title>\n<style>" << kStyle << "</style>\n</head>\n"
+       << "<body data-images-ok=\"pending\">\n";
+    os << "<h1>" << esc(e.title) << "</h1>\n<p class=\"meta\">experiment <code>" << esc(e.name)
+       << "</code> from <code>" << esc(e.source) << "</code> &middot; "
+       << (r.quick ? "<b>--quick</b> (budgets &times; " + num(e.mcml.quick_factor) + ")"
+                   : "full budgets")
+       << " &middot; seed " << e.seed << " &middot; revision <code>" << esc(git_revision())
+       << "</code> &middot; " << esc(utc_now()) << " &middot; " << num(r.seconds, 3)
+       << " s &middot; " << r.computed << " artifacts computed, " << r.reused
+       << " reused from the cache</p>\n";
+
+    os << "<h2 id=\"description\">Description</h2>\n";
+    std::istringstream desc(e.description);
+    std::string para, line;
+    auto flush = [&] {
+        if (!para.empty()) os << "<p>" << esc(para) << "</p>\n";
+        para.clear();
+    };
+    while (std::getline(desc, line)) {
+        if (line.find_first_not_of(" \t") == std::string::npos)
+            flush();
+        else
+            para += (para.empty() ? "" : " ") + line;
+    }
+    flush();
+    if (!c.plots.problem.empty())
+        os << "<p class=\"note\">No plots: " << esc(c.plots.problem) << "</p>\n";
+
+    if (e.profiles.enabled || e.profile_plots.enabled) {
+        os << "<h2 id=\"profiles\">Profiles</h2>\n";
+        os << "<p>Per material and RGB channel: MCML's total diffuse reflectance R<sub>d</sub> "
+              "(carrying the entry Fresnel factor 1 &minus; R<sub>sp</sub>), the part of it that "
+              "left beyond the grid, and the absorbed fraction, each &plusmn; its standard error "
+              "from batch statistics. The last column names the artifact behind the row (see "
+              "<a href=\"#provenance\">provenance</a>). Tables: <a href=\"summary.csv\">"
+              "summary.csv</a>, profiles/&lt;material&gt;.csv (R<sub>d</sub>(r) in 1/"
+           << unit_name(e.profiles.unit) << "<sup>2</sup> with standard errors).</p>\n";
+        os << "<table>\n<tr><th class=\"l\">material</th><th>ch</th><th>MFP [mm]</th>"
+              "<th>albedo</th><th>R<sub>sp</sub></th><th>R<sub>d</sub></th>"
+              "<th>R<sub>d</sub> beyond grid</th><th>A</th><th>photons</th><th>grid</th>"
+              "<th class=\"l\">artifact</th></tr>\n";
+        for (const auto& m : e.materials)
+            for (int ch = 0; ch < 3; ++ch) {
+                const ChannelNode* n = node(r, m.label, ch, "main");
+                const auto& x = n->result;
+                const auto& L = x.layout;
+                const size_t beyond = L.rd_r + static_cast<size_t>(L.nr);
+                os << "<tr class=\"" << kChannelNames[ch] << "\"><td class=\"l\">"
+                   << (ch == 0 ? "<a href=\"profiles/" + esc(m.label) + ".csv\">" + esc(m.label) +
+                                     "</a>"
+                               : "")
+                   << "</td><td class=\"ch\">" << kChannelNames[ch] << "</td><td>"
+                   << num(m.medium.mfp_cm(ch) * 10, 4) << "</td><td>" << num(m.medium.albedo(ch), 6)
+                   << "</td><td>" << num(x.rsp, 4) << "</td><td>"
+                   << with_error(x.mean(L.rd), x.se[L.rd]) << "</td><td>"
+                   << with_error(x.mean(beyond), x.se[beyond]) << "</td><td>"
+                   << with_error(x.mean(L.a), x.se[L.a]) << "</td><td>" << x.photons << "</td><td>"
+                   << n->grid.nr << " &times; " << num(n->grid.dr_cm * 10, 4)
+                   << " mm</td><td class=\"l\"><a href=\"#a-" << n->key.substr(0, 16) << "\"><code>"
+                   << n->key.substr(0, 12) << "</code></a></td></tr>\n";
+            }
+        os << "</table>\n";
+        figures(os, c.plots, "profiles");
+    }
+
+    if (e.convergence.enabled) {
+        os << "<h2 id=\"convergence\">Error against run time</h2>\n<p>The main runs record their "
+              "estimate and standard error after every batch, and their whole profile after 4, "
+              "8, 16, &hellip; batches; each is compared with an independent reference run (other "
+              "random streams) of "
+           << num(e.convergence.reference_factor) << " times the photons. Tables: ";
+        for (const auto& m : e.convergence.materials)
+            os << "<a href=\"convergence/" << esc(m) << "_history.csv\">" << esc(m)
+               << "_history.csv</a>, <a href=\"convergence/" << esc(m) << "_snapshots.csv\">"
+               << esc(m) << "_snapshots.csv</a> ";
+        os << "</p>\n";
+        figures(os, c.plots, "convergence");
+    }
+
+    os << "<h2 id=\"metrics\">Metrics</h2>\n<p>What <code>ssslab check</code> compares with the "
+          "baselines in <code>results/baselines/</code>: stochastic metrics by z-score with "
+          "their standard errors, deterministic ones with the stated relative tolerance. "
+          "R<sub>d</sub> within k MFP is the reflectance through the bins inside k mean free "
+          "paths; its standard error is the quadrature sum over the bins, an upper bound. "
+          "Table: <a href=\"metrics.csv\">metrics.csv</a>.</p>\n<table>\n<tr><th class=\"l\">"
+          "metric</th><th>value</th><th>unit</th><th class=\"l\">kind</th></tr>\n";
+    for (const auto& m : r.metrics)
+        os << "<tr><td class=\"l\">" << esc(m.name) << "</td><td>"
+           << (m.stochastic ? with_error(m.value, m.se) : num(m.value, 10)) << "</td><td>"
+           << esc(m.unit) << "</td><td class=\"l\">"
+           << (m.stochastic ? "stochastic" : "deterministic, rel. tol. " + num(m.tolerance))
+           << "</td></tr>\n";
+    os << "</table>\n";
+
+    os << "<h2 id=\"provenance\">Artifacts and provenance</h2>\n<p>Every number above comes from "
+          "one of these MCML runs, cached under <code>results/cache/mcml-channel/&lt;key&gt;/"
+          "</code> with the key the hash of everything that determines it (medium, grid, "
+          "budget, seed, engine version). Table: <a href=\"artifacts.csv\">artifacts.csv</a>.</p>"
+          "\n<table>\n<tr><th class=\"l\">key</th><th class=\"l\">material</th><th>ch</th>"
+          "<th class=\"l\">role</th><th class=\"l\">engine</th><th class=\"l\">budget</th>"
+          "<th>photons</th><th>batches</th><th>seed</th><th>time [s]</th>"
+          "<th class=\"l\">stopped by</th><th class=\"l\">revision</th><th class=\"l\">date</th>"
+          "<th class=\"l\">this run</th></tr>\n";
+    for (const auto& n : r.nodes) {
+        const Provenance& p = n.provenance;
+        os << "<tr id=\"a-" << n.key.substr(0, 16) << "\"><td class=\"l\"><code>"
+           << n.key.substr(0, 16) << "</code></td><td class=\"l\">" << esc(n.material)
+           << "</td><td>" << kChannelNames[n.channel] << "</td><td class=\"l\">" << n.role
+           << "</td><td class=\"l\">" << esc(p.engine + " " + p.engine_version)
+           << "</td><td class=\"l\">" << esc(p.budget) << "</td><td>" << p.photons << "</td><td>"
+           << p.batches << "</td><td>" << p.seed << "</td><td>" << num(p.seconds, 4)
+           << "</td><td class=\"l\">" << esc(p.stop_reason) << "</td><td class=\"l\"><code>"
+           << esc(p.revision) << "</code></td><td class=\"l\">" << esc(p.date_utc)
+           << "</td><td class=\"l\">" << (p.computed_now ? "computed" : "reused") << "</td></tr>\n";
+    }
+    os << "</table>\n";
+    os << "<h2 id=\"configuration\">Resolved configuration</h2>\n<p>Every default filled in "
+          "(<a href=\"experiment.toml\">experiment.toml</a>).</p>\n<pre>"
+       << esc(e.doc->resolved_toml()) << "</pre>\n";
+    os << kImageCheck << "</body>\n</html>\n";
+    return os.str();
+}
+
+}  // namespace ssslab::runner

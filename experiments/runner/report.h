@@ -1,0 +1,22 @@
+// report.html: one page with the experiment's description, tables and plots, and the
+// provenance of every number (engine, budget, seed, time, revision of each artifact).
+#pragma once
+
+#include "experiments/runner/plots.h"
+
+#include <string>
+
+namespace ssslab::runner {
+
+struct ExperimentRun;
+
+struct ReportContent {
+    PlotResult plots;
+};
+
+std::string render_report(const ExperimentRun& r, const ReportContent& c);
+
+/// "0.4315 ± 0.0004": a value with its standard error, two significant digits of the error.
+std::string with_error(double value, double se);
+
+}  // namespace ssslab::runner

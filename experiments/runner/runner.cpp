@@ -1,0 +1,501 @@
+#include "experiments/runner/runner.h"
+
+#include "core/atomic_file.h"
+#include "core/config.h"
+#include "core/error.h"
+#include "core/hash.h"
+#include "core/provenance.h"
+#include "experiments/runner/plots.h"
+#include "experiments/runner/report.h"
+#include "mcml/transport.h"
+
+#include <tbb/task_group.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <mutex>
+#include <sstream>
+
+#include <unistd.h>
+
+namespace ssslab::runner {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kKind = "mcml-channel";
+
+std::string budget_text(const mcml::Budget& b) {
+    std::ostringstream os;
+    if (b.photons) os << "photons = " << *b.photons;
+    if (b.seconds) os << (os.tellp() > 0 ? ", " : "") << "seconds = " << *b.seconds;
+    if (b.rel_error) os << (os.tellp() > 0 ? ", " : "") << "rel_error = " << *b.rel_error;
+    return os.str();
+}
+
+mcml::Budget scaled_budget(const mcml::Budget& b, double factor) {
+    mcml::Budget s = b;
+    if (b.photons)
+        s.photons = std::max<std::int64_t>(
+            100, static_cast<std::int64_t>(std::llround(static_cast<double>(*b.photons) * factor)));
+    if (b.seconds) s.seconds = *b.seconds * factor;
+    if (b.rel_error) s.rel_error = *b.rel_error / std::sqrt(factor);
+    return s;
+}
+
+// The seed of a node: independent streams for every material, channel and role, the same for
+// the same medium whatever the experiment it appears in.
+std::uint64_t derive_seed(std::uint64_t seed, const Medium& m, int c, const std::string& role) {
+    ContentKey k("seed");
+    k.add("experiment_seed", seed)
+        .add("sigma_a_per_cm", m.sigma_a_per_cm[c])
+        .add("sigma_s_per_cm", m.sigma_s_per_cm[c])
+        .add("g", m.g[c])
+        .add("eta", m.eta)
+        .add("channel", c)
+        .add("role", role);
+    return std::stoull(k.hex().substr(0, 16), nullptr, 16);
+}
+
+ContentKey node_key(const ChannelNode& n) {
+    const Medium& m = n.medium;
+    const int c = n.channel;
+    ContentKey k(kKind);
+    k.add("engine_version", mcml::engine_version())
+        .add("tally", "profile")
+        .add("snapshots", true)
+        .add("sigma_a_per_cm", m.sigma_a_per_cm[c])
+        .add("sigma_s_per_cm", m.sigma_s_per_cm[c])
+        .add("g", m.g[c])
+        .add("eta", m.eta)
+        .add("eta_above", m.eta_above)
+        .add("eta_below", m.eta_below)
+        .add("thickness_cm", m.thickness_cm)
+        .add("dr_cm", n.grid.dr_cm)
+        .add("nr", n.grid.nr)
+        .add("budget_photons", n.budget.photons ? *n.budget.photons : std::int64_t{-1})
+        .add("budget_seconds", n.budget.seconds ? *n.budget.seconds : -1.0)
+        .add("budget_rel_error", n.budget.rel_error ? *n.budget.rel_error : -1.0)
+        .add("batch_photons", n.batch_photons)
+        .add("seed", n.seed)
+        .add("stream", std::int64_t{0});
+    return k;
+}
+
+mcml::ProfileGrid grid_for(const Experiment& e, const Medium& m) {
+    mcml::ProfileGrid g = mcml::freude14_grid(m);
+    if (e.mcml.dr_cm) g.dr_cm = *e.mcml.dr_cm;
+    if (e.mcml.nr) g.nr = *e.mcml.nr;
+    return g;
+}
+
+std::string manifest_toml(const ChannelNode& n) {
+    auto doc = ConfigDocument::empty("manifest.toml");
+    ConfigTable root = doc->root();
+    ConfigTable a = root.table_or_empty("artifact");
+    a.record("kind", std::string(kKind));
+    a.record("key", n.key);
+    a.record("material", n.material);
+    a.record("channel", std::string(kChannelNames[n.channel]));
+    a.record("role", n.role);
+    a.record("canonical_description", n.key_text);
+    ConfigTable r = root.table_or_empty("run");
+    const mcml::RunResult& res = n.result;
+    r.record("engine", std::string("mcml"));
+    r.record("engine_version", std::string(mcml::engine_version()));
+    r.record("seed", static_cast<std::int64_t>(n.seed));
+    r.record("budget", budget_text(n.budget));
+    r.record("photons", static_cast<std::int64_t>(res.photons));
+    r.record("batches", static_cast<std::int64_t>(res.batches));
+    r.record("batch_photons", res.batch_photons);
+    r.record("wall_seconds", res.seconds);
+    r.record("stop_reason", std::string(mcml::to_string(res.reason)));
+    r.record("resumed_from_checkpoint", std::string(res.resumed ? "yes" : "no"));
+    r.record("Rd", res.mean(res.layout.rd));
+    r.record("Rd_se", res.se[res.layout.rd]);
+    doc->add_resolved_section("provenance", provenance());
+    return doc->resolved_toml();
+}
+
+Provenance read_manifest(const fs::path& file, const std::string& key) {
+    auto doc = ConfigDocument::parse_file(file.string());
+    ConfigTable root = doc->root();
+    ConfigTable r = root.require_table("run");
+    ConfigTable p = root.require_table("provenance");
+    Provenance pv;
+    pv.key = key;
+    pv.engine = r.string("engine");
+    pv.engine_version = r.string("engine_version");
+    pv.seed = static_cast<std::uint64_t>(r.integer("seed"));
+    pv.budget = r.string("budget");
+    pv.photons = static_cast<std::uint64_t>(r.integer("photons"));
+    pv.batches = static_cast<std::uint64_t>(r.integer("batches"));
+    pv.batch_photons = r.integer("batch_photons");
+    pv.seconds = r.number("wall_seconds");
+    pv.stop_reason = r.string("stop_reason");
+    pv.resumed = r.string("resumed_from_checkpoint") == "yes";
+    pv.revision = p.string("git_revision");
+    pv.date_utc = p.string("date_utc");
+    return pv;
+}
+
+const ChannelNode* find_node(const ExperimentRun& r, const std::string& material, int c,
+                             const std::string& role) {
+    for (const auto& n : r.nodes)
+        if (n.material == material && n.channel == c && n.role == role) return &n;
+    return nullptr;
+}
+
+std::string fmt(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.10g", v);
+    return buf;
+}
+
+// ---- tables ---------------------------------------------------------------------------------
+
+std::string summary_csv(const ExperimentRun& r) {
+    std::ostringstream os;
+    os << "material,channel,mfp_mm,albedo,Rsp,Rd,Rd_se,Rd_beyond_grid,Rd_beyond_grid_se,A,A_se,"
+          "Tt,Tt_se,photons,dr_mm,nr\n";
+    for (const auto& m : r.exp.materials)
+        for (int c = 0; c < 3; ++c) {
+            const ChannelNode* n = find_node(r, m.label, c, "main");
+            const mcml::RunResult& x = n->result;
+            const auto& L = x.layout;
+            os << m.label << ',' << kChannelNames[c] << ',' << fmt(m.medium.mfp_cm(c) * 10) << ','
+               << fmt(m.medium.albedo(c)) << ',' << fmt(x.rsp) << ',' << fmt(x.mean(L.rd)) << ','
+               << fmt(x.se[L.rd]) << ',' << fmt(x.mean(L.rd_r + static_cast<size_t>(L.nr))) << ','
+               << fmt(x.se[L.rd_r + static_cast<size_t>(L.nr)]) << ',' << fmt(x.mean(L.a)) << ','
+               << fmt(x.se[L.a]) << ',' << fmt(x.mean(L.tt)) << ',' << fmt(x.se[L.tt]) << ','
+               << x.photons << ',' << fmt(n->grid.dr_cm * 10) << ',' << n->grid.nr << '\n';
+        }
+    return os.str();
+}
+
+std::string artifacts_csv(const ExperimentRun& r) {
+    std::ostringstream os;
+    os << "material,channel,role,key,engine,engine_version,budget,photons,batches,seed,wall_s,"
+          "stop_reason,revision,date_utc,status,checkpoint\n";
+    for (const auto& n : r.nodes) {
+        const Provenance& p = n.provenance;
+        os << n.material << ',' << kChannelNames[n.channel] << ',' << n.role << ',' << n.key << ','
+           << p.engine << ',' << p.engine_version << ",\"" << p.budget << "\"," << p.photons << ','
+           << p.batches << ',' << p.seed << ',' << fmt(p.seconds) << ',' << p.stop_reason << ','
+           << p.revision << ',' << p.date_utc << ',' << (p.computed_now ? "computed" : "reused")
+           << ',' << (p.resumed ? "resumed" : "fresh") << '\n';
+    }
+    return os.str();
+}
+
+std::string metrics_csv(const std::vector<Metric>& ms) {
+    std::ostringstream os;
+    os << "metric,unit,value,se,kind,tolerance\n";
+    for (const auto& m : ms)
+        os << m.name << ',' << m.unit << ',' << fmt(m.value) << ',' << fmt(m.se) << ','
+           << (m.stochastic ? "stochastic" : "deterministic") << ',' << fmt(m.tolerance) << '\n';
+    return os.str();
+}
+
+// r R(r) relative L2 distance between two radial tallies (per-photon bin weights): the bin
+// weight is the integral of 2 pi r R(r) over the bin, so it already is r R(r) dr up to 2 pi.
+double rel_l2(const std::vector<double>& a, const std::vector<double>& ref, size_t off, int nr) {
+    double num = 0, den = 0;
+    for (int i = 0; i < nr; ++i) {
+        const double d = a[off + static_cast<size_t>(i)] - ref[off + static_cast<size_t>(i)];
+        num += d * d;
+        den += ref[off + static_cast<size_t>(i)] * ref[off + static_cast<size_t>(i)];
+    }
+    return den > 0 ? std::sqrt(num / den) : 0.0;
+}
+
+// Convergence tables of one material: the progressive estimates of the main runs against the
+// independent reference runs.
+void convergence_tables(const ExperimentRun& r, const std::string& material, std::string& history,
+                        std::string& snapshots) {
+    std::ostringstream h, s;
+    h << "channel,batches,photons,seconds,Rd,Rd_se,Rd_reference,Rd_reference_se,abs_error,"
+         "rel_error,rel_se,efficiency_per_s\n";
+    s << "channel,batches,photons,seconds,rRd_rel_l2_error,rRd_rel_l2_reference_floor\n";
+    for (int c = 0; c < 3; ++c) {
+        const ChannelNode* main = find_node(r, material, c, "main");
+        const ChannelNode* ref = find_node(r, material, c, "reference");
+        const mcml::RunResult& m = main->result;
+        const mcml::RunResult& f = ref->result;
+        const double rd_ref = f.mean(f.layout.rd), rd_ref_se = f.se[f.layout.rd];
+        std::uint64_t b = 0;
+        for (const auto& p : m.history) {
+            ++b;
+            if (b < 2) continue;  // a standard error needs two batches
+            const double rel_se = p.se / p.value;
+            h << kChannelNames[c] << ',' << b << ',' << p.photons << ',' << fmt(p.seconds) << ','
+              << fmt(p.value) << ',' << fmt(p.se) << ',' << fmt(rd_ref) << ',' << fmt(rd_ref_se)
+              << ',' << fmt(std::fabs(p.value - rd_ref)) << ','
+              << fmt(std::fabs(p.value - rd_ref) / rd_ref) << ',' << fmt(rel_se) << ','
+              << fmt(1.0 / (rel_se * rel_se * p.seconds)) << '\n';
+        }
+        // The reference's own noise: the distance between two independent estimates with the
+        // reference's standard errors, sqrt(sum se^2 / sum ref^2).
+        double num = 0, den = 0;
+        for (int i = 0; i < f.layout.nr; ++i) {
+            const size_t k = f.layout.rd_r + static_cast<size_t>(i);
+            num += f.se[k] * f.se[k];
+            den += f.values[k] * f.values[k];
+        }
+        const double floor = den > 0 ? std::sqrt(num / den) : 0.0;
+        for (const auto& sn : m.snapshots)
+            s << kChannelNames[c] << ',' << sn.batches << ',' << sn.photons << ','
+              << fmt(sn.seconds) << ','
+              << fmt(rel_l2(sn.mean, f.values, f.layout.rd_r, f.layout.nr)) << ',' << fmt(floor)
+              << '\n';
+    }
+    history = h.str();
+    snapshots = s.str();
+}
+
+}  // namespace
+
+RadialProfile material_profile(const ExperimentRun& r, const std::string& material) {
+    RadialProfile p;
+    p.name = material;
+    for (int c = 0; c < 3; ++c) {
+        const ChannelNode* n = find_node(r, material, c, "main");
+        p.dr_cm = n->grid.dr_cm;
+        p.nr = n->grid.nr;
+        mcml::fill_profile(n->result, n->grid, c, p);
+    }
+    return p;
+}
+
+ExperimentRun plan(const Experiment& e, const RunOptions& o) {
+    ExperimentRun r;
+    r.exp = e;
+    r.quick = o.quick;
+    r.out_dir = o.results_root / e.name;
+    const mcml::Budget main_budget =
+        o.quick ? scaled_budget(e.mcml.budget, e.mcml.quick_factor) : e.mcml.budget;
+    ArtifactCache cache(o.results_root / "cache");
+    auto add = [&](const MaterialEntry& m, int c, const std::string& role,
+                   const mcml::Budget& budget) {
+        ChannelNode n;
+        n.material = m.label;
+        n.channel = c;
+        n.role = role;
+        n.medium = m.medium;
+        n.grid = grid_for(e, m.medium);
+        n.budget = budget;
+        n.batch_photons = e.mcml.batch_photons;
+        n.seed = derive_seed(e.seed, m.medium, c, role);
+        const ContentKey k = node_key(n);
+        n.key = k.hex();
+        n.key_text = k.text();
+        n.cached = cache.find(kKind, n.key).has_value();
+        r.nodes.push_back(std::move(n));
+    };
+    for (const auto& m : e.materials)
+        for (int c = 0; c < 3; ++c) add(m, c, "main", main_budget);
+    if (e.convergence.enabled)
+        for (const auto& label : e.convergence.materials)
+            for (const auto& m : e.materials)
+                if (m.label == label)
+                    for (int c = 0; c < 3; ++c)
+                        add(m, c, "reference",
+                            scaled_budget(main_budget, e.convergence.reference_factor));
+    return r;
+}
+
+void print_plan(const ExperimentRun& r, std::ostream& os, bool verbose) {
+    int reuse = 0;
+    for (const auto& n : r.nodes) reuse += n.cached;
+    os << "experiment " << r.exp.name << (r.quick ? " (--quick)" : "") << ": " << r.nodes.size()
+       << " artifacts, " << reuse << " cached, " << r.nodes.size() - static_cast<size_t>(reuse)
+       << " to compute -> " << r.out_dir.string() << "/\n";
+    os << "  " << std::left << std::setw(9) << "status" << std::setw(12) << "material"
+       << std::setw(4) << "ch" << std::setw(11) << "role" << std::setw(26) << "budget"
+       << "key\n";
+    for (const auto& n : r.nodes) {
+        os << "  " << std::left << std::setw(9) << (n.cached ? "reuse" : "compute") << std::setw(12)
+           << n.material << std::setw(4) << kChannelNames[n.channel] << std::setw(11) << n.role
+           << std::setw(26) << budget_text(n.budget) << n.key.substr(0, 16) << "\n";
+        if (verbose) {
+            std::istringstream is(n.key_text);
+            std::string line;
+            while (std::getline(is, line)) os << "        | " << line << "\n";
+        }
+    }
+    os << "  outputs:";
+    if (r.exp.profiles.enabled) os << " profiles";
+    if (r.exp.profile_plots.enabled) os << " profile_plots";
+    if (r.exp.convergence.enabled) os << " convergence";
+    os << " report\n";
+}
+
+bool execute(ExperimentRun& r, const RunOptions& o) {
+    const auto t0 = std::chrono::steady_clock::now();
+    ArtifactCache cache(o.results_root / "cache");
+    cache.remove_stale_temporaries();
+    {
+        // Staging directories of killed runs (results/<name>.tmp-<pid>, .old-<pid>).
+        std::error_code ec;
+        const std::string prefix = r.exp.name + ".";
+        if (fs::exists(o.results_root, ec))
+            for (const auto& d : fs::directory_iterator(o.results_root, ec)) {
+                const std::string n = d.path().filename().string();
+                if (n.rfind(prefix + "tmp-", 0) == 0 || n.rfind(prefix + "old-", 0) == 0)
+                    if (fs::file_time_type::clock::now() - fs::last_write_time(d.path(), ec) >
+                        std::chrono::minutes(1))
+                        fs::remove_all(d.path(), ec);
+            }
+    }
+    std::mutex io;
+    std::atomic<bool> interrupted{false};
+    auto compute = [&](ChannelNode& n) {
+        mcml::Grid g;
+        g.dr = n.grid.dr_cm;
+        g.nr = n.grid.nr;
+        g.dz = n.medium.thickness_cm;
+        g.nz = 1;
+        g.na = 1;
+        const mcml::RunSpec spec = mcml::run_for_channel(n.medium, n.channel, 1, g);
+        mcml::EngineOptions eo;
+        eo.seed = n.seed;
+        eo.stream = 0;
+        eo.threads = o.threads;
+        eo.batch_photons = n.batch_photons;
+        eo.mode = mcml::TallyMode::kProfile;
+        eo.budget = n.budget;
+        eo.cancel = o.cancel;
+        eo.snapshots = true;
+        eo.checkpoint_path = cache.checkpoint_prefix(kKind, n.key).string();
+        eo.checkpoint_seconds = o.checkpoint_seconds;
+        n.result = mcml::run_default(spec, eo);
+        if (n.result.reason == mcml::StopReason::kInterrupted) {
+            interrupted = true;
+            return;
+        }
+        const std::string manifest = manifest_toml(n);
+        const fs::path dir = cache.store(
+            kKind, n.key,
+            {{"result.bin", mcml::serialize_result(n.result)}, {"manifest.toml", manifest}});
+        n.provenance = read_manifest(dir / "manifest.toml", n.key);
+        n.provenance.computed_now = true;
+        if (!o.quiet) {
+            std::lock_guard<std::mutex> lock(io);
+            std::printf("  computed %-10s %s %-9s %10llu photons in %7.2f s  [%s]%s\n",
+                        n.material.c_str(), kChannelNames[n.channel], n.role.c_str(),
+                        static_cast<unsigned long long>(n.result.photons), n.result.seconds,
+                        n.key.substr(0, 16).c_str(),
+                        n.result.resumed ? " (resumed from its checkpoint)" : "");
+            std::fflush(stdout);
+        }
+    };
+    // Runs whose wall time is studied (the convergence materials) run alone, one after the
+    // other with every core; the others run side by side.
+    auto timed = [&](const ChannelNode& n) {
+        if (!r.exp.convergence.enabled) return false;
+        const auto& ms = r.exp.convergence.materials;
+        return std::find(ms.begin(), ms.end(), n.material) != ms.end();
+    };
+    tbb::task_group tg;
+    for (auto& node : r.nodes) {
+        if (node.cached) {
+            const fs::path dir = *cache.find(kKind, node.key);
+            node.result = mcml::deserialize_result(read_file(dir / "result.bin"),
+                                                   (dir / "result.bin").string());
+            node.provenance = read_manifest(dir / "manifest.toml", node.key);
+            ++r.reused;
+            continue;
+        }
+        ++r.computed;
+        if (!timed(node)) tg.run([&, np = &node] { compute(*np); });
+    }
+    tg.wait();
+    for (auto& node : r.nodes)
+        if (!node.cached && timed(node) && !interrupted) compute(node);
+    if (interrupted) {
+        r.interrupted = true;
+        return false;
+    }
+    r.metrics = compute_metrics(r);
+
+    // Everything for results/<name>/ is written into a staging directory and swapped in at the
+    // end, so an interrupted or failed run leaves the previous results as they were.
+    const fs::path stage = r.out_dir.string() + ".tmp-" + std::to_string(::getpid());
+    std::error_code ec;
+    fs::remove_all(stage, ec);
+    fs::create_directories(stage, ec);
+    if (ec) throw IoError("cannot create '" + stage.string() + "': " + ec.message());
+    ReportContent report;
+    if (r.exp.profiles.enabled || r.exp.profile_plots.enabled) {
+        for (const auto& m : r.exp.materials) {
+            const RadialProfile p = material_profile(r, m.label);
+            write_file_atomic(stage / "profiles" / (m.label + ".csv"),
+                              p.to_csv(r.exp.profiles.unit));
+        }
+        write_file_atomic(stage / "summary.csv", summary_csv(r));
+    }
+    if (r.exp.convergence.enabled)
+        for (const auto& m : r.exp.convergence.materials) {
+            std::string h, s;
+            convergence_tables(r, m, h, s);
+            write_file_atomic(stage / "convergence" / (m + "_history.csv"), h);
+            write_file_atomic(stage / "convergence" / (m + "_snapshots.csv"), s);
+        }
+    write_file_atomic(stage / "metrics.csv", metrics_csv(r.metrics));
+    write_file_atomic(stage / "artifacts.csv", artifacts_csv(r));
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    report.plots = make_plots(r, stage, cache, o.quiet);
+    auto prov = provenance(o.command_line);
+    prov.push_back({"quick", r.quick ? "true" : "false"});
+    r.exp.doc->add_resolved_section("provenance", prov);
+    write_file_atomic(stage / "experiment.toml",
+                      "# ssslab run: the resolved experiment configuration and provenance\n" +
+                          r.exp.doc->resolved_toml());
+    write_file_atomic(stage / "report.html", render_report(r, report));
+
+    const fs::path old = r.out_dir.string() + ".old-" + std::to_string(::getpid());
+    fs::remove_all(old, ec);
+    if (fs::exists(r.out_dir)) fs::rename(r.out_dir, old);
+    fs::rename(stage, r.out_dir);
+    fs::remove_all(old, ec);
+    return true;
+}
+
+std::vector<Metric> compute_metrics(const ExperimentRun& r) {
+    std::vector<Metric> ms;
+    for (const auto& m : r.exp.materials) {
+        const ChannelNode* n0 = find_node(r, m.label, 0, "main");
+        ms.push_back({m.label + ".nr", "bins", static_cast<double>(n0->grid.nr), 0, false, 0});
+        ms.push_back({m.label + ".dr", "mm", n0->grid.dr_cm * 10, 0, false, 1e-12});
+        for (int c = 0; c < 3; ++c) {
+            const ChannelNode* n = find_node(r, m.label, c, "main");
+            const mcml::RunResult& x = n->result;
+            const auto& L = x.layout;
+            const std::string base = m.label + "." + kChannelNames[c] + ".";
+            ms.push_back({base + "Rd", "1", x.mean(L.rd), x.se[L.rd], true, 0});
+            // Reflectance inside k mean free paths. The standard error is the quadrature sum of
+            // the bins' errors: an upper bound, since a photon leaves through one bin only and
+            // the bins are negatively correlated.
+            const double mfp = m.medium.mfp_cm(c);
+            for (int k : {1, 4, 16}) {
+                double v = 0, var = 0;
+                for (int i = 0; i < L.nr && (i + 1) * n->grid.dr_cm <= k * mfp; ++i) {
+                    v += x.mean(L.rd_r + static_cast<size_t>(i));
+                    var += x.se[L.rd_r + static_cast<size_t>(i)] *
+                           x.se[L.rd_r + static_cast<size_t>(i)];
+                }
+                ms.push_back({base + "Rd_within_" + std::to_string(k) + "mfp", "1", v,
+                              std::sqrt(var), true, 0});
+            }
+            ms.push_back({base + "Rd_beyond_grid", "1", x.mean(L.rd_r + static_cast<size_t>(L.nr)),
+                          x.se[L.rd_r + static_cast<size_t>(L.nr)], true, 0});
+        }
+    }
+    return ms;
+}
+
+}  // namespace ssslab::runner

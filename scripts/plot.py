@@ -1,0 +1,141 @@
+#!/usr/bin/env python3
+"""Plots of ssslab experiment reports (matplotlib; run by `ssslab run` with Debian's python3).
+
+Usage: plot.py SPEC.json. The spec names CSV files (relative to its "root") and what to draw;
+every figure is written as PNG and SVG. Colours: the RGB channels in their own colours.
+"""
+import csv
+import json
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+COLOURS = {"R": "#d62728", "G": "#2ca02c", "B": "#1f77b4"}
+MIN_BATCHES = 16
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def save(fig, root, out):
+    for ext in ("png", "svg"):
+        fig.savefig(os.path.join(root, out + "." + ext), dpi=110 if ext == "png" else None,
+                    bbox_inches="tight")
+    plt.close(fig)
+
+
+def profile_plot(root, p):
+    rows = read_csv(os.path.join(root, p["csv"]))
+    unit = p["unit"]
+    r = [float(x["r_mid_" + unit]) for x in rows]
+    dr = float(rows[0]["r_hi_" + unit]) - float(rows[0]["r_lo_" + unit])
+    fig, ax = plt.subplots(1, 3, figsize=(16, 4.6))
+    for c in "RGB":
+        v = [float(x["Rd_%s_per_%s2" % (c, unit)]) for x in rows]
+        se = [float(x["Rd_%s_se_per_%s2" % (c, unit)]) for x in rows]
+        lo = [a - 2 * b for a, b in zip(v, se)]
+        hi = [a + 2 * b for a, b in zip(v, se)]
+        n = sum(1 for x in r if x <= p["linear_range"]) or len(r)
+        ax[0].plot(r[:n], v[:n], color=COLOURS[c], lw=1.2, label=c)
+        ax[0].fill_between(r[:n], lo[:n], hi[:n], color=COLOURS[c], alpha=0.25, lw=0)
+        pos = [(a, b, s) for a, b, s in zip(r, v, se) if b > 0]
+        ax[1].semilogy([a for a, _, _ in pos], [b for _, b, _ in pos], color=COLOURS[c], lw=1.0,
+                       label=c)
+        ax[1].fill_between([a for a, _, _ in pos], [max(b - 2 * s, b * 1e-3) for _, b, s in pos],
+                           [b + 2 * s for _, b, s in pos], color=COLOURS[c], alpha=0.25, lw=0)
+        rr = [2 * math.pi * a * b for a, b in zip(r, v)]
+        rs = [2 * math.pi * a * s for a, s in zip(r, se)]
+        ax[2].plot(r, rr, color=COLOURS[c], lw=1.0, label=c)
+        ax[2].fill_between(r, [a - 2 * b for a, b in zip(rr, rs)], [a + 2 * b for a, b in zip(rr, rs)],
+                           color=COLOURS[c], alpha=0.25, lw=0)
+    ax[0].set_title("R_d(r) near zero (linear)")
+    ax[1].set_title("R_d(r) over the whole range (log)")
+    ax[2].set_title("2 pi r R_d(r): reflectance per unit radius")
+    for a in ax:
+        a.set_xlabel("r [%s]" % unit)
+        a.grid(alpha=0.3)
+        a.legend(loc="upper right")
+    ax[0].set_ylabel("R_d [1/%s^2]" % unit)
+    ax[1].set_ylabel("R_d [1/%s^2]" % unit)
+    ax[2].set_ylabel("2 pi r R_d [1/%s]" % unit)
+    ax[2].set_xscale("log")
+    ax[2].set_xlim(left=max(r[0], dr / 2))
+    fig.suptitle("%s  (bands: +-2 standard errors; %d bins of %.4g %s)" % (p["title"], len(r), dr, unit),
+                 y=1.02)
+    save(fig, root, p["out"])
+
+
+def guide(ax, t, y, colour):
+    """A 1/sqrt(t) line through the last point."""
+    if not t:
+        return
+    t1, y1 = t[-1], y[-1]
+    ts = [t[0], t1]
+    ax.plot(ts, [y1 * math.sqrt(t1 / x) for x in ts], color=colour, ls=":", lw=1.0)
+
+
+def convergence_plot(root, p):
+    hist = read_csv(os.path.join(root, p["history"]))
+    snaps = read_csv(os.path.join(root, p["snapshots"]))
+    fig, ax = plt.subplots(1, 3, figsize=(16, 4.6))
+    for c in "RGB":
+        h = [x for x in hist if x["channel"] == c]
+        if not h:
+            continue
+        t = [float(x["seconds"]) for x in h]
+        err = [float(x["rel_error"]) for x in h]
+        # Standard errors from fewer than 16 batches are themselves too uncertain to show.
+        hs = [x for x in h if int(x["batches"]) >= MIN_BATCHES]
+        ts = [float(x["seconds"]) for x in hs]
+        rse = [float(x["rel_se"]) for x in hs]
+        eff = [float(x["efficiency_per_s"]) for x in hs]
+        ax[0].loglog(t, err, ".", ms=2.5, color=COLOURS[c], alpha=0.6,
+                     label="%s |Rd(t) - Rd_ref| / Rd_ref" % c)
+        ax[0].loglog(ts, rse, "-", lw=1.2, color=COLOURS[c], label="%s standard error" % c)
+        guide(ax[0], ts, rse, COLOURS[c])
+        ref_floor = float(h[-1]["Rd_reference_se"]) / float(h[-1]["Rd_reference"])
+        ax[0].axhline(ref_floor, color=COLOURS[c], lw=0.6, ls="--")
+        s = [x for x in snaps if x["channel"] == c]
+        tn = [float(x["seconds"]) for x in s]
+        l2 = [float(x["rRd_rel_l2_error"]) for x in s]
+        ax[1].loglog(tn, l2, "o-", ms=3, lw=1.0, color=COLOURS[c], label=c)
+        guide(ax[1], tn, l2, COLOURS[c])
+        if s:
+            ax[1].axhline(float(s[-1]["rRd_rel_l2_reference_floor"]), color=COLOURS[c], lw=0.6,
+                          ls="--")
+        ax[2].loglog(ts, eff, "-", lw=1.0, color=COLOURS[c], label=c)
+    ax[0].set_title("total diffuse reflectance: error and standard error")
+    ax[0].set_ylabel("relative error [-]")
+    ax[1].set_title("profile: relative L2 error of r R_d(r)")
+    ax[1].set_ylabel("relative L2 error [-]")
+    ax[2].set_title("efficiency 1 / (relative variance x time), from 16 batches on")
+    ax[2].set_ylabel("efficiency [1/s]")
+    for a in ax:
+        a.set_xlabel("wall time [s]")
+        a.grid(alpha=0.3, which="both")
+    ax[0].legend(fontsize=7, loc="lower left")
+    ax[1].legend(fontsize=8, loc="lower left")
+    ax[2].legend(fontsize=8, loc="lower right")
+    fig.suptitle("%s: dotted lines 1/sqrt(t) through the last point; dashed lines: the "
+                 "reference run's own noise" % p["title"], y=1.02)
+    save(fig, root, p["out"])
+
+
+def main():
+    with open(sys.argv[1]) as f:
+        spec = json.load(f)
+    root = spec["root"]
+    os.makedirs(os.path.join(root, "plots"), exist_ok=True)
+    for p in spec["plots"]:
+        {"profile": profile_plot, "convergence": convergence_plot}[p["kind"]](root, p)
+
+
+if __name__ == "__main__":
+    main()

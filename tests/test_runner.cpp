@@ -1,0 +1,385 @@
+// The experiment runner: content keys, cache reuse, interruption and resumption, config errors,
+// regression checks, and the report in a headless browser.
+#include "experiments/runner/experiment.h"
+#include "experiments/runner/runner.h"
+#include "testing.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+#include <thread>
+
+#include <spawn.h>
+#include <sys/wait.h>
+
+extern char** environ;
+
+namespace ssslab {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::run_ssslab;
+
+const char* kSmall = R"(
+[experiment]
+name = "small"
+title = "A small experiment"
+description = "Skin1 and a custom medium."
+seed = 7
+
+[materials]
+presets = ["Skin1"]
+
+[[materials.custom]]
+name = "Slab"
+sigma_a_per_mm = [0.1, 0.2, 0.3]
+sigma_s_per_mm = [5.0, 6.0, 7.0]
+g = 0.5
+eta = 1.4
+
+[mcml]
+photons = 20000
+quick_factor = 0.1
+
+[outputs.profiles]
+)";
+
+std::vector<std::string> keys(const std::string& text, bool quick = false) {
+    const runner::Experiment e = runner::parse_experiment(text, "k.toml");
+    runner::RunOptions o;
+    o.quick = quick;
+    o.results_root = "/nonexistent-results-root";
+    std::vector<std::string> k;
+    for (const auto& n : runner::plan(e, o).nodes) k.push_back(n.key);
+    return k;
+}
+
+std::string replace(std::string s, const std::string& from, const std::string& to) {
+    const size_t at = s.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) s.replace(at, from.size(), to);
+    return s;
+}
+
+TEST(RunnerKeys, SameConfigSameKeysAndEveryNodeDiffers) {
+    const auto a = keys(kSmall), b = keys(kSmall);
+    ASSERT_EQ(a.size(), 6u);
+    EXPECT_EQ(a, b);
+    for (size_t i = 0; i < a.size(); ++i)
+        for (size_t j = i + 1; j < a.size(); ++j) EXPECT_NE(a[i], a[j]);
+}
+
+TEST(RunnerKeys, IrrelevantFormattingKeepsTheKeys) {
+    const auto base = keys(kSmall);
+    // Whitespace, comments, key order, number spelling, title and description.
+    std::string t = kSmall;
+    t = replace(t, "photons = 20000", "photons   =   2e4   # the same number");
+    t = replace(t, "title = \"A small experiment\"", "title = \"Another title\"");
+    t = replace(t, "description = \"Skin1 and a custom medium.\"", "description = \"\"\"x\"\"\"");
+    t = replace(t, "g = 0.5\neta = 1.4", "eta = 1.40\ng = 5e-1");
+    t = "# a comment\n\n" + t;
+    EXPECT_EQ(keys(t), base);
+    // A preset given as explicit coefficients with the same values is the same medium.
+    std::string explicit_skin =
+        replace(kSmall, "presets = [\"Skin1\"]\n",
+                "[[materials.custom]]\nname = \"Skin1\"\nsigma_a_per_cm = [0.32, 1.7, 4.8]\n"
+                "sigma_s_per_cm = [7.4, 8.8, 10.1]\neta = 1.3\n");
+    const auto ek = keys(explicit_skin);
+    ASSERT_EQ(ek.size(), 6u);
+    // Skin1 comes after Slab here: compare as sets.
+    EXPECT_EQ(std::multiset<std::string>(ek.begin(), ek.end()),
+              std::multiset<std::string>(base.begin(), base.end()));
+}
+
+TEST(RunnerKeys, EveryRelevantChangeMakesNewKeys) {
+    const auto base = keys(kSmall);
+    const std::vector<std::pair<std::string, std::string>> changes = {
+        {"seed = 7", "seed = 8"},
+        {"photons = 20000", "photons = 20001"},
+        {"sigma_a_per_mm = [0.1, 0.2, 0.3]", "sigma_a_per_mm = [0.1, 0.2, 0.30000000001]"},
+        {"sigma_s_per_mm = [5.0, 6.0, 7.0]", "sigma_s_per_mm = [5.0, 6.0, 7.5]"},
+        {"g = 0.5", "g = -0.5"},
+        {"eta = 1.4", "eta = 1.41"},
+        {"[outputs.profiles]", "batch_photons = 500\n[outputs.profiles]"},
+        {"[outputs.profiles]", "[mcml.grid]\nnr = 100\n[outputs.profiles]"},
+    };
+    for (const auto& [from, to] : changes) {
+        const auto k = keys(replace(kSmall, from, to));
+        int changed = 0;
+        for (size_t i = 0; i < k.size(); ++i) changed += k[i] != base[i];
+        EXPECT_GT(changed, 0) << from << " -> " << to;
+    }
+    // A change to one material leaves the other's artifacts alone (only what changed reruns).
+    const auto k = keys(replace(kSmall, "eta = 1.4", "eta = 1.41"));
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(k[static_cast<size_t>(i)], base[static_cast<size_t>(i)]);
+    for (int i = 3; i < 6; ++i) EXPECT_NE(k[static_cast<size_t>(i)], base[static_cast<size_t>(i)]);
+    // --quick is a different budget.
+    EXPECT_NE(keys(kSmall, true), base);
+}
+
+TEST(Runner, SecondRunComputesNothingAndWritesTheSameResults) {
+    testing::TempDir dir;
+    dir.write("small.toml", kSmall);
+    const auto dry = run_ssslab({"run", "small.toml", "--dry-run"}, dir.path());
+    ASSERT_EQ(dry.exit_code, 0) << dry.err;
+    EXPECT_NE(dry.out.find("6 to compute"), std::string::npos) << dry.out;
+    EXPECT_FALSE(fs::exists(dir / "results")) << "--dry-run must not write";
+
+    const auto first = run_ssslab({"run", "small.toml"}, dir.path());
+    ASSERT_EQ(first.exit_code, 0) << first.err;
+    EXPECT_NE(first.out.find("6 computed, 0 reused"), std::string::npos) << first.out;
+    const std::string csv = testing::read_text(dir / "results" / "small" / "profiles" / "Slab.csv");
+    const std::string summary = testing::read_text(dir / "results" / "small" / "summary.csv");
+
+    const auto again = run_ssslab({"run", "small.toml", "--dry-run"}, dir.path());
+    EXPECT_NE(again.out.find("6 cached, 0 to compute"), std::string::npos) << again.out;
+    const auto second = run_ssslab({"run", "small.toml"}, dir.path());
+    ASSERT_EQ(second.exit_code, 0) << second.err;
+    EXPECT_NE(second.out.find("0 computed, 6 reused"), std::string::npos) << second.out;
+    EXPECT_EQ(testing::read_text(dir / "results" / "small" / "profiles" / "Slab.csv"), csv);
+    EXPECT_EQ(testing::read_text(dir / "results" / "small" / "summary.csv"), summary);
+    for (const char* f : {"report.html", "metrics.csv", "artifacts.csv", "experiment.toml"})
+        EXPECT_TRUE(fs::exists(dir / "results" / "small" / f)) << f;
+    // Only what changed is computed again.
+    dir.write("small.toml", replace(kSmall, "eta = 1.4", "eta = 1.41"));
+    const auto third = run_ssslab({"run", "small.toml"}, dir.path());
+    EXPECT_NE(third.out.find("3 computed, 3 reused"), std::string::npos) << third.out;
+}
+
+// Start ssslab in the background, kill it after `ms` milliseconds with `sig`, return its status.
+int run_and_kill(const std::vector<std::string>& args, const fs::path& cwd, int ms, int sig) {
+    const std::string bin = testing::ssslab_binary();
+    std::vector<std::string> argv_s = {bin};
+    argv_s.insert(argv_s.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& s : argv_s) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    const fs::path here = fs::current_path();
+    fs::current_path(cwd);
+    pid_t pid = 0;
+    const int rc = posix_spawn(&pid, bin.c_str(), nullptr, nullptr, argv.data(), environ);
+    fs::current_path(here);
+    if (rc != 0) return -1;
+    std::this_thread::sleep_for(std::chrono::milliseconds(ms));
+    ::kill(pid, sig);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+void expect_no_partial_cache_entries(const fs::path& cache) {
+    if (!fs::exists(cache)) return;
+    for (const auto& kind : fs::directory_iterator(cache))
+        for (const auto& e : fs::directory_iterator(kind.path())) {
+            const std::string n = e.path().filename().string();
+            if (e.is_directory() && n.rfind(".tmp-", 0) != 0) {
+                EXPECT_TRUE(fs::exists(e.path() / "manifest.toml")) << "partial entry " << n;
+            }
+        }
+}
+
+TEST(Runner, KilledRunResumesToTheUninterruptedResultBitForBit) {
+    const std::string big = replace(kSmall, "photons = 20000", "photons = 500000");
+    testing::TempDir whole, parts;
+    whole.write("big.toml", big);
+    parts.write("big.toml", big);
+    const auto full = run_ssslab({"run", "big.toml", "-q"}, whole.path());
+    ASSERT_EQ(full.exit_code, 0) << full.err;
+
+    // SIGKILL: no chance to save anything beyond the periodic checkpoints (every 0.1 s here).
+    ::setenv("SSSLAB_CHECKPOINT_SECONDS", "0.1", 1);
+    const int killed = run_and_kill({"run", "big.toml", "-q"}, parts.path(), 900, SIGKILL);
+    EXPECT_EQ(killed, 128 + SIGKILL) << "the run finished before it was killed";
+    expect_no_partial_cache_entries(parts / "results" / "cache");
+    EXPECT_FALSE(fs::exists(parts / "results" / "small" / "summary.csv"));
+    // SIGINT: finishes the batches in flight, checkpoints, exits 130 without results.
+    const int interrupted = run_and_kill({"run", "big.toml", "-q"}, parts.path(), 600, SIGINT);
+    ::unsetenv("SSSLAB_CHECKPOINT_SECONDS");
+    if (interrupted != 0) {  // 0 if the resumed run was already done
+        EXPECT_EQ(interrupted, 130);
+        EXPECT_FALSE(fs::exists(parts / "results" / "small" / "summary.csv"));
+    }
+    expect_no_partial_cache_entries(parts / "results" / "cache");
+
+    const auto resumed = run_ssslab({"run", "big.toml", "-q"}, parts.path());
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    for (const char* f :
+         {"profiles/Skin1.csv", "profiles/Slab.csv", "summary.csv", "metrics.csv"}) {
+        const std::string a = testing::read_text(whole / "results" / "small" / f);
+        ASSERT_GT(a.size(), 100u) << f;
+        EXPECT_EQ(a, testing::read_text(parts / "results" / "small" / f)) << f;
+    }
+    // The resumed run continued from the checkpoints instead of starting over.
+    const std::string artifacts = testing::read_text(parts / "results" / "small" / "artifacts.csv");
+    EXPECT_NE(artifacts.find(",resumed"), std::string::npos) << artifacts;
+}
+
+TEST(Runner, CheckCatchesAPlantedRegressionAndPassesAnUnchangedRerun) {
+    testing::TempDir dir;
+    const std::string base = replace(kSmall, "quick_factor = 0.1", "quick_factor = 0.5");
+    dir.write("small.toml", base);
+    const auto none = run_ssslab({"check", "small.toml", "--quick"}, dir.path());
+    EXPECT_EQ(none.exit_code, 2) << none.out << none.err;
+    EXPECT_NE(none.err.find("no baseline"), std::string::npos) << none.err;
+
+    const auto update = run_ssslab({"check", "small.toml", "--quick", "--update"}, dir.path());
+    ASSERT_EQ(update.exit_code, 0) << update.err;
+    ASSERT_TRUE(fs::exists(dir / "results" / "baselines" / "small.quick.toml"));
+
+    const auto same = run_ssslab({"check", "small.toml", "--quick"}, dir.path());
+    EXPECT_EQ(same.exit_code, 0) << same.out << same.err;
+    EXPECT_NE(same.out.find("0 regressions"), std::string::npos) << same.out;
+
+    // Independent random streams (another seed): the same physics passes the z-tests.
+    dir.write("small.toml", replace(base, "seed = 7", "seed = 99"));
+    const auto reseeded = run_ssslab({"check", "small.toml", "--quick"}, dir.path());
+    EXPECT_EQ(reseeded.exit_code, 0) << reseeded.out;
+
+    // A planted regression: half as much absorption again in one channel of one material.
+    dir.write("small.toml", replace(base, "sigma_a_per_mm = [0.1, 0.2, 0.3]",
+                                    "sigma_a_per_mm = [0.1, 0.2, 0.45]"));
+    const auto planted = run_ssslab({"check", "small.toml", "--quick"}, dir.path());
+    EXPECT_EQ(planted.exit_code, 1) << planted.out;
+    EXPECT_NE(planted.out.find("Slab.B."), std::string::npos) << planted.out;
+    EXPECT_NE(planted.out.find("REGRESSION"), std::string::npos) << planted.out;
+    EXPECT_EQ(planted.out.find("Skin1.R.Rd "), std::string::npos) << "Skin1 did not move";
+
+    // A deterministic metric (the grid) is compared exactly.
+    dir.write("small.toml",
+              replace(base, "[outputs.profiles]", "[mcml.grid]\nnr = 200\n[outputs.profiles]"));
+    const auto grid = run_ssslab({"check", "small.toml", "--quick"}, dir.path());
+    EXPECT_EQ(grid.exit_code, 1) << grid.out;
+    EXPECT_NE(grid.out.find("Skin1.nr"), std::string::npos) << grid.out;
+}
+
+struct BadConfig {
+    std::string name, content;
+    std::vector<std::string> expect;
+};
+
+TEST(Runner, BadExperimentConfigsAreRefusedWithTheirLocation) {
+    const std::string head = "[experiment]\nname = \"x\"\n";
+    const std::string mats = "[materials]\npresets = [\"Skin1\"]\n";
+    const std::string outs = "[outputs.profiles]\n";
+    const std::vector<BadConfig> cases = {
+        {"syntax", head + "seed = = 1\n" + mats + outs, {"e.toml:3:", "TOML syntax error"}},
+        {"no experiment table", mats + outs, {"key 'experiment'", "required table"}},
+        {"no name",
+         "[experiment]\ntitle = \"t\"\n" + mats + outs,
+         {"key 'experiment.name'", "required"}},
+        {"bad name",
+         "[experiment]\nname = \"My Run\"\n" + mats + outs,
+         {"e.toml:2:8", "experiment.name", "lower-case letters"}},
+        {"unknown key", head + "sede = 1\n" + mats + outs, {"e.toml:3:1", "did you mean 'seed'"}},
+        {"negative seed",
+         head + "seed = -1\n" + mats + outs,
+         {"e.toml:3:8", "experiment.seed", "[0, inf)"}},
+        {"unknown preset",
+         head + "[materials]\npresets = [\"Skim1\"]\n" + outs,
+         {"e.toml:4:11", "unknown material \"Skim1\"", "did you mean \"Skin1\""}},
+        {"preset twice",
+         head + "[materials]\npresets = [\"Skin1\", \"skin1\"]\n" + outs,
+         {"e.toml:4:", "listed twice"}},
+        {"presets not strings",
+         head + "[materials]\npresets = [1, 2]\n" + outs,
+         {"e.toml:4:", "materials.presets", "array of strings"}},
+        {"no materials", head + "[materials]\n" + outs, {"e.toml:3:", "no materials"}},
+        {"custom without name",
+         head + mats + "[[materials.custom]]\nsigma_a_per_mm = 0.1\n" + outs,
+         {"materials.custom[0].name", "required"}},
+        {"custom bad coefficient",
+         head + mats +
+             "[[materials.custom]]\nname = \"c\"\nsigma_a_per_mm = -0.1\nsigma_s_per_mm = 1\neta = "
+             "1.3\n" +
+             outs,
+         {"e.toml:7:", "materials.custom[0].sigma_a_per_mm", "[0, inf)"}},
+        {"custom duplicate of preset",
+         head + mats +
+             "[[materials.custom]]\nname = \"Skin1\"\nsigma_a_per_mm = 0.1\nsigma_s_per_mm = "
+             "1\neta = 1.3\n" +
+             outs,
+         {"defined twice"}},
+        {"photons zero",
+         head + mats + "[mcml]\nphotons = 0\n" + outs,
+         {"e.toml:6:11", "mcml.photons", "[1, 9e+18]"}},
+        {"quick factor above 1",
+         head + mats + "[mcml]\nquick_factor = 2\n" + outs,
+         {"mcml.quick_factor", "(0, 1]"}},
+        {"grid both units",
+         head + mats + "[mcml.grid]\ndr_mm = 0.1\ndr_cm = 0.01\n" + outs,
+         {"mcml.grid.dr_cm", "not both"}},
+        {"no outputs", head + mats + "[outputs]\n", {"no outputs"}},
+        {"unknown output",
+         head + mats + "[outputs.profils]\n",
+         {"e.toml:5:", "outputs.profils", "did you mean 'profiles'"}},
+        {"unknown unit",
+         head + mats + "[outputs.profiles]\nunit = \"inch\"\n",
+         {"outputs.profiles.unit", "\"mm\", \"cm\""}},
+        {"convergence of an absent material",
+         head + mats + outs + "[outputs.convergence]\nmaterials = [\"Apple\"]\n",
+         {"outputs.convergence.materials", "not a material of this experiment"}},
+        {"convergence reference factor",
+         head + mats + outs +
+             "[outputs.convergence]\nmaterials = [\"Skin1\"]\nreference_factor = 0.5\n",
+         {"outputs.convergence.reference_factor", "[1, 1000]"}},
+        {"convergence with a time budget",
+         head + mats + "[mcml]\nseconds = 10\n" + outs +
+             "[outputs.convergence]\nmaterials = [\"Skin1\"]\n",
+         {"needs a photon budget"}},
+    };
+    ASSERT_GE(cases.size(), 15u);
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.name);
+        testing::TempDir dir;
+        dir.write("e.toml", c.content);
+        const auto r = run_ssslab({"run", "e.toml"}, dir.path());
+        EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+        for (const auto& s : c.expect)
+            EXPECT_NE(r.err.find(s), std::string::npos) << s << "\n" << r.err;
+        EXPECT_EQ(dir.files(), std::vector<std::string>{"e.toml"}) << "no output on bad input";
+    }
+}
+
+TEST(Report, OpensInHeadlessChromiumWithItsPlots) {
+    if (std::system("command -v chromium >/dev/null 2>&1") != 0)
+        GTEST_SKIP() << "chromium is not installed (scripts/setup.sh installs it)";
+    testing::TempDir dir;
+    const auto r = run_ssslab({"run", "--quick", "-q"}, dir.path());  // the default experiment
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const fs::path report = dir / "results" / "freude14-profiles" / "report.html";
+    ASSERT_TRUE(fs::exists(report));
+    const std::string flags =
+        "--headless=new --no-sandbox --disable-gpu --disable-quic --no-first-run "
+        "--disable-background-networking --disable-component-update --disable-sync "
+        "--hide-scrollbars --virtual-time-budget=10000 --enable-logging=stderr --v=0 "
+        "--user-data-dir=" +
+        (dir / "chromium-profile").string();
+    const std::string dom = (dir / "dom.html").string(), log = (dir / "chromium.log").string();
+    const std::string url = "file://" + report.string();
+    ASSERT_EQ(std::system(
+                  ("chromium " + flags + " --dump-dom '" + url + "' >'" + dom + "' 2>'" + log + "'")
+                      .c_str()),
+              0);
+    const std::string page = testing::read_text(dom);
+    EXPECT_NE(page.find("data-images-ok=\"yes\""), std::string::npos) << page.substr(0, 400);
+    EXPECT_NE(page.find("data-images=\"6\""), std::string::npos);
+    // The page's own console: no JavaScript errors, no failed loads.
+    const std::string console = testing::read_text(log);
+    EXPECT_EQ(console.find("Uncaught"), std::string::npos) << console;
+    EXPECT_EQ(console.find("Failed to load resource"), std::string::npos) << console;
+    // A screenshot of the rendered page.
+    const std::string shot = (dir / "report.png").string();
+    ASSERT_EQ(std::system(("chromium " + flags + " --window-size=1280,2000 --screenshot='" + shot +
+                           "' '" + url + "' >/dev/null 2>&1")
+                              .c_str()),
+              0);
+    ASSERT_TRUE(fs::exists(shot));
+    EXPECT_GT(fs::file_size(shot), 50000u) << "a blank page compresses to a few kB";
+}
+
+}  // namespace
+}  // namespace ssslab
