@@ -89,14 +89,14 @@ std::optional<std::array<double, 3>> coefficient_per_cm(ConfigTable& t, const st
     return t.optional_rgb(cm, Range::nonnegative());
 }
 
-std::optional<double> length_cm(ConfigTable& t, const std::string& base, Range r) {
+}  // namespace
+
+std::optional<double> optional_length_cm(ConfigTable& t, const std::string& base, const Range& r) {
     const std::string mm = base + "_mm", cm = base + "_cm";
     if (t.has(mm) && t.has(cm)) t.fail(cm, "give " + base + " once, in mm or in cm, not both");
     if (auto v = t.optional_number(mm, r)) return *v / 10.0;
     return t.optional_number(cm, r);
 }
-
-}  // namespace
 
 Medium medium_from_config(ConfigTable& t) {
     Medium m;
@@ -130,7 +130,7 @@ Medium medium_from_config(ConfigTable& t) {
         m.eta = t.number("eta", Range::positive());
         m.thickness_cm = 1e8;
     }
-    if (auto d = length_cm(t, "thickness", Range::positive())) m.thickness_cm = *d;
+    if (auto d = optional_length_cm(t, "thickness", Range::positive())) m.thickness_cm = *d;
     m.eta_above = t.number("eta_above", 1.0, Range::positive());
     m.eta_below = t.number("eta_below", 1.0, Range::positive());
     t.record("thickness_cm", m.thickness_cm);

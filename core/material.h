@@ -13,6 +13,7 @@
 namespace ssslab {
 
 class ConfigTable;
+struct Range;
 
 /// One RGB channel index: 0 = R, 1 = G, 2 = B.
 inline constexpr const char* kChannelNames[3] = {"R", "G", "B"};
@@ -61,6 +62,9 @@ std::optional<Medium> find_material(const std::string& name);
 std::string material_names();
 /// The preset name nearest to `name` (edit distance at most 3), or "" if none is near.
 std::string nearest_material(const std::string& name);
+
+/// A length given as <base>_mm or <base>_cm (not both), in cm; nullopt if neither is given.
+std::optional<double> optional_length_cm(ConfigTable& t, const std::string& base, const Range& r);
 
 /// Read a medium from a config table: either `preset = "Skin1"` (optionally with `thickness_cm`
 /// or `thickness_mm`, `eta_above`, `eta_below`), or explicit coefficients with their unit in the

@@ -58,6 +58,20 @@ void put_vec(std::string& out, const std::vector<double>& v) {
     out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(double));
 }
 
+// The per-batch history and the snapshots, shared by checkpoints and result files.
+void put_progress(std::string& out, const std::vector<ProgressPoint>& history,
+                  const std::vector<Snapshot>& snapshots) {
+    put<std::uint64_t>(out, history.size());
+    for (const auto& p : history) put(out, p);
+    put<std::uint64_t>(out, snapshots.size());
+    for (const auto& sn : snapshots) {
+        put(out, sn.photons);
+        put(out, sn.batches);
+        put(out, sn.seconds);
+        put_vec(out, sn.mean);
+    }
+}
+
 void save_checkpoint(const std::string& path, const Checkpoint& c) {
     std::string out(kMagic, 8);
     put<std::uint64_t>(out, c.fingerprint.size());
@@ -68,15 +82,7 @@ void save_checkpoint(const std::string& path, const Checkpoint& c) {
     put(out, c.seconds);
     put_vec(out, c.sum);
     put_vec(out, c.q);
-    put<std::uint64_t>(out, c.history.size());
-    for (const auto& p : c.history) put(out, p);
-    put<std::uint64_t>(out, c.snapshots.size());
-    for (const auto& sn : c.snapshots) {
-        put(out, sn.photons);
-        put(out, sn.batches);
-        put(out, sn.seconds);
-        put_vec(out, sn.mean);
-    }
+    put_progress(out, c.history, c.snapshots);
     write_file_atomic(path, out);
 }
 
@@ -106,6 +112,19 @@ class Cursor {
         pos_ += n;
         return s;
     }
+    void get_progress(std::vector<ProgressPoint>& history, std::vector<Snapshot>& snapshots) {
+        const auto nh = get<std::uint64_t>();
+        for (std::uint64_t i = 0; i < nh; ++i) history.push_back(get<ProgressPoint>());
+        const auto ns = get<std::uint64_t>();
+        for (std::uint64_t i = 0; i < ns; ++i) {
+            Snapshot sn;
+            sn.photons = get<std::uint64_t>();
+            sn.batches = get<std::uint64_t>();
+            sn.seconds = get<double>();
+            sn.mean = get_vec();
+            snapshots.push_back(std::move(sn));
+        }
+    }
     void need(size_t n) const {
         if (pos_ + n > d_.size())
             throw InputError({path_, 0, 0}, "", "file is truncated or corrupt");
@@ -132,17 +151,7 @@ std::optional<Checkpoint> load_checkpoint(const std::string& path) {
     k.seconds = c.get<double>();
     k.sum = c.get_vec();
     k.q = c.get_vec();
-    const auto nh = c.get<std::uint64_t>();
-    for (std::uint64_t i = 0; i < nh; ++i) k.history.push_back(c.get<ProgressPoint>());
-    const auto ns = c.get<std::uint64_t>();
-    for (std::uint64_t i = 0; i < ns; ++i) {
-        Snapshot sn;
-        sn.photons = c.get<std::uint64_t>();
-        sn.batches = c.get<std::uint64_t>();
-        sn.seconds = c.get<double>();
-        sn.mean = c.get_vec();
-        k.snapshots.push_back(std::move(sn));
-    }
+    c.get_progress(k.history, k.snapshots);
     return k;
 }
 
@@ -457,15 +466,7 @@ std::string serialize_result(const RunResult& r) {
     put<std::int32_t>(out, r.threads);
     put<std::int32_t>(out, static_cast<std::int32_t>(r.reason));
     put<std::int32_t>(out, r.resumed ? 1 : 0);
-    put<std::uint64_t>(out, r.history.size());
-    for (const auto& p : r.history) put(out, p);
-    put<std::uint64_t>(out, r.snapshots.size());
-    for (const auto& sn : r.snapshots) {
-        put(out, sn.photons);
-        put(out, sn.batches);
-        put(out, sn.seconds);
-        put_vec(out, sn.mean);
-    }
+    put_progress(out, r.history, r.snapshots);
     return out;
 }
 
@@ -490,17 +491,7 @@ RunResult deserialize_result(const std::string& data, const std::string& name) {
     r.threads = c.get<std::int32_t>();
     r.reason = static_cast<StopReason>(c.get<std::int32_t>());
     r.resumed = c.get<std::int32_t>() != 0;
-    const auto nh = c.get<std::uint64_t>();
-    for (std::uint64_t i = 0; i < nh; ++i) r.history.push_back(c.get<ProgressPoint>());
-    const auto ns = c.get<std::uint64_t>();
-    for (std::uint64_t i = 0; i < ns; ++i) {
-        Snapshot sn;
-        sn.photons = c.get<std::uint64_t>();
-        sn.batches = c.get<std::uint64_t>();
-        sn.seconds = c.get<double>();
-        sn.mean = c.get_vec();
-        r.snapshots.push_back(std::move(sn));
-    }
+    c.get_progress(r.history, r.snapshots);
     if (r.values.size() != l.size || r.se.size() != l.size)
         throw InputError({name, 0, 0}, "", "result file is inconsistent (tally sizes differ)");
     return r;

@@ -1,5 +1,6 @@
 #include "mcml/profile.h"
 
+#include "core/config.h"
 #include "mcml/transport.h"
 
 #include <algorithm>
@@ -17,6 +18,21 @@ ProfileGrid freude14_grid(const Medium& m) {
     g.dr_cm = mfp_min / 20.0;
     g.nr = static_cast<int>(std::ceil(32.0 * mfp_max / g.dr_cm));
     return g;
+}
+
+GridOverride read_grid_override(ConfigTable& t) {
+    GridOverride o;
+    o.dr_cm = optional_length_cm(t, "dr", Range::positive());
+    if (auto v = t.optional_integer("nr", Range::closed(1, 1e7))) o.nr = static_cast<int>(*v);
+    return o;
+}
+
+Budget read_budget(ConfigTable& t) {
+    Budget b;
+    b.photons = t.optional_integer("photons", Range::closed(1, 9e18));
+    b.seconds = t.optional_number("seconds", Range::positive());
+    b.rel_error = t.optional_number("rel_error", Range::open(0, 1));
+    return b;
 }
 
 void fill_profile(const RunResult& r, const ProfileGrid& grid, int c, RadialProfile& p) {

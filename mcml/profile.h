@@ -8,7 +8,12 @@
 
 #include <array>
 #include <functional>
+#include <optional>
 #include <string>
+
+namespace ssslab {
+class ConfigTable;
+}
 
 namespace ssslab::mcml {
 
@@ -20,6 +25,22 @@ struct ProfileGrid {
 /// [Freude14 Table 6.1]: dr = min over RGB of MFP / 20, nr = ceil(32 max MFP / dr), with
 /// MFP = 1 / (sigma_a + sigma_s').
 ProfileGrid freude14_grid(const Medium& m);
+
+/// A grid given in a config (dr_mm or dr_cm, nr; each optional) over a default rule.
+struct GridOverride {
+    std::optional<double> dr_cm;
+    std::optional<int> nr;
+    bool any() const { return dr_cm || nr; }
+    ProfileGrid apply(ProfileGrid g) const {
+        if (dr_cm) g.dr_cm = *dr_cm;
+        if (nr) g.nr = *nr;
+        return g;
+    }
+};
+GridOverride read_grid_override(ConfigTable& t);
+
+/// A budget from a config table: photons, seconds, rel_error (each optional).
+Budget read_budget(ConfigTable& t);
 
 struct ProfileOptions {
     std::uint64_t seed = 1;

@@ -56,23 +56,16 @@ ProfileJob read_profile_job(const std::string& config_path, const std::string& m
 
     ConfigTable grid = root.table_or_empty("grid");
     job.grid = mcml::freude14_grid(job.medium);
-    std::string rule = "Freude14 Table 6.1 (dr = min MFP / 20, nr = ceil(32 max MFP / dr))";
-    if (grid.has("dr_mm") && grid.has("dr_cm"))
-        grid.fail("dr_cm", "give dr once, in mm or in cm, not both");
-    if (auto v = grid.optional_number("dr_mm", Range::positive()))
-        job.grid.dr_cm = *v / 10.0, rule = "config";
-    if (auto v = grid.optional_number("dr_cm", Range::positive()))
-        job.grid.dr_cm = *v, rule = "config";
-    if (auto v = grid.optional_integer("nr", Range::closed(1, 1e7)))
-        job.grid.nr = static_cast<int>(*v), rule = "config";
+    const mcml::GridOverride go = mcml::read_grid_override(grid);
+    job.grid = go.apply(job.grid);
+    const std::string rule =
+        go.any() ? "config" : "Freude14 Table 6.1 (dr = min MFP / 20, nr = ceil(32 max MFP / dr))";
     grid.record("dr_cm", job.grid.dr_cm);
     grid.record("nr", static_cast<std::int64_t>(job.grid.nr));
     grid.record("rule", rule);
 
     ConfigTable budget = root.table_or_empty("budget");
-    job.budget.photons = budget.optional_integer("photons", Range::closed(1, 9e18));
-    job.budget.seconds = budget.optional_number("seconds", Range::positive());
-    job.budget.rel_error = budget.optional_number("rel_error", Range::open(0, 1));
+    job.budget = mcml::read_budget(budget);
     job.batch = budget.integer("batch_photons", 0, Range::nonnegative());
     if (c.photons) job.budget.photons = c.photons, budget.record("photons", *c.photons);
     if (c.seconds) job.budget.seconds = c.seconds, budget.record("seconds", *c.seconds);

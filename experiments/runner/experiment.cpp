@@ -60,9 +60,7 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
         mats.fail("presets", "no materials: give presets = [...] or [[materials.custom]] tables");
 
     ConfigTable mc = root.table_or_empty("mcml");
-    e.mcml.budget.photons = mc.optional_integer("photons", Range::closed(1, 9e18));
-    e.mcml.budget.seconds = mc.optional_number("seconds", Range::positive());
-    e.mcml.budget.rel_error = mc.optional_number("rel_error", Range::open(0, 1));
+    e.mcml.budget = mcml::read_budget(mc);
     if (!e.mcml.budget.photons && !e.mcml.budget.seconds && !e.mcml.budget.rel_error) {
         e.mcml.budget.photons = mcml::kFreude14Photons;
         mc.record("photons", static_cast<std::int64_t>(mcml::kFreude14Photons));
@@ -70,12 +68,7 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
     e.mcml.quick_factor = mc.number("quick_factor", 0.02, Range::left_open(0, 1));
     e.mcml.batch_photons = mc.integer("batch_photons", 0, Range::nonnegative());
     ConfigTable grid = mc.table_or_empty("grid");
-    if (grid.has("dr_mm") && grid.has("dr_cm"))
-        grid.fail("dr_cm", "give dr once, in mm or in cm, not both");
-    if (auto v = grid.optional_number("dr_mm", Range::positive())) e.mcml.dr_cm = *v / 10.0;
-    if (auto v = grid.optional_number("dr_cm", Range::positive())) e.mcml.dr_cm = *v;
-    if (auto v = grid.optional_integer("nr", Range::closed(1, 1e7)))
-        e.mcml.nr = static_cast<int>(*v);
+    e.mcml.grid = mcml::read_grid_override(grid);
 
     ConfigTable outs = root.require_table("outputs");
     if (auto t = outs.table("profiles")) {

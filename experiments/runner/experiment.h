@@ -36,8 +36,7 @@ struct McmlSetup {
     mcml::Budget budget;         ///< per RGB channel, before --quick
     double quick_factor = 0.02;  ///< --quick multiplies photon and time budgets by this
     std::int64_t batch_photons = 0;
-    std::optional<double> dr_cm;  ///< grid override (else Freude14 Table 6.1)
-    std::optional<int> nr;
+    mcml::GridOverride grid;  ///< over Freude14 Table 6.1
 };
 
 struct Experiment {

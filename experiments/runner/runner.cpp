@@ -87,10 +87,7 @@ ContentKey node_key(const ChannelNode& n) {
 }
 
 mcml::ProfileGrid grid_for(const Experiment& e, const Medium& m) {
-    mcml::ProfileGrid g = mcml::freude14_grid(m);
-    if (e.mcml.dr_cm) g.dr_cm = *e.mcml.dr_cm;
-    if (e.mcml.nr) g.nr = *e.mcml.nr;
-    return g;
+    return e.mcml.grid.apply(mcml::freude14_grid(m));
 }
 
 std::string manifest_toml(const ChannelNode& n) {
