@@ -1,0 +1,193 @@
+#include "approx/models.h"
+
+#include <tbb/parallel_for.h>
+#include <Eigen/QR>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+namespace ssslab::approx {
+
+namespace {
+
+// Minimise sum_i D_i a_i^2 - 2 B_i a_i subject to sum_i a_i = s and a >= 0:
+// a_i = max(0, (B_i - lambda) / D_i) with lambda such that the sum is s (it decreases in lambda).
+Eigen::VectorXd constrained_step(const Eigen::VectorXd& B, const Eigen::VectorXd& D, double s) {
+    const Eigen::Index n = B.size();
+    auto total = [&](double lambda) {
+        double t = 0;
+        for (Eigen::Index i = 0; i < n; ++i)
+            if (D(i) > 0) t += std::max(0.0, (B(i) - lambda) / D(i));
+        return t;
+    };
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (Eigen::Index i = 0; i < n; ++i) {
+        if (!(D(i) > 0)) continue;
+        lo = std::min(lo, B(i) - s * D(i));  // there, the i-th term alone reaches s
+        hi = std::max(hi, B(i));             // there, every term is 0
+    }
+    if (!(lo < hi)) throw std::runtime_error("guided optimization: degenerate weights");
+    for (int it = 0; it < 200 && hi - lo > 0; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        if (mid <= lo || mid >= hi) break;
+        (total(mid) > s ? lo : hi) = mid;
+    }
+    const double lambda = 0.5 * (lo + hi);
+    Eigen::VectorXd a(n);
+    for (Eigen::Index i = 0; i < n; ++i)
+        a(i) = D(i) > 0 ? std::max(0.0, (B(i) - lambda) / D(i)) : 0.0;
+    // Remove the last rounding of the sum (a proportional correction keeps a >= 0).
+    const double sum = a.sum();
+    if (sum > 0) a *= s / sum;
+    return a;
+}
+
+}  // namespace
+
+namespace {
+
+struct LevelResult {
+    Eigen::VectorXd a;
+    int iterations = 0;
+    double change = 0, objective = 0;
+};
+
+// Solve the guided problem for a quadrant q (4 sum q = 1) from the start a (sum a = 1/2).
+constexpr double kTolerance = 1e-12;  // relative L1 change of a between steps
+
+LevelResult solve_level(const Eigen::MatrixXd& q, const GuideParams& g, Eigen::VectorXd a) {
+    const int n = static_cast<int>(q.rows());
+    // The guide on x, y in [-1, 1] spanning the grid: cell centres at (i + 1/2) / n.
+    Eigen::VectorXd x(n), sx(n);
+    for (int i = 0; i < n; ++i) {
+        x(i) = (i + 0.5) / n;
+        sx(i) = g.b > 0 ? 1.0 - std::exp(-g.b * x(i) * x(i)) : 1.0;
+    }
+    // W and W o q are symmetric: column i is row i, so the products below read contiguous
+    // columns. Built and applied in parallel (oneTBB).
+    Eigen::MatrixXd W(n, n), WQ(n, n);
+    const bool even_integer_k = g.k == std::floor(g.k) && static_cast<int>(g.k) % 2 == 0;
+    tbb::parallel_for(0, n, [&](int j) {
+        for (int i = 0; i < n; ++i) {
+            const double r2 = x(i) * x(i) + x(j) * x(j);
+            double radial;
+            if (g.k == 0)
+                radial = 1.0;
+            else if (g.k == 1)
+                radial = std::sqrt(r2);
+            else if (even_integer_k)
+                radial = std::pow(r2, static_cast<int>(g.k) / 2);
+            else
+                radial = std::pow(r2, 0.5 * g.k);
+            W(i, j) = radial * sx(i) * sx(j);
+            WQ(i, j) = W(i, j) * q(i, j);
+        }
+    });
+    // B = (W o q) b and D = W (b o b), in one parallel pass over the columns.
+    auto products = [&](const Eigen::VectorXd& b, Eigen::VectorXd& B, Eigen::VectorXd& D) {
+        const Eigen::VectorXd bb = b.cwiseProduct(b);
+        B.resize(n);
+        D.resize(n);
+        tbb::parallel_for(0, n, [&](int i) {
+            B(i) = WQ.col(i).dot(b);
+            D(i) = W.col(i).dot(bb);
+        });
+    };
+    const double s = 0.5;
+    // The damped alternating step: the best a for the other factor b fixed (a separable
+    // quadratic with the constraint and bounds), averaged with b. Its fixed point a = b is a KKT
+    // point of the symmetric problem. Anderson acceleration (depth 6) of this map, every
+    // accelerated iterate projected back onto {a >= 0, sum a = 1/2}, restarted when the residual
+    // grows.
+    auto step = [&](const Eigen::VectorXd& b) {
+        Eigen::VectorXd B, D;
+        products(b, B, D);
+        return Eigen::VectorXd(0.5 * (constrained_step(B, D, s) + b));
+    };
+    constexpr int kDepth = 6;
+    std::vector<Eigen::VectorXd> dx, df;  // differences of iterates and of residuals
+    Eigen::VectorXd x_prev, f_prev;
+    LevelResult res;
+    double change = 1, last_residual = std::numeric_limits<double>::infinity();
+    int it = 0;
+    for (; it < 5000; ++it) {
+        const Eigen::VectorXd t = step(a);
+        const Eigen::VectorXd f = t - a;  // residual
+        change = f.lpNorm<1>() / a.lpNorm<1>();
+        if (change <= kTolerance) {
+            a = t;
+            break;
+        }
+        if (f.lpNorm<1>() > last_residual) {  // the accelerated step overshot: restart
+            dx.clear(), df.clear();
+            x_prev.resize(0);
+            last_residual = f.lpNorm<1>();
+            a = t;
+            continue;
+        }
+        last_residual = f.lpNorm<1>();
+        if (x_prev.size()) {
+            dx.push_back(a - x_prev);
+            df.push_back(f - f_prev);
+            if (static_cast<int>(dx.size()) > kDepth) dx.erase(dx.begin()), df.erase(df.begin());
+        }
+        x_prev = a;
+        f_prev = f;
+        Eigen::VectorXd next = t;
+        if (!df.empty()) {
+            const int m = static_cast<int>(df.size());
+            Eigen::MatrixXd F(a.size(), m), X(a.size(), m);
+            for (int c = 0; c < m; ++c)
+                F.col(c) = df[static_cast<size_t>(c)], X.col(c) = dx[static_cast<size_t>(c)];
+            const Eigen::VectorXd gamma = F.colPivHouseholderQr().solve(f);
+            Eigen::VectorXd aa = a + f - (X + F) * gamma;
+            for (Eigen::Index i = 0; i < aa.size(); ++i) aa(i) = std::max(0.0, aa(i));
+            if (aa.sum() > 0) next = aa * (s / aa.sum());
+        }
+        a = next;
+    }
+    res.a = a;
+    res.iterations = it;
+    res.change = change;
+    res.objective = 4.0 * (W.cwiseProduct((q - a * a.transpose()).cwiseAbs2())).sum();
+    return res;
+}
+
+}  // namespace
+
+ModelResult guided(const Kernel2D& k, const GuideParams& g) {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!(g.k >= 0 && g.k <= 4))
+        throw std::invalid_argument("guided optimization: k outside [0, 4]");
+    if (!(g.b >= 0)) throw std::invalid_argument("guided optimization: b < 0");
+    // No truncation of the domain: where K vanishes the optimum is not always a = 0 (when the
+    // constraint must add mass, its multiplier is negative and the cheapest place for mass is
+    // where the weights are small, far out included).
+    const Eigen::MatrixXd& q = k.quadrant();
+    Eigen::VectorXd a = 2.0 * q.rowwise().sum();  // the pre-integrated kernel as first guess
+    a *= 0.5 / a.sum();
+    const LevelResult res = solve_level(q, g, a);
+    a = res.a;
+    const int n = k.n();
+    const double change = res.change;
+    const int it = res.iterations;
+    ModelResult r;
+    r.kernel.model = "guided-k" + std::to_string(g.k) + "-b" + std::to_string(g.b);
+    r.kernel.h_mm = k.h_mm();
+    r.kernel.n = n;
+    SeparableTerm t;
+    t.a.assign(a.data(), a.data() + n);
+    r.kernel.terms.push_back(std::move(t));
+    const double l1 = r.kernel.l1();
+    r.info["constraint_error"] = std::fabs(l1 - 1.0);
+    r.info["iterations"] = it;
+    r.info["last_change"] = change;
+    r.info["objective"] = res.objective;
+    r.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return r;
+}
+
+}  // namespace ssslab::approx
