@@ -8,7 +8,10 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build git pkg-config
-  libtbb-dev            # oneTBB: parallel photon batches
+  libtbb-dev            # oneTBB: parallel photon batches and kernel builds
+  libeigen3-dev         # Eigen: dense linear algebra of the kernel models
+  libspectra-dev        # Spectra: leading eigenpairs only (truncated SVD of large kernels)
+  libfftw3-dev          # FFTW: exact 2D convolutions (the image-space ground truth)
   libfmt-dev            # fmt: formatting
   libcli11-dev          # CLI11: the command line
   libtomlplusplus-dev   # toml++: TOML configs with source positions for error messages
