@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace ssslab::approx {
 
@@ -32,7 +33,14 @@ Kernel2D::Kernel2D(const RadialProfile& p, int c, const KernelGrid& grid) : h_(g
         const double v = R[static_cast<size_t>(b)];
         return std::isfinite(v) ? v * to_mm2 : 0.0;
     };
-    double total = 0;
+    // The total is accumulated with Neumaier compensation: a quadrant has up to ~10^7 cells and the
+    // normalisation must hold to near machine precision for the image-space tests.
+    double total = 0, carry = 0;
+    auto accumulate = [&](double v) {
+        const double t = total + v;
+        carry += std::abs(total) >= std::abs(v) ? (total - t) + v : (v - t) + total;
+        total = t;
+    };
     for (int i = 0; i < n; ++i)
         for (int j = i; j < n; ++j) {
             double sum = 0;
@@ -44,10 +52,14 @@ Kernel2D::Kernel2D(const RadialProfile& p, int c, const KernelGrid& grid) : h_(g
                 }
             const double mass = sum / (s * s) * h_ * h_;
             q_(i, j) = q_(j, i) = mass;
-            total += (i == j ? 4.0 : 8.0) * mass;
+            accumulate((i == j ? 4.0 : 8.0) * mass);
         }
+    total += carry;
     raw_l1_ = total;
-    if (total > 0) q_ /= total;
+    if (!(total > 0) || !std::isfinite(total))
+        throw std::invalid_argument("Kernel2D: channel " + std::to_string(c) + " of profile '" +
+                                    p.name + "' has no reflectance on the grid");
+    q_ /= total;
 }
 
 Kernel2D::Kernel2D(Eigen::MatrixXd quadrant, double h_mm) : q_(std::move(quadrant)), h_(h_mm) {
@@ -55,7 +67,9 @@ Kernel2D::Kernel2D(Eigen::MatrixXd quadrant, double h_mm) : q_(std::move(quadran
         throw std::invalid_argument("Kernel2D: quadrant must be square and non-empty");
     const double total = 4.0 * q_.sum();
     raw_l1_ = total;
-    if (total != 0) q_ /= total;
+    if (!(total > 0) || !std::isfinite(total))
+        throw std::invalid_argument("Kernel2D: the quadrant has no positive mass");
+    q_ /= total;
 }
 
 Eigen::MatrixXd Kernel2D::full() const {

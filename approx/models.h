@@ -81,6 +81,12 @@ struct Tap {
     std::array<double, 3> weight;
 };
 
+/// The SSSS skin kernel as a model on a kernel grid (offsets in mm, w = 1): a_s(x) =
+/// t p(x / (0.001 + f)) / ||p|| + (1 - t) delta(x) with the demo's profile p (d'Eon's skin
+/// Gaussians, red weights) and the demo's strength t and falloff f of `channel`; the delta's mass
+/// is split between the two cells next to x = 0. Unit L1.
+ModelResult ssss_skin_kernel(const Kernel2D& k, int channel, const SsssSkinParams& p = {});
+
 /// SeparableSSS::calculateKernel() of the demo, operation for operation in single precision:
 /// `samples` offsets in [-range, range] (range 2, or 3 for more than 20 samples) by the quadratic
 /// mapping, weights (area x profile), normalised, then the strength lerp with the centre delta.

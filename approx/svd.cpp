@@ -62,7 +62,7 @@ EigenPairs leading_eigenpairs(const Eigen::MatrixXd& q, int count) {
     const int ncv = std::min(n, std::max(2 * count + 1, 20));
     Spectra::SymEigsSolver<EvenBlockOp> eigs(op, count, ncv);
     eigs.init();
-    eigs.compute(Spectra::SortRule::LargestMagn, 10000, 1e-12);
+    eigs.compute(Spectra::SortRule::LargestMagn, 10000, 1e-12, Spectra::SortRule::LargestMagn);
     if (eigs.info() != Spectra::CompInfo::Successful)
         throw std::runtime_error("SVD: the Lanczos iteration did not converge");
     r.values = eigs.eigenvalues();

@@ -128,13 +128,69 @@ def convergence_plot(root, p):
     save(fig, root, p["out"])
 
 
+def singular_values_plot(root, p):
+    rows = read_csv(os.path.join(root, p["csv"]))
+    materials = []
+    for x in rows:
+        if x["material"] not in materials:
+            materials.append(x["material"])
+    fig, ax = plt.subplots(1, len(materials), figsize=(3.6 * len(materials), 3.6), squeeze=False)
+    for a, m in zip(ax[0], materials):
+        for c in "RGB":
+            v = [(int(x["index"]), float(x["sigma_over_sigma1"])) for x in rows
+                 if x["material"] == m and x["channel"] == c]
+            a.semilogy([i for i, _ in v], [s for _, s in v], "o-", ms=2.5, lw=1.0,
+                       color=COLOURS[c], label=c)
+        a.set_title(m)
+        a.set_xlabel("index")
+        a.grid(alpha=0.3, which="both")
+        a.legend(fontsize=8)
+    ax[0][0].set_ylabel("sigma_i / sigma_1")
+    fig.suptitle("Singular values of the ground-truth kernels (%s)" % p["title"], y=1.02)
+    save(fig, root, p["out"])
+
+
+def kernel_slices_plot(root, p):
+    rows = [x for x in read_csv(os.path.join(root, p["csv"])) if x["material"] == p["material"]]
+    models = []
+    for x in rows:
+        if x["model"] not in models:
+            models.append(x["model"])
+    fig, ax = plt.subplots(2, 3, figsize=(15, 7.5))
+    cmap = plt.get_cmap("tab10")
+    for col, c in enumerate("RGB"):
+        gt_axis = [(float(x["r_mm"]), float(x["value_per_mm2"])) for x in rows
+                   if x["channel"] == c and x["model"] == "ground_truth" and x["direction"] == "axis"]
+        peak = max(v for _, v in gt_axis) if gt_axis else 1.0
+        rmax = max([r for r, v in gt_axis if v > 1e-3 * peak] or [1.0])
+        for row, direction in enumerate(("axis", "diagonal")):
+            a = ax[row][col]
+            for mi, model in enumerate(models):
+                pts = [(float(x["r_mm"]), float(x["value_per_mm2"])) for x in rows
+                       if x["channel"] == c and x["model"] == model and x["direction"] == direction]
+                pts = [(r, v) for r, v in pts if r <= 1.5 * rmax]
+                style = dict(color="k", ls=":", lw=2.0) if model == "ground_truth" else \
+                    dict(color=cmap(mi % 10), lw=1.0)
+                a.plot([r for r, _ in pts], [v for _, v in pts], label=model, **style)
+            a.set_title("%s, %s" % (c, direction))
+            a.set_xlabel("r [mm]")
+            a.grid(alpha=0.3)
+    ax[0][0].set_ylabel("kernel [1/mm^2]")
+    ax[1][0].set_ylabel("kernel [1/mm^2]")
+    ax[0][2].legend(fontsize=7)
+    fig.suptitle(p["title"], y=1.01)
+    save(fig, root, p["out"])
+
+
 def main():
     with open(sys.argv[1]) as f:
         spec = json.load(f)
     root = spec["root"]
     os.makedirs(os.path.join(root, "plots"), exist_ok=True)
     for p in spec["plots"]:
-        {"profile": profile_plot, "convergence": convergence_plot}[p["kind"]](root, p)
+        {"profile": profile_plot, "convergence": convergence_plot,
+         "singular_values": singular_values_plot,
+         "kernel_slices": kernel_slices_plot}[p["kind"]](root, p)
 
 
 if __name__ == "__main__":

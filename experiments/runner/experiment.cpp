@@ -96,10 +96,22 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
                     "a convergence study needs a photon budget in [mcml] (the reference run has "
                     "reference_factor times as many photons)");
     }
-    if (!e.profiles.enabled && !e.profile_plots.enabled && !e.convergence.enabled)
+    {
+        std::vector<std::string> all_labels;
+        for (const auto& m : e.materials) all_labels.push_back(m.label);
+        std::set<std::string> names;
+        for (ConfigTable& t : outs.table_array("kernels")) {
+            e.kernel_studies.push_back(read_kernel_study(t, all_labels));
+            if (!names.insert(e.kernel_studies.back().name).second)
+                t.fail("name", "a kernel study named \"" + e.kernel_studies.back().name +
+                                   "\" is defined twice");
+        }
+    }
+    if (!e.profiles.enabled && !e.profile_plots.enabled && !e.convergence.enabled &&
+        e.kernel_studies.empty())
         outs.fail("profiles",
                   "no outputs: give at least one of [outputs.profiles], "
-                  "[outputs.profile_plots], [outputs.convergence]");
+                  "[outputs.profile_plots], [outputs.convergence], [[outputs.kernels]]");
     root.finish();
     return e;
 }

@@ -11,12 +11,15 @@
 //   [outputs.profile_plots]  linear plot near zero, log plot, r R(r) (linear_range_mfp)
 //   [outputs.convergence]    error against run time for `materials`, against an independent
 //                            reference run with reference_factor times the budget
+//   [[outputs.kernels]]      kernel studies: separable models scored in kernel and image space
+//                            (experiments/runner/kernel_study.h)
 // Every error names file:line:column and the key.
 #pragma once
 
 #include "core/config.h"
 #include "core/material.h"
 #include "core/profile.h"
+#include "experiments/runner/kernel_study.h"
 #include "mcml/engine.h"
 #include "mcml/profile.h"
 
@@ -59,6 +62,8 @@ struct Experiment {
         std::vector<std::string> materials;  ///< labels
         double reference_factor = 4.0;
     } convergence;
+
+    std::vector<KernelStudySpec> kernel_studies;  ///< [[outputs.kernels]]
 
     std::shared_ptr<ConfigDocument> doc;  ///< parsed config; holds the resolved configuration
 };

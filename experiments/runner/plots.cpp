@@ -112,6 +112,35 @@ PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const Artifac
             out.plots.push_back({"convergence", m, stem, caption.str()});
         }
     }
+    for (const auto& st : e.kernel_studies) {
+        const std::string sdir = "kernels/" + st.name + "/";
+        if (st.singular_values > 0) {
+            const std::string stem = "plots/" + st.name + "_singular_values";
+            std::ostringstream js;
+            js << "{\"kind\": \"singular_values\", \"csv\": "
+               << json_string(sdir + "singular_values.csv")
+               << ", \"title\": " << json_string(st.name) << ", \"out\": " << json_string(stem)
+               << "}";
+            add(js.str(), {sdir + "singular_values.csv"});
+            out.plots.push_back({"study:" + st.name, "singular values", stem,
+                                 "The leading singular values of each channel's 2D kernel, "
+                                 "divided by the first (as Freude14 Fig. 5.1)."});
+        }
+        if (st.kernel_plots)
+            for (const auto& m : st.materials) {
+                const std::string stem = "plots/" + st.name + "_slices_" + m;
+                std::ostringstream js;
+                js << "{\"kind\": \"kernel_slices\", \"csv\": " << json_string(sdir + "slices.csv")
+                   << ", \"material\": " << json_string(m)
+                   << ", \"title\": " << json_string(m + " (" + st.name + ")")
+                   << ", \"out\": " << json_string(stem) << "}";
+                add(js.str(), {sdir + "slices.csv"});
+                out.plots.push_back({"study:" + st.name, m + " kernels", stem,
+                                     m + ": the 2D kernels along the main axis (top) and the "
+                                         "diagonal (bottom) per channel, ground truth dotted (as "
+                                         "Freude14 Fig. 6.2)."});
+            }
+    }
     if (out.plots.empty()) return out;
 
     // Reuse what was drawn before; draw the rest in one Python process.

@@ -1,7 +1,12 @@
 #include "experiments/runner/report.h"
 
 #include "core/provenance.h"
+#include "experiments/runner/kernel_study.h"
 #include "experiments/runner/runner.h"
+
+#include <array>
+#include <cstdlib>
+#include <map>
 
 #include <cmath>
 #include <cstdio>
@@ -57,6 +62,8 @@ figcaption { font-size: 0.9em; color: #444; }
 pre { background: #f7f7f7; padding: 0.8em; overflow-x: auto; font-size: 0.82em; }
 .note { background: #fff8e0; border-left: 4px solid #e0b000; padding: 0.5em 0.8em; }
 code { font-size: 0.95em; }
+img.panel { width: 180px; image-rendering: pixelated; border: 1px solid #ddd; }
+table.panels td { border: none; font-size: 0.8em; vertical-align: top; }
 )CSS";
 
 // Marks the page once every image has loaded (or failed): the headless-browser test reads it.
@@ -85,6 +92,156 @@ void figures(std::ostringstream& os, const PlotResult& p, const std::string& sec
         os << "<figure><a href=\"" << esc(f.stem) << ".svg\"><img src=\"" << esc(f.stem)
            << ".png\" alt=\"" << esc(f.title) << "\"></a><figcaption>" << esc(f.caption)
            << " (<a href=\"" << esc(f.stem) << ".svg\">SVG</a>)</figcaption></figure>\n";
+    }
+}
+
+// A CSV cell reader that honours double quotes (model specs contain commas).
+std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
+    std::vector<std::vector<std::string>> rows;
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.empty()) continue;
+        std::vector<std::string> row;
+        std::string cell;
+        bool quoted = false;
+        for (char ch : line) {
+            if (ch == '"')
+                quoted = !quoted;
+            else if (ch == ',' && !quoted)
+                row.push_back(cell), cell.clear();
+            else
+                cell += ch;
+        }
+        row.push_back(cell);
+        rows.push_back(row);
+    }
+    return rows;
+}
+
+size_t column(const std::vector<std::string>& header, const char* name) {
+    for (size_t i = 0; i < header.size(); ++i)
+        if (header[i] == name) return i;
+    return header.size();
+}
+
+std::string cell_num(const std::string& v, int digits = 4) {
+    if (v.empty()) return "";
+    char* end = nullptr;
+    const double x = std::strtod(v.c_str(), &end);
+    return *end == '\0' ? num(x, digits) : esc(v);
+}
+
+// Rows grouped by a key with one value per channel: "key -> R, G, B".
+void channel_table(std::ostringstream& os, const std::string& csv,
+                   const std::vector<const char*>& keys, const char* value,
+                   const std::vector<const char*>& extra_sum, const char* title) {
+    const auto rows = parse_csv(csv);
+    if (rows.size() < 2) return;
+    const auto& h = rows[0];
+    const size_t ch = column(h, "channel"), v = column(h, value);
+    std::vector<std::string> order;
+    std::map<std::string, std::array<std::string, 3>> vals;
+    std::map<std::string, std::vector<std::string>> key_cells;
+    std::map<std::string, std::vector<double>> sums;
+    for (size_t i = 1; i < rows.size(); ++i) {
+        const auto& row = rows[i];
+        std::string key;
+        std::vector<std::string> kc;
+        for (const char* k : keys) {
+            const size_t c = column(h, k);
+            kc.push_back(c < row.size() ? row[c] : "");
+            key += kc.back() + "|";
+        }
+        if (!vals.count(key))
+            order.push_back(key), key_cells[key] = kc, sums[key].assign(extra_sum.size(), 0.0);
+        const int channel = row[ch] == "R" ? 0 : row[ch] == "G" ? 1 : 2;
+        vals[key][static_cast<size_t>(channel)] = v < row.size() ? row[v] : "";
+        for (size_t e = 0; e < extra_sum.size(); ++e) {
+            const size_t c = column(h, extra_sum[e]);
+            if (c < row.size()) sums[key][e] += std::strtod(row[c].c_str(), nullptr);
+        }
+    }
+    os << "<p><b>" << title << "</b></p>\n<table>\n<tr>";
+    for (const char* k : keys) os << "<th class=\"l\">" << esc(k) << "</th>";
+    os << "<th>R</th><th>G</th><th>B</th>";
+    for (const char* e : extra_sum) os << "<th>" << esc(e) << " (sum RGB)</th>";
+    os << "</tr>\n";
+    for (const auto& key : order) {
+        os << "<tr>";
+        for (const auto& kc : key_cells[key]) os << "<td class=\"l\">" << esc(kc) << "</td>";
+        for (const auto& x : vals[key]) os << "<td>" << cell_num(x) << "</td>";
+        for (double x : sums[key]) os << "<td>" << num(x, 3) << "</td>";
+        os << "</tr>\n";
+    }
+    os << "</table>\n";
+}
+
+void study_section(std::ostringstream& os, const StudyOutput& so, const PlotResult& plots) {
+    const KernelStudySpec& s = *so.spec;
+    const std::string dir = "kernels/" + s.name + "/";
+    os << "<h3 id=\"study-" << esc(s.name) << "\">Kernel study <code>" << esc(s.name)
+       << "</code></h3>\n<p class=\"meta\">" << esc(so.summary) << " &middot; "
+       << (so.computed_now ? "computed in this run" : "reused from the cache")
+       << " &middot; key <code>" << so.key.substr(0, 16) << "</code> &middot; tables: ";
+    for (const auto& [name, content] : so.files)
+        if (name.size() > 4 && name.substr(name.size() - 4) == ".csv")
+            os << "<a href=\"" << esc(dir + name) << "\">" << esc(name) << "</a> ";
+    os << "</p>\n<p>Models: ";
+    for (const auto& m : s.models) os << "<code>" << esc(m.text) << "</code> ";
+    os << ". Every kernel is built on the thesis's grid of each material (cells of dr = min MFP "
+          "/ 20 over 32 max MFP"
+       << (s.refine > 1 ? ", refined " + std::to_string(s.refine) + " times" : "")
+       << ") from the ground-truth profile normalised to unit L1, as Freude14 §6.2 does.</p>\n";
+    if (so.files.count("kernels.csv"))
+        channel_table(os, so.files.at("kernels.csv"), {"material", "model"}, "kernel_rms",
+                      {"build_s", "l1_error"}, "Kernel-space RMS per channel (unit-L1 kernels)");
+    if (so.files.count("comparison.csv")) {
+        channel_table(os, so.files.at("comparison.csv"), {"material", "model"}, "normalised", {},
+                      "Kernel-space RMS normalised as Freude14 Table 6.3 (by the entry the "
+                      "thesis maps to 1: Ketchup, manual, B)");
+        channel_table(os, so.files.at("comparison.csv"), {"material", "model"}, "thesis_normalised",
+                      {}, "Freude14 Table 6.3 (the thesis's numbers)");
+        channel_table(os, so.files.at("comparison.csv"), {"material", "model"}, "ratio", {},
+                      "Ratio ours / thesis");
+    }
+    if (so.files.count("image.csv"))
+        channel_table(os, so.files.at("image.csv"), {"material", "signal", "model", "sampling"},
+                      "rms", {}, "Image-space RMS per channel against the exact 2D convolution");
+    for (const auto& f : plots.plots)
+        if (f.section == "study:" + s.name)
+            os << "<figure><a href=\"" << esc(f.stem) << ".svg\"><img src=\"" << esc(f.stem)
+               << ".png\" alt=\"" << esc(f.title) << "\"></a><figcaption>" << esc(f.caption)
+               << "</figcaption></figure>\n";
+    // Image panels: input, exact, then each model and its difference (normalised across the
+    // models of a signal).
+    std::map<std::string, std::vector<std::string>> panels;  // images/<material>/<signal>/ -> files
+    for (const auto& [name, content] : so.files)
+        if (name.rfind("images/", 0) == 0) {
+            const size_t slash = name.rfind('/');
+            panels[name.substr(0, slash + 1)].push_back(name.substr(slash + 1));
+        }
+    for (const auto& [folder, names] : panels) {
+        os << "<p><b>" << esc(folder.substr(7))
+           << "</b> (differences scaled to the largest "
+              "difference among the models)</p>\n<table class=\"panels\"><tr>";
+        auto cell = [&](const std::string& file, const std::string& caption) {
+            os << "<td class=\"l\"><img class=\"panel\" src=\"" << esc(dir + folder + file)
+               << "\" alt=\"" << esc(caption) << "\"><br>" << esc(caption) << "</td>";
+        };
+        cell("input.png", "input");
+        cell("exact.png", "exact (2D)");
+        int col = 2;
+        for (const auto& n : names) {
+            if (n == "input.png" || n == "exact.png" || n.find("_diff.png") != std::string::npos)
+                continue;
+            const std::string label = n.substr(0, n.size() - 4);
+            if (col++ % 6 == 0) os << "</tr><tr>";
+            cell(n, label);
+            cell(label + "_diff.png", label + " |diff|");
+            ++col;
+        }
+        os << "</tr></table>\n";
     }
 }
 
@@ -182,6 +339,11 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
                << esc(m) << "_snapshots.csv</a> ";
         os << "</p>\n";
         figures(os, c.plots, "convergence");
+    }
+
+    if (!c.studies.empty()) {
+        os << "<h2 id=\"kernels\">Kernel studies</h2>\n";
+        for (const auto& so : c.studies) study_section(os, so, c.plots);
     }
 
     os << "<h2 id=\"metrics\">Metrics</h2>\n<p>What <code>ssslab check</code> compares with the "

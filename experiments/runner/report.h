@@ -4,14 +4,28 @@
 
 #include "experiments/runner/plots.h"
 
+#include <map>
 #include <string>
+#include <vector>
 
 namespace ssslab::runner {
 
 struct ExperimentRun;
 
+struct KernelStudySpec;
+
+/// A kernel study's results as they go into the report.
+struct StudyOutput {
+    const KernelStudySpec* spec = nullptr;
+    std::string key;
+    bool computed_now = false;
+    std::string summary;
+    std::map<std::string, std::string> files;  ///< relative to kernels/<name>/
+};
+
 struct ReportContent {
     PlotResult plots;
+    std::vector<StudyOutput> studies;
 };
 
 std::string render_report(const ExperimentRun& r, const ReportContent& c);

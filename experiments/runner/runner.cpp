@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "core/hash.h"
 #include "core/provenance.h"
+#include "experiments/runner/kernel_study.h"
 #include "experiments/runner/plots.h"
 #include "experiments/runner/report.h"
 #include "mcml/transport.h"
@@ -444,6 +445,49 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
         }
     write_file_atomic(stage / "metrics.csv", metrics_csv(r.metrics));
     write_file_atomic(stage / "artifacts.csv", artifacts_csv(r));
+    for (const auto& study : r.exp.kernel_studies) {
+        // A study is an artifact keyed by its spec and the ground-truth runs it reads.
+        ContentKey key("kernel-study");
+        key.add("version", kernel_study_version()).add("spec", study.canonical());
+        for (const auto& m : study.materials)
+            for (int c = 0; c < 3; ++c)
+                key.add(m + "." + kChannelNames[c], find_node(r, m, c, "main")->key);
+        StudyOutput so;
+        so.spec = &study;
+        so.key = key.hex();
+        if (const auto dir = cache.find("kernel-study", so.key)) {
+            for (const auto& f : fs::recursive_directory_iterator(*dir)) {
+                if (!f.is_regular_file()) continue;
+                const std::string rel = fs::relative(f.path(), *dir).string();
+                if (rel != "manifest.toml") so.files[rel] = read_file(f.path());
+            }
+            auto doc = ConfigDocument::parse_file((*dir / "manifest.toml").string());
+            so.summary = doc->root().require_table("study").string("summary");
+            ++r.reused;
+        } else {
+            std::map<std::string, RadialProfile> profiles;
+            for (const auto& m : study.materials) profiles[m] = material_profile(r, m);
+            so.files = run_kernel_study(study, profiles, so.summary);
+            auto doc = ConfigDocument::empty("manifest.toml");
+            ConfigTable st = doc->root().table_or_empty("study");
+            st.record("name", study.name);
+            st.record("key", so.key);
+            st.record("summary", so.summary);
+            st.record("canonical_description", key.text());
+            doc->add_resolved_section("provenance", provenance());
+            auto all = so.files;
+            all["manifest.toml"] = doc->resolved_toml();
+            cache.store("kernel-study", so.key, all);
+            so.computed_now = true;
+            ++r.computed;
+        }
+        if (!o.quiet)
+            std::printf("  %s kernel study %s: %s\n", so.computed_now ? "computed" : "reused  ",
+                        study.name.c_str(), so.summary.c_str());
+        for (const auto& [name, content] : so.files)
+            write_file_atomic(stage / "kernels" / study.name / name, content);
+        report.studies.push_back(std::move(so));
+    }
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     report.plots = make_plots(r, stage, cache, o.quiet);
     auto prov = provenance(o.command_line);

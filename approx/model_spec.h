@@ -1,0 +1,52 @@
+// Models named in experiment configs: "svd:rank=3", "svd:rank=1,l1", "preintegration",
+// "guided:k=1", "guided:k=1.55,b=50", "manual:table_a1,unit=mm", "manual:fit=skin_shaded",
+// "deon:n=4", "ssss_skin". One table maps names to builders; an unknown name or key is an error
+// that lists what exists.
+#pragma once
+
+#include "approx/kernel2d.h"
+#include "approx/models.h"
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace ssslab::approx {
+
+struct ModelSpec {
+    std::string text;  ///< as written, e.g. "guided:k=1"
+    std::string name;  ///< "svd", "preintegration", "guided", "manual", "deon", "ssss_skin"
+    std::map<std::string, std::string> params;
+
+    double number(const std::string& key, double fallback) const;
+    std::string string(const std::string& key, const std::string& fallback) const;
+    bool flag(const std::string& key) const { return params.count(key) > 0; }
+    /// A short label for tables and file names, e.g. "svd3", "guided_k1", "manual_a1_mm".
+    std::string label() const;
+    /// Properties for Table 5.1.
+    bool closed_form() const;  ///< no optimisation needed to build it
+};
+
+/// Parse and validate a model spec; throws std::invalid_argument with a message naming the
+/// offending part and listing the valid names and keys.
+ModelSpec parse_model(const std::string& text);
+
+/// What the builders need besides the kernel: the material (Table A.1 is per material), the
+/// channel, and for image-space fits the test signal machinery.
+struct ModelContext {
+    std::string material;
+    int channel = 0;
+};
+
+/// Build a model for one channel.
+ModelResult build_model(const ModelSpec& spec, const Kernel2D& k, const ModelContext& ctx);
+
+/// The manual model's parameters of [Freude14 Table A.1] (sqrt(tau) per channel, w), for
+/// Apple, Ketchup, Marble, Skin1, Wholemilk; the unit is not stated in the thesis.
+struct TableA1Row {
+    std::array<double, 3> sqrt_tau_near, sqrt_tau_far;
+    double w;
+};
+const std::map<std::string, TableA1Row>& freude14_table_a1();
+
+}  // namespace ssslab::approx

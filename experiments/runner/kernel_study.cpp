@@ -1,0 +1,352 @@
+#include "experiments/runner/kernel_study.h"
+
+#include "approx/convolve.h"
+#include "approx/kernel2d.h"
+#include "approx/models.h"
+#include "core/error.h"
+#include "core/material.h"
+#include "core/png.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <set>
+#include <sstream>
+
+namespace ssslab::runner {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string num(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.8g", v);
+    return buf;
+}
+
+// [Freude14 Table 6.3]: kernel-space RMS, normalised so that the table's largest entry
+// (Ketchup, manual, B) is 1.
+struct ThesisRow {
+    const char* material;
+    const char* model;
+    double rgb[3];
+};
+const std::vector<ThesisRow>& thesis_table_6_3() {
+    static const std::vector<ThesisRow> t = {
+        {"Apple", "svd1", {0.057, 0.058, 0.066}},
+        {"Marble", "svd1", {0.038, 0.041, 0.045}},
+        {"Ketchup", "svd1", {0.061, 0.161, 0.157}},
+        {"Skin1", "svd1", {0.035, 0.062, 0.095}},
+        {"Wholemilk", "svd1", {0.036, 0.040, 0.046}},
+        {"Apple", "pre", {0.120, 0.122, 0.142}},
+        {"Marble", "pre", {0.079, 0.088, 0.096}},
+        {"Ketchup", "pre", {0.139, 0.370, 0.354}},
+        {"Skin1", "pre", {0.074, 0.142, 0.226}},
+        {"Wholemilk", "pre", {0.074, 0.084, 0.099}},
+        {"Apple", "guided1", {0.137, 0.141, 0.162}},
+        {"Marble", "guided1", {0.090, 0.099, 0.110}},
+        {"Ketchup", "guided1", {0.141, 0.167, 0.160}},
+        {"Skin1", "guided1", {0.084, 0.166, 0.230}},
+        {"Wholemilk", "guided1", {0.084, 0.097, 0.115}},
+        {"Apple", "manual", {0.106, 0.107, 0.118}},
+        {"Marble", "manual", {0.077, 0.074, 0.075}},
+        {"Ketchup", "manual", {0.151, 0.683, 1.000}},
+        {"Skin1", "manual", {0.093, 0.202, 0.261}},
+        {"Wholemilk", "manual", {0.070, 0.081, 0.091}},
+    };
+    return t;
+}
+
+// Which thesis column a model spec corresponds to ("" if none).
+std::string thesis_column(const approx::ModelSpec& m) {
+    if (m.name == "svd" && m.number("rank", 1) == 1 && !m.flag("l1")) return "svd1";
+    if (m.name == "preintegration") return "pre";
+    if (m.name == "guided" && m.number("k", 1) == 1 && m.number("b", 0) == 0) return "guided1";
+    if (m.name == "manual" && m.flag("table_a1")) return "manual";
+    return "";
+}
+
+// Radius holding `fraction` of the mass of an even 1D kernel (half cell masses).
+double mass_radius(const std::vector<double>& half, double h, double fraction) {
+    double total = 0;
+    for (double v : half) total += v;
+    double run = 0;
+    for (size_t i = 0; i < half.size(); ++i) {
+        run += half[i];
+        if (run >= fraction * total) return static_cast<double>(i + 1) * h;
+    }
+    return static_cast<double>(half.size()) * h;
+}
+
+std::string png_of(const approx::ImageRGB& img) {
+    return encode_png_rgb8(img.width, img.height, approx::to_rgb8(img, true));
+}
+
+}  // namespace
+
+const char* kernel_study_version() {
+    return "kernel-study-1";
+}
+
+std::string KernelStudySpec::canonical() const {
+    std::ostringstream os;
+    os << "name=" << name << "\nmaterials=";
+    for (const auto& m : materials) os << m << ",";
+    os << "\nmodels=";
+    for (const auto& m : models) os << m.text << ";";
+    os << "\nsignals=";
+    for (auto s : signals) os << approx::signal_name(s) << ",";
+    os << "\ntaps=" << taps << "\njitter=" << num(jitter) << "\npixels=" << pixels
+       << "\nfov_mm=" << num(fov_mm) << "\nrefine=" << refine << "\nimages=" << images
+       << "\nkernel_plots=" << kernel_plots << "\nsingular_values=" << singular_values
+       << "\ncompare=" << compare << "\n";
+    return os.str();
+}
+
+KernelStudySpec read_kernel_study(ConfigTable& t, const std::vector<std::string>& labels) {
+    KernelStudySpec s;
+    s.name = t.string("name");
+    if (s.name.empty() ||
+        s.name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_-") != std::string::npos)
+        t.fail("name", "expected a name of lower-case letters, digits, '_' and '-', got \"" +
+                           s.name + "\"");
+    if (t.has("materials")) {
+        s.materials = t.string_list("materials");
+        for (const auto& m : s.materials)
+            if (std::find(labels.begin(), labels.end(), m) == labels.end())
+                t.fail("materials", "\"" + m + "\" is not a material of this experiment");
+    } else {
+        s.materials = labels;
+    }
+    if (s.materials.empty()) t.fail("materials", "expected at least one material");
+    const std::vector<std::string> models =
+        t.has("models") ? t.string_list("models") : std::vector<std::string>{};
+    std::set<std::string> seen;
+    for (const auto& m : models) {
+        try {
+            s.models.push_back(approx::parse_model(m));
+        } catch (const std::invalid_argument& e) {
+            t.fail("models", e.what());
+        }
+        if (!seen.insert(s.models.back().label()).second)
+            t.fail("models", "model \"" + m + "\" is listed twice");
+    }
+    if (t.has("signals"))
+        for (const auto& name : t.string_list("signals")) {
+            approx::Signal sig;
+            if (!approx::parse_signal(name, sig))
+                t.fail("signals", "unknown signal \"" + name +
+                                      "\"; signals: edge, circle_squares, dot, skin_shaded, "
+                                      "skin_uniform");
+            s.signals.push_back(sig);
+        }
+    s.taps = static_cast<int>(t.integer("taps", 17, Range::closed(0, 1001)));
+    if (s.taps != 0 && (s.taps < 3 || s.taps % 2 == 0))
+        t.fail("taps",
+               "expected 0 (none) or an odd number of taps >= 3, got " + std::to_string(s.taps));
+    s.jitter = t.number("jitter", 0.0, Range::closed(0, 1));
+    s.pixels = static_cast<int>(t.integer("pixels", 256, Range::closed(16, 4096)));
+    s.fov_mm = t.optional_number("fov_mm", Range::positive()).value_or(0.0);
+    s.refine = static_cast<int>(t.integer("refine", 1, Range::closed(1, 8)));
+    s.images = t.boolean("images", false);
+    s.kernel_plots = t.boolean("kernel_plots", false);
+    s.singular_values = static_cast<int>(t.integer("singular_values", 0, Range::closed(0, 200)));
+    s.compare = t.choice("compare", "", {"", "freude14_table_6_3"});
+    if (s.models.empty() && s.singular_values == 0)
+        t.fail("models", "expected at least one model (or singular_values > 0)");
+    if (s.models.empty() &&
+        (!s.signals.empty() || s.images || s.kernel_plots || !s.compare.empty()))
+        t.fail("models", "signals, images, kernel_plots and compare need models");
+    return s;
+}
+
+std::map<std::string, std::string> run_kernel_study(
+    const KernelStudySpec& spec, const std::map<std::string, RadialProfile>& profiles,
+    std::string& summary) {
+    std::map<std::string, std::string> files;
+    std::ostringstream kernels, image, singular, slices;
+    kernels << "material,channel,model,label,rank,convolutions_1d,build_s,kernel_rms,max_abs,"
+               "sum,l1_error,radial_asymmetry,constraint_error,iterations,grid_n,h_mm\n";
+    image << "material,signal,model,label,sampling,channel,rms,max_abs,energy,fov_mm,pixels\n";
+    singular << "material,channel,index,sigma,sigma_over_sigma1\n";
+    slices << "material,channel,model,direction,r_mm,value_per_mm2\n";
+    struct Rms {
+        std::string material, column, spec;
+        int channel;
+        double rms;
+    };
+    std::vector<Rms> for_compare;
+    const auto t0 = Clock::now();
+
+    for (const auto& material : spec.materials) {
+        const RadialProfile& profile = profiles.at(material);
+        const approx::KernelGrid grid = approx::KernelGrid::from_profile(profile, spec.refine);
+        std::vector<std::unique_ptr<approx::Kernel2D>> k;
+        for (int c = 0; c < 3; ++c)
+            k.push_back(std::make_unique<approx::Kernel2D>(profile, c, grid));
+
+        if (spec.singular_values > 0)
+            for (int c = 0; c < 3; ++c) {
+                const auto sv =
+                    approx::singular_values(*k[static_cast<size_t>(c)], spec.singular_values);
+                for (size_t i = 0; i < sv.size(); ++i)
+                    singular << material << ',' << kChannelNames[c] << ',' << i + 1 << ','
+                             << num(sv[i]) << ',' << num(sv[i] / sv[0]) << '\n';
+            }
+
+        // Models, per channel.
+        std::vector<std::array<approx::ModelResult, 3>> built;
+        for (const auto& m : spec.models) {
+            std::array<approx::ModelResult, 3> r;
+            for (int c = 0; c < 3; ++c) {
+                r[static_cast<size_t>(c)] =
+                    approx::build_model(m, *k[static_cast<size_t>(c)], {material, c});
+                const approx::ModelResult& x = r[static_cast<size_t>(c)];
+                const approx::KernelErrors e =
+                    approx::kernel_errors(*k[static_cast<size_t>(c)], x.kernel);
+                auto info = [&](const char* key) {
+                    const auto it = x.info.find(key);
+                    return it == x.info.end() ? std::string() : num(it->second);
+                };
+                kernels << material << ',' << kChannelNames[c] << ",\"" << m.text << "\","
+                        << m.label() << ',' << x.kernel.rank() << ',' << x.kernel.convolutions_1d()
+                        << ',' << num(x.build_seconds) << ',' << num(e.rms) << ',' << num(e.max_abs)
+                        << ',' << num(x.kernel.sum()) << ',' << num(e.l1_error) << ','
+                        << num(e.radial_asymmetry) << ',' << info("constraint_error") << ','
+                        << info("iterations") << ',' << grid.n << ',' << num(grid.h_mm) << '\n';
+                const std::string col = thesis_column(m);
+                if (!col.empty()) for_compare.push_back({material, col, m.text, c, e.rms});
+            }
+            built.push_back(std::move(r));
+        }
+
+        if (spec.kernel_plots) {
+            // Slices as Freude14 Fig. 6.2: along the main axis (cells (i, 0)) and the diagonal
+            // (cells (i, i)), at most 400 points each.
+            for (int c = 0; c < 3; ++c) {
+                const approx::Kernel2D& kc = *k[static_cast<size_t>(c)];
+                const int n = kc.n(), stride = std::max(1, n / 400);
+                const double h = kc.h_mm(), area = h * h;
+                auto emit = [&](const std::string& model, auto value) {
+                    for (int i = 0; i < n; i += stride) {
+                        slices << material << ',' << kChannelNames[c] << ',' << model << ",axis,"
+                               << num(std::sqrt((i + 0.5) * (i + 0.5) + 0.25) * h) << ','
+                               << num(value(i, 0) / area) << '\n';
+                        slices << material << ',' << kChannelNames[c] << ',' << model
+                               << ",diagonal," << num((i + 0.5) * std::sqrt(2.0) * h) << ','
+                               << num(value(i, i) / area) << '\n';
+                    }
+                };
+                emit("ground_truth", [&](int i, int j) { return kc.at(i, j); });
+                for (size_t mi = 0; mi < built.size(); ++mi) {
+                    const approx::SeparableKernel& sk = built[mi][static_cast<size_t>(c)].kernel;
+                    emit(spec.models[mi].label(), [&](int i, int j) { return sk.at(i, j); });
+                }
+            }
+        }
+
+        if (!spec.signals.empty()) {
+            double fov = spec.fov_mm;
+            if (fov <= 0) {
+                double r90 = 0;
+                for (int c = 0; c < 3; ++c) {
+                    const approx::ModelResult p =
+                        approx::preintegration(*k[static_cast<size_t>(c)]);
+                    r90 = std::max(r90, mass_radius(p.kernel.terms[0].a, grid.h_mm, 0.9));
+                }
+                fov = 8.0 * r90;
+            }
+            approx::SignalParams sp;
+            sp.size = spec.pixels;
+            sp.pixel_mm = fov / spec.pixels;
+            sp.dot_radius_mm = fov / 64.0;
+            for (approx::Signal sig : spec.signals) {
+                const approx::ImageRGB e = approx::make_signal(sig, sp);
+                const approx::ImageRGB exact =
+                    approx::convolve_exact(e, {k[0].get(), k[1].get(), k[2].get()});
+                const std::string dir = "images/" + material + "/" + approx::signal_name(sig) + "/";
+                std::vector<std::pair<std::string, approx::ImageRGB>> outs;
+                auto record = [&](const approx::ModelSpec& m, const std::string& sampling,
+                                  const approx::ImageRGB& out) {
+                    const approx::ImageErrors ie = approx::image_errors(out, exact);
+                    for (int c = 0; c < 3; ++c)
+                        image << material << ',' << approx::signal_name(sig) << ",\"" << m.text
+                              << "\"," << m.label() << ',' << sampling << ',' << kChannelNames[c]
+                              << ',' << num(ie.rms[static_cast<size_t>(c)]) << ','
+                              << num(ie.max_abs[static_cast<size_t>(c)]) << ','
+                              << num(ie.energy[static_cast<size_t>(c)]) << ',' << num(fov) << ','
+                              << spec.pixels << '\n';
+                };
+                for (size_t mi = 0; mi < built.size(); ++mi) {
+                    const auto& m = spec.models[mi];
+                    const std::array<const approx::SeparableKernel*, 3> a = {
+                        &built[mi][0].kernel, &built[mi][1].kernel, &built[mi][2].kernel};
+                    const approx::ImageRGB full = approx::convolve_separable(e, a);
+                    record(m, "full", full);
+                    outs.push_back({m.label(), full});
+                    if (spec.taps > 0 && built[mi][0].kernel.rank() == 1) {
+                        const approx::TapKernel taps = approx::make_taps(a, spec.taps);
+                        record(m, "taps" + std::to_string(spec.taps),
+                               approx::convolve_taps(e, taps, 0.0));
+                        if (spec.jitter > 0)
+                            record(m, "taps" + std::to_string(spec.taps) + "_jitter",
+                                   approx::convolve_taps(e, taps, spec.jitter));
+                    }
+                }
+                if (spec.images) {
+                    files[dir + "input.png"] = png_of(e);
+                    files[dir + "exact.png"] = png_of(exact);
+                    // Differences normalised across the models of this signal, as the thesis.
+                    double scale = 1e-30;
+                    for (const auto& [label, out] : outs) {
+                        const approx::ImageErrors ie = approx::image_errors(out, exact);
+                        for (double v : ie.max_abs) scale = std::max(scale, v);
+                    }
+                    for (const auto& [label, out] : outs) {
+                        files[dir + label + ".png"] = png_of(out);
+                        files[dir + label + "_diff.png"] = encode_png_rgb8(
+                            out.width, out.height, approx::difference_rgb8(out, exact, scale));
+                    }
+                }
+            }
+        }
+    }
+
+    files["kernels.csv"] = kernels.str();
+    if (!spec.signals.empty()) files["image.csv"] = image.str();
+    if (spec.singular_values > 0) files["singular_values.csv"] = singular.str();
+    if (spec.kernel_plots) files["slices.csv"] = slices.str();
+    if (spec.compare == "freude14_table_6_3") {
+        // Normalise as the thesis did: by the entry its table is normalised to (Ketchup, manual,
+        // B) when the study has it, otherwise by the study's largest entry.
+        double ref = 0;
+        for (const auto& x : for_compare) ref = std::max(ref, x.rms);
+        for (const auto& x : for_compare)
+            if (x.material == "Ketchup" && x.column == "manual" && x.channel == 2) ref = x.rms;
+        std::ostringstream cmp;
+        cmp << "material,model,thesis_column,channel,rms,normalised,thesis_normalised,ratio\n";
+        for (const auto& x : for_compare) {
+            double thesis = -1;
+            for (const auto& row : thesis_table_6_3())
+                if (x.material == row.material && x.column == row.model)
+                    thesis = row.rgb[x.channel];
+            const double norm = ref > 0 ? x.rms / ref : 0;
+            cmp << x.material << ",\"" << x.spec << "\"," << x.column << ','
+                << kChannelNames[x.channel] << ',' << num(x.rms) << ',' << num(norm) << ','
+                << (thesis >= 0 ? num(thesis) : "") << ',' << (thesis > 0 ? num(norm / thesis) : "")
+                << '\n';
+        }
+        files["comparison.csv"] = cmp.str();
+    }
+    std::ostringstream sum;
+    sum << spec.materials.size() << " materials x " << spec.models.size() << " models";
+    if (!spec.signals.empty()) sum << " x " << spec.signals.size() << " signals";
+    sum << " in " << num(std::chrono::duration<double>(Clock::now() - t0).count()) << " s";
+    summary = sum.str();
+    return files;
+}
+
+}  // namespace ssslab::runner
