@@ -19,7 +19,13 @@ Kernel2D::Kernel2D(const RadialProfile& p, int c, const KernelGrid& grid) : h_(g
     const int n = grid.n;
     if (n < 1 || !(h_ > 0)) throw std::invalid_argument("Kernel2D: empty grid");
     const double dr = p.dr_cm * 10.0;  // mm
+    if (c < 0 || c > 2)
+        throw std::invalid_argument("Kernel2D: channel " + std::to_string(c) + " is not 0, 1 or 2");
     const std::vector<double>& R = p.rd_per_cm2[c];
+    if (R.size() < static_cast<size_t>(std::max(p.nr, 0)))
+        throw std::invalid_argument("Kernel2D: channel " + std::to_string(c) + " of profile '" +
+                                    p.name + "' has " + std::to_string(R.size()) +
+                                    " bins, fewer than nr = " + std::to_string(p.nr));
     const double to_mm2 = 0.01;  // 1/cm^2 -> 1/mm^2
     const int s = std::max(2, static_cast<int>(std::ceil(2.0 * h_ / dr)));
     q_.resize(n, n);

@@ -24,7 +24,7 @@ double gaussian_cell_mass(double x0, double x1, double sigma) {
 }  // namespace
 
 ModelResult manual_two_gaussian(const Kernel2D& k, double sqrt_tau_near_mm, double sqrt_tau_far_mm,
-                                double w) {
+                                double w, bool normalise) {
     const auto t0 = std::chrono::steady_clock::now();
     if (!(sqrt_tau_near_mm > 0) || !std::isfinite(sqrt_tau_near_mm) || !(sqrt_tau_far_mm > 0) ||
         !std::isfinite(sqrt_tau_far_mm))
@@ -40,14 +40,21 @@ ModelResult manual_two_gaussian(const Kernel2D& k, double sqrt_tau_near_mm, doub
     r.kernel.n = n;
     SeparableTerm t;
     t.a.resize(static_cast<size_t>(n));
-    // Exact cell masses of a_m over [i h, (i + 1) h]; the half vector covers x >= 0 and holds at
-    // most 1/2. No renormalisation: what falls beyond the grid is lost, as in the thesis.
-    for (int i = 0; i < n; ++i)
-        t.a[static_cast<size_t>(i)] =
-            w * gaussian_cell_mass(i * h, (i + 1) * h, sqrt_tau_near_mm) +
-            (1.0 - w) * gaussian_cell_mass(i * h, (i + 1) * h, sqrt_tau_far_mm);
+    // Exact cell masses of each Gaussian over [i h, (i + 1) h]. Each Gaussian is then normalised
+    // on the grid (its half vector sums to 1/2), so the kernel has unit L1 and w stays the share
+    // of energy in the near Gaussian: the thesis's "enforced energy conservation via
+    // normalization" [Freude14 §5.4]. What a Gaussian would lose beyond the grid is reported.
+    std::vector<double> gn(static_cast<size_t>(n)), gf(static_cast<size_t>(n));
+    double sn = 0, sf = 0;
+    for (int i = 0; i < n; ++i) {
+        sn += gn[static_cast<size_t>(i)] = gaussian_cell_mass(i * h, (i + 1) * h, sqrt_tau_near_mm);
+        sf += gf[static_cast<size_t>(i)] = gaussian_cell_mass(i * h, (i + 1) * h, sqrt_tau_far_mm);
+    }
+    const double cn = normalise ? 0.5 / sn : 1.0, cf = normalise ? 0.5 / sf : 1.0;
+    for (size_t i = 0; i < gn.size(); ++i) t.a[i] = w * cn * gn[i] + (1.0 - w) * cf * gf[i];
     r.kernel.terms.push_back(std::move(t));
-    // 1 - (the full 1D sum), from the tails beyond n h on both sides: erfc, not a difference.
+    // 1 - (the full 1D sum before normalisation), from the tails beyond n h on both sides: erfc,
+    // not a difference.
     const double e = n * h / std::sqrt(2.0);
     r.info["mass_outside_grid"] =
         w * std::erfc(e / sqrt_tau_near_mm) + (1.0 - w) * std::erfc(e / sqrt_tau_far_mm);

@@ -23,8 +23,9 @@ const std::vector<Known>& known_models() {
         {"preintegration", {}, "preintegration (Eq. 5.17)"},
         {"guided", {"k", "b"}, "guided:k=K[,b=B] (Eq. 5.19/5.20)"},
         {"manual",
-         {"table_a1", "unit", "near", "far", "w"},
-         "manual:table_a1,unit=mm|cm or manual:near=MM,far=MM,w=W (Eq. 5.21)"},
+         {"table_a1", "unit", "near", "far", "w", "fit"},
+         "manual:table_a1,unit=mm|cm, manual:near=MM,far=MM,w=W or manual:fit=SIGNAL (Eq. "
+         "5.21)"},
         {"deon", {"n"}, "deon:n=1..6 (d'Eon & Luebke 2007)"},
         {"ssss_skin", {}, "ssss_skin (Eq. 4.8, the separable-sss demo's kernel)"},
     };
@@ -119,7 +120,13 @@ ModelSpec parse_model(const std::string& text) {
         if (n < 1 || n > 6 || n != std::floor(n))
             throw std::invalid_argument("model \"" + text + "\": n must be an integer in [1, 6]");
     } else if (m.name == "manual") {
-        if (m.flag("table_a1")) {
+        Signal sig;
+        if (m.flag("fit") && (m.params.size() != 1 || !parse_signal(m.string("fit", ""), sig)))
+            throw std::invalid_argument("model \"" + text +
+                                        "\": fit takes a test signal (edge, circle_squares, dot, "
+                                        "skin_shaded, skin_uniform) and no other parameter");
+        if (m.flag("fit")) {
+        } else if (m.flag("table_a1")) {
             const std::string u = m.string("unit", "");
             if (u != "mm" && u != "cm")
                 throw std::invalid_argument("model \"" + text +
@@ -160,7 +167,17 @@ ModelResult build_model(const ModelSpec& m, const Kernel2D& k, const ModelContex
         r = sum_of_gaussians(k, static_cast<int>(m.number("n", 1)));
     } else if (m.name == "manual") {
         double near, far, w;
-        if (m.flag("table_a1")) {
+        if (m.flag("fit")) {
+            Signal sig;
+            parse_signal(m.string("fit", ""), sig);
+            if (!ctx.fit_images)
+                throw std::invalid_argument("model \"" + m.text +
+                                            "\" needs test-signal images (a kernel study)");
+            const auto& [signal, exact] = ctx.fit_images(sig);
+            r = fit_manual_two_gaussian(k, signal, exact, ctx.channel);
+            r.kernel.model = m.label();
+            return r;
+        } else if (m.flag("table_a1")) {
             const auto& t = freude14_table_a1();
             const auto it = t.find(ctx.material);
             if (it == t.end())

@@ -4,9 +4,11 @@
 // that lists what exists.
 #pragma once
 
+#include "approx/image.h"
 #include "approx/kernel2d.h"
 #include "approx/models.h"
 
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -36,6 +38,9 @@ ModelSpec parse_model(const std::string& text);
 struct ModelContext {
     std::string material;
     int channel = 0;
+    /// For image-space fits ("manual:fit=SIGNAL"): a test signal and its exact 2D convolution
+    /// with the material's kernels, on the study's pixel grid.
+    std::function<const std::pair<ImageRGB, ImageRGB>&(Signal)> fit_images;
 };
 
 /// Build a model for one channel.

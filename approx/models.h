@@ -2,6 +2,7 @@
 // model approximates one channel's Kernel2D (unit L1) by a SeparableKernel on the same grid.
 #pragma once
 
+#include "approx/image.h"
 #include "approx/kernel2d.h"
 #include "approx/separable.h"
 
@@ -48,9 +49,21 @@ ModelResult guided(const Kernel2D& k, const GuideParams& g);
 // ---- Manual two-Gaussian model [Freude14 §5.4, Eq. 5.21, Table A.1] -------------------------
 
 /// a_m(x) = w G(x, tau_n) + (1 - w) G(x, tau_f) with 1D Gaussians of unit integral; widths
-/// sqrt(tau) in mm. Cell masses are exact integrals of the Gaussians over the cells.
+/// sqrt(tau) in mm. Cell masses are exact integrals of the Gaussians over the cells; with
+/// `normalise` (the thesis's energy conservation) each Gaussian is scaled to unit mass on the
+/// grid, so the kernel has unit L1 whatever leaves the grid. info: mass_outside_grid (of the
+/// unnormalised mixture), l1.
 ModelResult manual_two_gaussian(const Kernel2D& k, double sqrt_tau_near_mm, double sqrt_tau_far_mm,
-                                double w);
+                                double w, bool normalise = true);
+
+/// The manual model's "close fit": sqrt(tau_n), sqrt(tau_f) and w of one channel minimising the
+/// image-space RMS of the separable convolution of `signal` against `exact` (the exact 2D
+/// convolution of the same signal, channel `channel`) under the conventions of convolve.h. The
+/// error is a quartic in w for fixed widths, minimised exactly; the widths are found by a
+/// log-spaced grid search refined by Nelder-Mead. info: fit_rms, sqrt_tau_near_mm,
+/// sqrt_tau_far_mm, w, evaluations (image-space evaluations of a width pair).
+ModelResult fit_manual_two_gaussian(const Kernel2D& k, const ImageRGB& signal,
+                                    const ImageRGB& exact, int channel);
 
 // ---- d'Eon's sum of Gaussians [d'Eon & Luebke 2007; Freude14 Eq. 4.15] ----------------------
 

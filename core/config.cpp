@@ -249,6 +249,18 @@ double ConfigTable::number(std::string_view key, Range range) {
     return v;
 }
 
+std::optional<std::vector<std::string>> ConfigTable::optional_string_list(std::string_view key) {
+    mark(key);
+    if (!find(key)) return std::nullopt;
+    return string_list(key);
+}
+
+std::optional<std::string> ConfigTable::optional_string(std::string_view key) {
+    mark(key);
+    if (!find(key)) return std::nullopt;
+    return string(key);
+}
+
 std::optional<double> ConfigTable::optional_number(std::string_view key, Range range) {
     mark(key);
     const toml::node* n = find(key);

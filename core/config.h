@@ -69,6 +69,10 @@ class ConfigTable {
                        std::initializer_list<std::string_view> choices);
     /// A required array of strings (may be empty).
     std::vector<std::string> string_list(std::string_view key);
+    /// An optional array of strings (the key is known to "did you mean" even when absent).
+    std::optional<std::vector<std::string>> optional_string_list(std::string_view key);
+    /// An optional string.
+    std::optional<std::string> optional_string(std::string_view key);
     std::optional<double> optional_number(std::string_view key, Range range = Range::any());
     std::optional<std::int64_t> optional_integer(std::string_view key, Range range = Range::any());
     /// Three numbers per RGB channel: an array of three, or one number used for all three.

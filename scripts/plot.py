@@ -156,29 +156,34 @@ def kernel_slices_plot(root, p):
     for x in rows:
         if x["model"] not in models:
             models.append(x["model"])
-    fig, ax = plt.subplots(2, 3, figsize=(15, 7.5))
+    # Log-log, as the kernels span decades from the near-singular centre to the tail; values
+    # below 1e-5 of the ground truth's peak (and negative lobes of higher-rank SVD terms) are cut.
+    fig, ax = plt.subplots(2, 3, figsize=(15, 8), constrained_layout=True)
     cmap = plt.get_cmap("tab10")
     for col, c in enumerate("RGB"):
         gt_axis = [(float(x["r_mm"]), float(x["value_per_mm2"])) for x in rows
                    if x["channel"] == c and x["model"] == "ground_truth" and x["direction"] == "axis"]
         peak = max(v for _, v in gt_axis) if gt_axis else 1.0
-        rmax = max([r for r, v in gt_axis if v > 1e-3 * peak] or [1.0])
+        rmax = max([r for r, v in gt_axis if v > 1e-5 * peak] or [1.0])
         for row, direction in enumerate(("axis", "diagonal")):
             a = ax[row][col]
             for mi, model in enumerate(models):
                 pts = [(float(x["r_mm"]), float(x["value_per_mm2"])) for x in rows
                        if x["channel"] == c and x["model"] == model and x["direction"] == direction]
-                pts = [(r, v) for r, v in pts if r <= 1.5 * rmax]
+                pts = [(r, v) for r, v in pts if r <= 1.5 * rmax and v > 0]
                 style = dict(color="k", ls=":", lw=2.0) if model == "ground_truth" else \
                     dict(color=cmap(mi % 10), lw=1.0)
                 a.plot([r for r, _ in pts], [v for _, v in pts], label=model, **style)
+            a.set_xscale("log")
+            a.set_yscale("log")
+            a.set_ylim(1e-5 * peak, 3 * peak)
             a.set_title("%s, %s" % (c, direction))
             a.set_xlabel("r [mm]")
-            a.grid(alpha=0.3)
+            a.grid(alpha=0.3, which="both")
     ax[0][0].set_ylabel("kernel [1/mm^2]")
     ax[1][0].set_ylabel("kernel [1/mm^2]")
     ax[0][2].legend(fontsize=7)
-    fig.suptitle(p["title"], y=1.01)
+    fig.suptitle(p["title"])
     save(fig, root, p["out"])
 
 

@@ -2,6 +2,8 @@
 // demo's shipped presets (ssss_demo_kernel), the manual two-Gaussian model of Freude14 Eq. 5.21
 // against direct integrals, and d'Eon & Luebke's sum of Gaussians on kernels that are exactly
 // Gaussian mixtures and on a realistic profile.
+#include "approx/convolve.h"
+#include "approx/image.h"
 #include "approx/kernel2d.h"
 #include "approx/models.h"
 #include "approx/separable.h"
@@ -274,17 +276,73 @@ TEST(ManualTwoGaussian, HoldsUnitMassWhenTheGaussiansFitInsideTheGrid) {
     }
 }
 
-TEST(ManualTwoGaussian, DoesNotRenormaliseWhatLeavesTheGrid) {
-    const Kernel2D k = flat_kernel(100, 0.01);  // extent 1 mm: the far Gaussian (1 mm) spills
+TEST(ManualTwoGaussian, RenormalisesEachGaussianOnTheGridOrNot) {
+    // Extent 1 mm: the far Gaussian (sigma 1 mm) spills, 31.73 % of it (P(|x| > 1 sigma)).
+    const Kernel2D k = flat_kernel(100, 0.01);
+    const double spill = std::erfc(1.0 / std::sqrt(2.0));
+    const double outside = 0.6 * spill;
+    const ModelResult raw = approx::manual_two_gaussian(k, 0.05, 1.0, 0.4, false);
+    ASSERT_TRUE(all_finite(raw));
+    EXPECT_NEAR(raw.info.at("mass_outside_grid"), outside, 1e-12);
+    double half = 0;
+    for (double v : raw.kernel.terms[0].a) half += v;
+    EXPECT_NEAR(1.0 - 2.0 * half, outside, 1e-12);
+    EXPECT_NEAR(raw.kernel.l1(), (1 - outside) * (1 - outside), 1e-12);
+    // Normalised [Freude14 §5.4: "enforced energy conservation via normalization"]: unit L1,
+    // and each Gaussian scaled by its own mass on the grid, so w keeps its meaning.
     const ModelResult r = approx::manual_two_gaussian(k, 0.05, 1.0, 0.4);
     ASSERT_TRUE(all_finite(r));
-    const double outside = 0.6 * std::erfc(1.0 / std::sqrt(2.0));  // P(|x| > 1 sigma) = 0.3173
+    EXPECT_NEAR(r.kernel.l1(), 1.0, 1e-14);
+    EXPECT_NEAR(r.info.at("l1"), 1.0, 1e-14);
     EXPECT_NEAR(r.info.at("mass_outside_grid"), outside, 1e-12);
-    double half = 0;
-    for (double v : r.kernel.terms[0].a) half += v;
-    EXPECT_NEAR(1.0 - 2.0 * half, outside, 1e-12);
-    EXPECT_NEAR(r.kernel.l1(), (1 - outside) * (1 - outside), 1e-12);
-    EXPECT_NEAR(r.info.at("l1"), (1 - outside) * (1 - outside), 1e-12);
+    const ModelResult near = approx::manual_two_gaussian(k, 0.05, 1.0, 1.0, false);
+    const ModelResult far = approx::manual_two_gaussian(k, 0.05, 1.0, 0.0, false);
+    for (int i : {0, 3, 40, 99}) {
+        const size_t s = static_cast<size_t>(i);
+        const double expected =
+            0.4 * near.kernel.terms[0].a[s] + 0.6 * far.kernel.terms[0].a[s] / (1.0 - spill);
+        EXPECT_NEAR(r.kernel.terms[0].a[s], expected, 1e-14) << i;
+    }
+}
+
+TEST(ManualTwoGaussian, CloseFitRecoversAnExactlyTwoGaussianKernel) {
+    // A kernel that is exactly the manual model (sigma_n = 0.08 mm, sigma_f = 0.5 mm, w = 0.35):
+    // the image-space fit must find its parameters, with an image error at rounding level.
+    const double h = 0.01, sn = 0.08, sf = 0.5, w = 0.35;
+    const int n = 300;
+    const ModelResult truth = approx::manual_two_gaussian(flat_kernel(n, h), sn, sf, w);
+    const std::vector<double>& a = truth.kernel.terms[0].a;
+    Eigen::MatrixXd q(n, n);
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) q(i, j) = a[static_cast<size_t>(i)] * a[static_cast<size_t>(j)];
+    const Kernel2D k(q, h);
+    approx::SignalParams sp;
+    sp.size = 80;
+    sp.pixel_mm = 0.04;
+    const approx::ImageRGB e = approx::make_signal(approx::Signal::kCircleSquares, sp);
+    const approx::ImageRGB exact = approx::convolve_exact(e, {&k, &k, &k});
+    const ModelResult fit = approx::fit_manual_two_gaussian(k, e, exact, 1);
+    ASSERT_TRUE(all_finite(fit));
+    std::printf("close fit: sigma_n %.5f sigma_f %.5f w %.5f rms %.3g in %d evaluations, %.2f s\n",
+                fit.info.at("sqrt_tau_near_mm"), fit.info.at("sqrt_tau_far_mm"), fit.info.at("w"),
+                fit.info.at("fit_rms"), static_cast<int>(fit.info.at("evaluations")),
+                fit.build_seconds);
+    EXPECT_NEAR(fit.info.at("sqrt_tau_near_mm"), sn, 0.01 * sn);
+    EXPECT_NEAR(fit.info.at("sqrt_tau_far_mm"), sf, 0.01 * sf);
+    EXPECT_NEAR(fit.info.at("w"), w, 0.01);
+    EXPECT_LT(fit.info.at("fit_rms"), 1e-4);
+    EXPECT_NEAR(fit.kernel.l1(), 1.0, 1e-12);
+    // The fitted model scored independently, through the separable convolution of convolve.h.
+    const approx::ImageRGB out =
+        approx::convolve_separable(e, {&fit.kernel, &fit.kernel, &fit.kernel});
+    EXPECT_NEAR(approx::image_errors(out, exact).rms[1], fit.info.at("fit_rms"), 1e-6);
+    // Bad inputs.
+    EXPECT_THROW(approx::fit_manual_two_gaussian(k, e, exact, 3), std::invalid_argument);
+    approx::SignalParams other = sp;
+    other.size = 64;
+    EXPECT_THROW(approx::fit_manual_two_gaussian(
+                     k, approx::make_signal(approx::Signal::kEdge, other), exact, 0),
+                 std::invalid_argument);
 }
 
 TEST(ManualTwoGaussian, NarrowGaussianFillsTheFirstCell) {
@@ -298,11 +356,12 @@ TEST(ManualTwoGaussian, NarrowGaussianFillsTheFirstCell) {
 }
 
 TEST(ManualTwoGaussian, EndpointsAreSingleGaussiansAndTheModelIsLinearInW) {
+    // Unnormalised (the far Gaussian spills 4e-6 of its mass beyond the 6 mm grid).
     const Kernel2D k = flat_kernel(300, 0.02);
-    const ModelResult near = approx::manual_two_gaussian(k, 0.2, 1.3, 1.0);
-    const ModelResult near2 = approx::manual_two_gaussian(k, 0.2, 0.05, 1.0);
-    const ModelResult far = approx::manual_two_gaussian(k, 0.2, 1.3, 0.0);
-    const ModelResult mid = approx::manual_two_gaussian(k, 0.2, 1.3, 0.3);
+    const ModelResult near = approx::manual_two_gaussian(k, 0.2, 1.3, 1.0, false);
+    const ModelResult near2 = approx::manual_two_gaussian(k, 0.2, 0.05, 1.0, false);
+    const ModelResult far = approx::manual_two_gaussian(k, 0.2, 1.3, 0.0, false);
+    const ModelResult mid = approx::manual_two_gaussian(k, 0.2, 1.3, 0.3, false);
     for (int i = 0; i < 300; ++i) {
         const size_t s = static_cast<size_t>(i);
         const double x0 = i * 0.02, x1 = x0 + 0.02;

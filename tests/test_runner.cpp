@@ -330,6 +330,54 @@ TEST(Runner, BadExperimentConfigsAreRefusedWithTheirLocation) {
          head + mats + "[mcml]\nseconds = 10\n" + outs +
              "[outputs.convergence]\nmaterials = [\"Skin1\"]\n",
          {"needs a photon budget"}},
+        // Kernel studies ([[outputs.kernels]]).
+        {"study unknown model",
+         head + mats + "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"svdd:rank=1\"]\n",
+         {"e.toml:7:", "outputs.kernels[0].models", "unknown model \"svdd\"", "svd:rank=N"}},
+        {"study unknown model parameter",
+         head + mats + "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"guided:q=1\"]\n",
+         {"outputs.kernels[0].models", "unknown parameter \"q\"", "takes: b, k"}},
+        {"study guided k out of range",
+         head + mats + "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"guided:k=5\"]\n",
+         {"outputs.kernels[0].models", "k must be in [0, 4]"}},
+        {"study svd rank not a number",
+         head + mats + "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"svd:rank=two\"]\n",
+         {"outputs.kernels[0].models", "rank must be a number"}},
+        {"study manual without unit",
+         head + mats + "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"manual:table_a1\"]\n",
+         {"outputs.kernels[0].models", "unit=mm or unit=cm"}},
+        {"study manual fit of an unknown signal",
+         head + mats + "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"manual:fit=edges\"]\n",
+         {"outputs.kernels[0].models", "fit takes a test signal"}},
+        {"study model twice",
+         head + mats +
+             "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"preintegration\", "
+             "\"preintegration\"]\n",
+         {"outputs.kernels[0].models", "listed twice"}},
+        {"study unknown signal",
+         head + mats +
+             "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"preintegration\"]\nsignals = "
+             "[\"egde\"]\n",
+         {"e.toml:8:", "outputs.kernels[0].signals", "unknown signal \"egde\""}},
+        {"study even taps",
+         head + mats +
+             "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"preintegration\"]\ntaps = 16\n",
+         {"e.toml:8:", "outputs.kernels[0].taps", "odd number"}},
+        {"study reference not a model",
+         head + mats +
+             "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"preintegration\"]\nsignals = "
+             "[\"edge\"]\nreference = \"guided:k=1\"\n",
+         {"outputs.kernels[0].reference", "not one of this study's models"}},
+        {"study of an absent material",
+         head + mats +
+             "[[outputs.kernels]]\nname = \"k\"\nmaterials = [\"Apple\"]\nmodels = "
+             "[\"preintegration\"]\n",
+         {"outputs.kernels[0].materials", "not a material of this experiment"}},
+        {"study unknown key",
+         head + mats +
+             "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"preintegration\"]\nsignal = "
+             "[\"edge\"]\n",
+         {"e.toml:8:1", "did you mean 'signals'"}},
     };
     ASSERT_GE(cases.size(), 15u);
     for (const auto& c : cases) {

@@ -5,6 +5,12 @@
 // Freude14 Table 6.1 grid). The reference figures of the original MCML 1.2.2 on one core of this
 // machine class (2270 and 104 photons/ms) are from the issue that specified the port; `--write-mci`
 // writes the exact inputs so the original can be timed on the same cases.
+//
+// `ssslab bench --kernels`: build time of every kernel model per material and channel, for the
+// eleven Freude14 materials on the thesis grid (Table 6.1). The ground-truth profiles come from
+// short MCML runs whose time is printed but is not part of the figures.
+#include "approx/kernel2d.h"
+#include "approx/model_spec.h"
 #include "core/atomic_file.h"
 #include "core/material.h"
 #include "experiments/cli/commands.h"
@@ -12,11 +18,20 @@
 #include "mcml/mci.h"
 #include "mcml/profile.h"
 
+#include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
+#include <array>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
 
 namespace ssslab::cli {
 
@@ -59,6 +74,10 @@ struct BenchArgs {
     int repeat = 3;
     std::string only;
     std::string write_mci;
+    // --kernels
+    bool kernels = false;
+    std::int64_t photons = 100'000;  ///< per channel, for the ground-truth profiles
+    std::string csv;
 };
 
 int run_bench(const BenchArgs& a) {
@@ -124,6 +143,271 @@ int run_bench(const BenchArgs& a) {
     return 0;
 }
 
+// ---- Kernel build times (--kernels) ------------------------------------------------------------
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+/// The models timed, in column order, with their short column headers.
+struct TimedModel {
+    const char* spec;
+    const char* header;
+};
+const std::vector<TimedModel>& timed_models() {
+    static const std::vector<TimedModel> m = {
+        {"svd:rank=1", "svd1"},
+        {"svd:rank=4,l1", "svd4,l1"},
+        {"preintegration", "preint"},
+        {"guided:k=1", "guided1"},
+        {"guided:k=1.55,b=50", "guided1.55"},
+        {"manual:table_a1,unit=mm", "manualA1"},
+        {"deon:n=1", "deon1"},
+        {"deon:n=6", "deon6"},
+        {"ssss_skin", "ssss"},
+    };
+    return m;
+}
+
+/// One model on one channel: the best time of the repeats and the builder's info.
+struct Timing {
+    bool built = false;
+    double seconds = 0;
+    std::map<std::string, double> info;
+
+    std::optional<double> get(const std::string& key) const {
+        const auto it = info.find(key);
+        return it == info.end() ? std::nullopt : std::optional<double>(it->second);
+    }
+};
+
+struct MaterialTimes {
+    std::string name;
+    int n = 0;
+    double h_mm = 0;
+    double mcml_seconds = 0;  ///< the three ground-truth runs (not part of the benchmark)
+    std::array<std::uint64_t, 3> photons{};
+    std::array<double, 3> kernel2d_seconds{};
+    std::vector<std::array<Timing, 3>> models;  ///< per timed_models() entry, per channel
+};
+
+std::string sig3(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+    return buf;
+}
+
+std::string num(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.8g", v);
+    return buf;
+}
+
+/// Ground truth, Kernel2D and every model for one material.
+MaterialTimes time_material(const MaterialPreset& preset,
+                            const std::vector<approx::ModelSpec>& specs, std::int64_t photons,
+                            int threads, int repeat) {
+    MaterialTimes t;
+    t.name = preset.name;
+    const Medium& m = preset.medium;
+    // The runner's ground truth: the thesis grid, profile tallies, channel = stream.
+    const mcml::ProfileGrid grid = mcml::freude14_grid(m);
+    mcml::ProfileOptions po;
+    po.seed = 1;
+    po.threads = threads;
+    po.budget.photons = photons;
+    auto t0 = Clock::now();
+    const mcml::ProfileRun run = mcml::simulate_profile(m, grid, po);
+    t.mcml_seconds = seconds_since(t0);
+    for (int c = 0; c < 3; ++c)
+        t.photons[static_cast<size_t>(c)] = run.channels[static_cast<size_t>(c)].photons;
+
+    const approx::KernelGrid kg = approx::KernelGrid::from_profile(run.profile, 1);
+    t.n = kg.n;
+    t.h_mm = kg.h_mm;
+    std::array<std::unique_ptr<approx::Kernel2D>, 3> kernels;
+    for (int c = 0; c < 3; ++c) {
+        double best = 0;
+        for (int r = 0; r < repeat; ++r) {
+            t0 = Clock::now();
+            auto k = std::make_unique<approx::Kernel2D>(run.profile, c, kg);
+            const double s = seconds_since(t0);
+            if (r == 0 || s < best) best = s;
+            kernels[static_cast<size_t>(c)] = std::move(k);
+        }
+        t.kernel2d_seconds[static_cast<size_t>(c)] = best;
+    }
+
+    const bool in_table_a1 = approx::freude14_table_a1().count(t.name) > 0;
+    for (const auto& spec : specs) {
+        std::array<Timing, 3> row;
+        if (spec.name == "manual" && spec.flag("table_a1") && !in_table_a1) {
+            t.models.push_back(row);
+            continue;
+        }
+        for (int c = 0; c < 3; ++c) {
+            Timing& x = row[static_cast<size_t>(c)];
+            approx::ModelContext ctx;
+            ctx.material = t.name;
+            ctx.channel = c;
+            for (int r = 0; r < repeat; ++r) {
+                t0 = Clock::now();
+                approx::ModelResult res =
+                    approx::build_model(spec, *kernels[static_cast<size_t>(c)], ctx);
+                const double s = seconds_since(t0);
+                if (!x.built || s < x.seconds) x.seconds = s;
+                x.built = true;
+                x.info = std::move(res.info);
+            }
+        }
+        t.models.push_back(std::move(row));
+    }
+    return t;
+}
+
+int run_kernel_bench(const BenchArgs& a, int repeat) {
+    const int threads = a.threads > 0 ? a.threads : tbb::info::default_concurrency();
+    // The model builders (guided's passes) and MCML use oneTBB: cap every arena at `threads`.
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                              static_cast<size_t>(threads));
+    const std::int64_t photons = a.quick ? std::max<std::int64_t>(1, a.photons / 5) : a.photons;
+    const auto& models = timed_models();
+    std::vector<approx::ModelSpec> specs;
+    for (const auto& m : models) specs.push_back(approx::parse_model(m.spec));
+
+    const auto& presets = freude14_materials();
+    std::vector<MaterialTimes> all;
+    std::fprintf(stderr,
+                 "kernel build times: %zu materials, MCML ground truth %lld photons per channel, "
+                 "%d threads\n",
+                 presets.size(), static_cast<long long>(photons), threads);
+    for (size_t i = 0; i < presets.size(); ++i) {
+        const auto t0 = Clock::now();
+        all.push_back(time_material(presets[i], specs, photons, threads, repeat));
+        const MaterialTimes& t = all.back();
+        std::fprintf(stderr, "[%2zu/%zu] %-10s n = %5d  MCML %6.2f s  kernels %7.2f s\n", i + 1,
+                     presets.size(), t.name.c_str(), t.n, t.mcml_seconds,
+                     seconds_since(t0) - t.mcml_seconds);
+        std::fflush(stderr);
+    }
+
+    // Table 1: seconds per kernel (one channel), materials x models.
+    std::printf(
+        "Kernel build time [s per kernel = one RGB channel], thesis grid (Freude14 Table 6.1)\n");
+    std::printf("%-10s %2s %5s %9s %9s", "material", "ch", "n", "h_mm", "kernel2d");
+    for (const auto& m : models) std::printf(" %10s", m.header);
+    std::printf("\n");
+    for (const auto& t : all)
+        for (int c = 0; c < 3; ++c) {
+            const size_t cc = static_cast<size_t>(c);
+            if (c == 0)
+                std::printf("%-10s %2s %5d %9s", t.name.c_str(), kChannelNames[c], t.n,
+                            sig3(t.h_mm).c_str());
+            else
+                std::printf("%-10s %2s %5s %9s", "", kChannelNames[c], "", "");
+            std::printf(" %9s", sig3(t.kernel2d_seconds[cc]).c_str());
+            for (const auto& row : t.models)
+                std::printf(" %10s", row[cc].built ? sig3(row[cc].seconds).c_str() : "-");
+            std::printf("\n");
+        }
+
+    // Table 2: per material, the ground truth's cost and the guided solver's constraint error
+    // (max over channels) and iterations (per channel).
+    std::vector<size_t> guided_columns;
+    for (size_t i = 0; i < specs.size(); ++i)
+        if (specs[i].name == "guided") guided_columns.push_back(i);
+    std::printf(
+        "\nPer material: MCML ground truth time (3 channels; not part of the figures), "
+        "kernel2d and models [s] summed over the 3 channels (models: over all columns), guided "
+        "constraint error (max over channels) and iterations\n");
+    std::printf("%-10s %9s %10s %9s %9s", "material", "MCML_s", "photons/ch", "kernel2d", "models");
+    for (size_t i : guided_columns)
+        std::printf(" %11s %16s", (std::string(models[i].header) + " err").c_str(),
+                    (std::string(models[i].header) + " it R/G/B").c_str());
+    std::printf("\n");
+    double mcml_total = 0, kernel2d_total = 0, models_total = 0, worst_error = 0;
+    struct Slowest {
+        double seconds = -1;
+        std::string material, model;
+        int channel = 0;
+    } slowest;
+    for (const auto& t : all) {
+        double k2d = 0, sum = 0;
+        for (double s : t.kernel2d_seconds) k2d += s;
+        for (size_t i = 0; i < t.models.size(); ++i)
+            for (int c = 0; c < 3; ++c) {
+                const Timing& x = t.models[i][static_cast<size_t>(c)];
+                if (!x.built) continue;
+                sum += x.seconds;
+                if (x.seconds > slowest.seconds) slowest = {x.seconds, t.name, models[i].spec, c};
+            }
+        mcml_total += t.mcml_seconds;
+        kernel2d_total += k2d;
+        models_total += sum;
+        std::printf("%-10s %9.2f %10llu %9s %9s", t.name.c_str(), t.mcml_seconds,
+                    static_cast<unsigned long long>(t.photons[0]), sig3(k2d).c_str(),
+                    sig3(sum).c_str());
+        for (size_t i : guided_columns) {
+            double err = 0;
+            std::string its;
+            for (int c = 0; c < 3; ++c) {
+                const Timing& x = t.models[i][static_cast<size_t>(c)];
+                err = std::max(err, x.get("constraint_error").value_or(0.0));
+                const auto it = x.get("iterations");
+                its += (c ? "/" : "") + (it ? std::to_string(static_cast<long long>(*it)) : "-");
+            }
+            worst_error = std::max(worst_error, err);
+            std::printf(" %11s %16s", sig3(err).c_str(), its.c_str());
+        }
+        std::printf("\n");
+    }
+
+    std::printf("\nTotal build time: models %s s, Kernel2D %s s (%zu materials x 3 channels)\n",
+                sig3(models_total).c_str(), sig3(kernel2d_total).c_str(), all.size());
+    if (slowest.seconds >= 0)
+        std::printf("Slowest kernel: %s, %s %s, %s s\n", slowest.model.c_str(),
+                    slowest.material.c_str(), kChannelNames[slowest.channel],
+                    sig3(slowest.seconds).c_str());
+    std::printf("Largest guided constraint error |sum A - 1|: %s%s\n", sig3(worst_error).c_str(),
+                worst_error > 1e-6 ? "  (above 1e-6)" : "");
+    std::printf("MCML ground truth (not counted): %s s in all, %lld photons per channel%s\n",
+                sig3(mcml_total).c_str(), static_cast<long long>(photons),
+                a.quick ? " (--quick: a fifth)" : "");
+    std::printf(
+        "Each time is the fastest of %d run%s (--repeat; default 1 with --kernels), wall time "
+        "around approx::build_model (kernel2d: the Kernel2D constructor), with oneTBB limited to "
+        "%d thread%s (--threads). n = cells per quadrant side (2n per side), h = cell size.\n",
+        repeat, repeat == 1 ? "" : "s", threads, threads == 1 ? "" : "s");
+    std::printf("Columns:");
+    for (const auto& m : models) std::printf(" %s = \"%s\";", m.header, m.spec);
+    std::printf(" '-': Freude14 Table A.1 has no row for the material.\n");
+
+    if (!a.csv.empty()) {
+        std::ostringstream csv;
+        csv << "material,channel,model,grid_n,h_mm,build_s,constraint_error,iterations\n";
+        for (const auto& t : all)
+            for (int c = 0; c < 3; ++c) {
+                const size_t cc = static_cast<size_t>(c);
+                csv << t.name << ',' << kChannelNames[c] << ",kernel2d," << t.n << ','
+                    << num(t.h_mm) << ',' << num(t.kernel2d_seconds[cc]) << ",,\n";
+                for (size_t i = 0; i < t.models.size(); ++i) {
+                    const Timing& x = t.models[i][cc];
+                    if (!x.built) continue;
+                    const auto err = x.get("constraint_error");
+                    const auto it = x.get("iterations");
+                    csv << t.name << ',' << kChannelNames[c] << ",\"" << models[i].spec << "\","
+                        << t.n << ',' << num(t.h_mm) << ',' << num(x.seconds) << ','
+                        << (err ? num(*err) : "") << ',' << (it ? num(*it) : "") << '\n';
+                }
+            }
+        write_file_atomic(a.csv, csv.str());
+        std::printf("wrote %s\n", a.csv.c_str());
+    }
+    return 0;
+}
+
 }  // namespace
 
 void register_bench(CLI::App& app, std::function<int()>& action) {
@@ -131,16 +415,38 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
     CLI::App* sub = app.add_subcommand(
         "bench",
         "Benchmark the MCML engine: photons/ms and ns per scattering event, one thread "
-        "and all threads");
+        "and all threads; with --kernels, the kernel models' build times instead");
     sub->add_option("--threads", a->threads, "Threads for the multi-threaded rows (default: all)");
-    sub->add_flag("--quick", a->quick, "A tenth of the photons");
-    sub->add_option("--repeat", a->repeat, "Runs per row; the fastest is reported (default 3)")
-        ->check(CLI::PositiveNumber);
-    sub->add_option("--case", a->only, "Only the cases whose name contains this text");
+    sub->add_flag("--quick", a->quick, "A tenth of the photons (with --kernels: a fifth)");
+    CLI::Option* repeat =
+        sub->add_option("--repeat", a->repeat,
+                        "Runs per row; the fastest is reported (default 3; 1 with --kernels)")
+            ->check(CLI::Range(1, 1'000'000));
+    CLI::Option* kernels = sub->add_flag(
+        "--kernels", a->kernels,
+        "Instead of MCML: time the kernel models' builds per channel for the eleven Freude14 "
+        "materials on the thesis grid (the MCML ground truth is timed separately)");
+    sub->add_option("--case", a->only, "Only the cases whose name contains this text")
+        ->excludes(kernels);
     sub->add_option("--write-mci", a->write_mci,
                     "Write the benchmark inputs as .mci files into this directory (to time the "
-                    "original program on the same cases) and exit");
-    sub->callback([a, &action] { action = [a] { return run_bench(*a); }; });
+                    "original program on the same cases) and exit")
+        ->excludes(kernels);
+    sub->add_option("--photons", a->photons,
+                    "With --kernels: MCML photons per channel for the ground-truth profiles "
+                    "(default 100000)")
+        ->check(CLI::Range(std::int64_t{1}, std::int64_t{1'000'000'000'000}))
+        ->needs(kernels);
+    sub->add_option("--csv", a->csv,
+                    "With --kernels: also write the times in long format (material, channel, "
+                    "model, grid_n, h_mm, build_s, constraint_error, iterations) to this file")
+        ->needs(kernels);
+    sub->callback([a, repeat, &action] {
+        action = [a, explicit_repeat = repeat->count() > 0] {
+            if (a->kernels) return run_kernel_bench(*a, explicit_repeat ? a->repeat : 1);
+            return run_bench(*a);
+        };
+    });
 }
 
 }  // namespace ssslab::cli

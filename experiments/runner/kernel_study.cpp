@@ -81,6 +81,12 @@ double mass_radius(const std::vector<double>& half, double h, double fraction) {
     return static_cast<double>(half.size()) * h;
 }
 
+std::string num17(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
 std::string png_of(const approx::ImageRGB& img) {
     return encode_png_rgb8(img.width, img.height, approx::to_rgb8(img, true));
 }
@@ -88,7 +94,7 @@ std::string png_of(const approx::ImageRGB& img) {
 }  // namespace
 
 const char* kernel_study_version() {
-    return "kernel-study-1";
+    return "kernel-study-3";
 }
 
 std::string KernelStudySpec::canonical() const {
@@ -102,7 +108,7 @@ std::string KernelStudySpec::canonical() const {
     os << "\ntaps=" << taps << "\njitter=" << num(jitter) << "\npixels=" << pixels
        << "\nfov_mm=" << num(fov_mm) << "\nrefine=" << refine << "\nimages=" << images
        << "\nkernel_plots=" << kernel_plots << "\nsingular_values=" << singular_values
-       << "\ncompare=" << compare << "\n";
+       << "\ncompare=" << compare << "\nreference=" << reference << "\n";
     return os.str();
 }
 
@@ -113,8 +119,8 @@ KernelStudySpec read_kernel_study(ConfigTable& t, const std::vector<std::string>
         s.name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_-") != std::string::npos)
         t.fail("name", "expected a name of lower-case letters, digits, '_' and '-', got \"" +
                            s.name + "\"");
-    if (t.has("materials")) {
-        s.materials = t.string_list("materials");
+    if (auto ms = t.optional_string_list("materials")) {
+        s.materials = *ms;
         for (const auto& m : s.materials)
             if (std::find(labels.begin(), labels.end(), m) == labels.end())
                 t.fail("materials", "\"" + m + "\" is not a material of this experiment");
@@ -123,7 +129,7 @@ KernelStudySpec read_kernel_study(ConfigTable& t, const std::vector<std::string>
     }
     if (s.materials.empty()) t.fail("materials", "expected at least one material");
     const std::vector<std::string> models =
-        t.has("models") ? t.string_list("models") : std::vector<std::string>{};
+        t.optional_string_list("models").value_or(std::vector<std::string>{});
     std::set<std::string> seen;
     for (const auto& m : models) {
         try {
@@ -134,8 +140,8 @@ KernelStudySpec read_kernel_study(ConfigTable& t, const std::vector<std::string>
         if (!seen.insert(s.models.back().label()).second)
             t.fail("models", "model \"" + m + "\" is listed twice");
     }
-    if (t.has("signals"))
-        for (const auto& name : t.string_list("signals")) {
+    if (auto names = t.optional_string_list("signals"))
+        for (const auto& name : *names) {
             approx::Signal sig;
             if (!approx::parse_signal(name, sig))
                 t.fail("signals", "unknown signal \"" + name +
@@ -155,6 +161,13 @@ KernelStudySpec read_kernel_study(ConfigTable& t, const std::vector<std::string>
     s.kernel_plots = t.boolean("kernel_plots", false);
     s.singular_values = static_cast<int>(t.integer("singular_values", 0, Range::closed(0, 200)));
     s.compare = t.choice("compare", "", {"", "freude14_table_6_3"});
+    if (auto ref = t.optional_string("reference")) {
+        s.reference = *ref;
+        if (std::none_of(s.models.begin(), s.models.end(),
+                         [&](const approx::ModelSpec& m) { return m.text == s.reference; }))
+            t.fail("reference", "\"" + s.reference + "\" is not one of this study's models");
+        if (s.signals.empty()) t.fail("reference", "a reference needs signals");
+    }
     if (s.models.empty() && s.singular_values == 0)
         t.fail("models", "expected at least one model (or singular_values > 0)");
     if (s.models.empty() &&
@@ -167,18 +180,33 @@ std::map<std::string, std::string> run_kernel_study(
     const KernelStudySpec& spec, const std::map<std::string, RadialProfile>& profiles,
     std::string& summary) {
     std::map<std::string, std::string> files;
-    std::ostringstream kernels, image, singular, slices;
+    std::ostringstream kernels, image, singular, slices, versus;
     kernels << "material,channel,model,label,rank,convolutions_1d,build_s,kernel_rms,max_abs,"
                "sum,l1_error,radial_asymmetry,constraint_error,iterations,grid_n,h_mm\n";
     image << "material,signal,model,label,sampling,channel,rms,max_abs,energy,fov_mm,pixels\n";
     singular << "material,channel,index,sigma,sigma_over_sigma1\n";
     slices << "material,channel,model,direction,r_mm,value_per_mm2\n";
+    versus << "material,signal,model,reference,channel,rms\n";
     struct Rms {
         std::string material, column, spec;
         int channel;
         double rms;
     };
     std::vector<Rms> for_compare;
+    // Per model, over materials and channels: what Table 5.1 lists, measured.
+    struct Aggregate {
+        int rank = 0, convolutions = 0, kernels = 0;
+        double build_sum = 0, build_max = 0, kernel_rms_sum = 0, l1_error_max = 0;
+        double image_rms_sum = 0, taps_rms_sum = 0;
+        int images = 0, taps_images = 0;
+    };
+    std::vector<Aggregate> agg(spec.models.size());
+    // Regression metrics (`ssslab check`): deterministic functions of the fixed-seed profiles.
+    std::ostringstream metrics;
+    metrics << "metric,unit,value,tolerance\n";
+    auto metric = [&](const std::string& name, const char* unit, double v) {
+        metrics << name << ',' << unit << ',' << num17(v) << ",1e-4\n";
+    };
     const auto t0 = Clock::now();
 
     for (const auto& material : spec.materials) {
@@ -192,10 +220,45 @@ std::map<std::string, std::string> run_kernel_study(
             for (int c = 0; c < 3; ++c) {
                 const auto sv =
                     approx::singular_values(*k[static_cast<size_t>(c)], spec.singular_values);
-                for (size_t i = 0; i < sv.size(); ++i)
+                for (size_t i = 0; i < sv.size(); ++i) {
                     singular << material << ',' << kChannelNames[c] << ',' << i + 1 << ','
                              << num(sv[i]) << ',' << num(sv[i] / sv[0]) << '\n';
+                    if (i > 0 && i < 6)
+                        metric(spec.name + "." + material + "." + kChannelNames[c] + ".sigma" +
+                                   std::to_string(i + 1) + "_over_sigma1",
+                               "1", sv[i] / sv[0]);
+                }
             }
+
+        // The image grid: given, or 8 times the radius holding 90 % of the widest channel's
+        // pre-integrated kernel.
+        double fov = spec.fov_mm;
+        if (fov <= 0) {
+            double r90 = 0;
+            for (int c = 0; c < 3; ++c) {
+                const approx::ModelResult p = approx::preintegration(*k[static_cast<size_t>(c)]);
+                r90 = std::max(r90, mass_radius(p.kernel.terms[0].a, grid.h_mm, 0.9));
+            }
+            fov = 8.0 * r90;
+        }
+        approx::SignalParams sp;
+        sp.size = spec.pixels;
+        sp.pixel_mm = fov / spec.pixels;
+        sp.dot_radius_mm = fov / 64.0;
+        // Each signal and its exact convolution, made once (image-space fits use them too).
+        std::map<approx::Signal, std::pair<approx::ImageRGB, approx::ImageRGB>> signal_images;
+        auto images_of =
+            [&](approx::Signal sig) -> const std::pair<approx::ImageRGB, approx::ImageRGB>& {
+            auto it = signal_images.find(sig);
+            if (it == signal_images.end()) {
+                approx::ImageRGB e = approx::make_signal(sig, sp);
+                approx::ImageRGB exact =
+                    approx::convolve_exact(e, {k[0].get(), k[1].get(), k[2].get()});
+                it = signal_images.emplace(sig, std::make_pair(std::move(e), std::move(exact)))
+                         .first;
+            }
+            return it->second;
+        };
 
         // Models, per channel.
         std::vector<std::array<approx::ModelResult, 3>> built;
@@ -203,7 +266,7 @@ std::map<std::string, std::string> run_kernel_study(
             std::array<approx::ModelResult, 3> r;
             for (int c = 0; c < 3; ++c) {
                 r[static_cast<size_t>(c)] =
-                    approx::build_model(m, *k[static_cast<size_t>(c)], {material, c});
+                    approx::build_model(m, *k[static_cast<size_t>(c)], {material, c, images_of});
                 const approx::ModelResult& x = r[static_cast<size_t>(c)];
                 const approx::KernelErrors e =
                     approx::kernel_errors(*k[static_cast<size_t>(c)], x.kernel);
@@ -219,6 +282,17 @@ std::map<std::string, std::string> run_kernel_study(
                         << info("iterations") << ',' << grid.n << ',' << num(grid.h_mm) << '\n';
                 const std::string col = thesis_column(m);
                 if (!col.empty()) for_compare.push_back({material, col, m.text, c, e.rms});
+                Aggregate& g = agg[static_cast<size_t>(&m - spec.models.data())];
+                g.rank = std::max(g.rank, x.kernel.rank());
+                g.convolutions = std::max(g.convolutions, x.kernel.convolutions_1d());
+                ++g.kernels;
+                g.build_sum += x.build_seconds;
+                g.build_max = std::max(g.build_max, x.build_seconds);
+                g.kernel_rms_sum += e.rms;
+                g.l1_error_max = std::max(g.l1_error_max, std::fabs(e.l1_error));
+                metric(spec.name + "." + material + "." + m.label() + "." + kChannelNames[c] +
+                           ".kernel_rms",
+                       "1", e.rms);
             }
             built.push_back(std::move(r));
         }
@@ -249,29 +323,25 @@ std::map<std::string, std::string> run_kernel_study(
         }
 
         if (!spec.signals.empty()) {
-            double fov = spec.fov_mm;
-            if (fov <= 0) {
-                double r90 = 0;
-                for (int c = 0; c < 3; ++c) {
-                    const approx::ModelResult p =
-                        approx::preintegration(*k[static_cast<size_t>(c)]);
-                    r90 = std::max(r90, mass_radius(p.kernel.terms[0].a, grid.h_mm, 0.9));
-                }
-                fov = 8.0 * r90;
-            }
-            approx::SignalParams sp;
-            sp.size = spec.pixels;
-            sp.pixel_mm = fov / spec.pixels;
-            sp.dot_radius_mm = fov / 64.0;
             for (approx::Signal sig : spec.signals) {
-                const approx::ImageRGB e = approx::make_signal(sig, sp);
-                const approx::ImageRGB exact =
-                    approx::convolve_exact(e, {k[0].get(), k[1].get(), k[2].get()});
+                const auto& [e, exact] = images_of(sig);
                 const std::string dir = "images/" + material + "/" + approx::signal_name(sig) + "/";
                 std::vector<std::pair<std::string, approx::ImageRGB>> outs;
                 auto record = [&](const approx::ModelSpec& m, const std::string& sampling,
                                   const approx::ImageRGB& out) {
                     const approx::ImageErrors ie = approx::image_errors(out, exact);
+                    const double mean_rms = (ie.rms[0] + ie.rms[1] + ie.rms[2]) / 3.0;
+                    Aggregate& g = agg[static_cast<size_t>(&m - spec.models.data())];
+                    if (sampling == "full") {
+                        g.image_rms_sum += mean_rms;
+                        ++g.images;
+                    } else if (sampling.find("jitter") == std::string::npos) {
+                        g.taps_rms_sum += mean_rms;
+                        ++g.taps_images;
+                    }
+                    metric(spec.name + "." + material + "." + approx::signal_name(sig) + "." +
+                               m.label() + "." + sampling + ".image_rms",
+                           "1", mean_rms);
                     for (int c = 0; c < 3; ++c)
                         image << material << ',' << approx::signal_name(sig) << ",\"" << m.text
                               << "\"," << m.label() << ',' << sampling << ',' << kChannelNames[c]
@@ -294,6 +364,20 @@ std::map<std::string, std::string> run_kernel_study(
                         if (spec.jitter > 0)
                             record(m, "taps" + std::to_string(spec.taps) + "_jitter",
                                    approx::convolve_taps(e, taps, spec.jitter));
+                    }
+                }
+                if (!spec.reference.empty()) {
+                    const approx::ImageRGB* ref = nullptr;
+                    for (size_t mi = 0; mi < built.size(); ++mi)
+                        if (spec.models[mi].text == spec.reference) ref = &outs[mi].second;
+                    for (size_t mi = 0; mi < built.size(); ++mi) {
+                        if (&outs[mi].second == ref) continue;
+                        const approx::ImageErrors ie = approx::image_errors(outs[mi].second, *ref);
+                        for (int c = 0; c < 3; ++c)
+                            versus << material << ',' << approx::signal_name(sig) << ",\""
+                                   << spec.models[mi].text << "\",\"" << spec.reference << "\","
+                                   << kChannelNames[c] << ',' << num(ie.rms[static_cast<size_t>(c)])
+                                   << '\n';
                     }
                 }
                 if (spec.images) {
@@ -319,6 +403,7 @@ std::map<std::string, std::string> run_kernel_study(
     if (!spec.signals.empty()) files["image.csv"] = image.str();
     if (spec.singular_values > 0) files["singular_values.csv"] = singular.str();
     if (spec.kernel_plots) files["slices.csv"] = slices.str();
+    if (!spec.reference.empty()) files["image_vs_reference.csv"] = versus.str();
     if (spec.compare == "freude14_table_6_3") {
         // Normalise as the thesis did: by the entry its table is normalised to (Ketchup, manual,
         // B) when the study has it, otherwise by the study's largest entry.
@@ -326,25 +411,60 @@ std::map<std::string, std::string> run_kernel_study(
         for (const auto& x : for_compare) ref = std::max(ref, x.rms);
         for (const auto& x : for_compare)
             if (x.material == "Ketchup" && x.column == "manual" && x.channel == 2) ref = x.rms;
-        std::ostringstream cmp;
-        cmp << "material,model,thesis_column,channel,rms,normalised,thesis_normalised,ratio\n";
-        for (const auto& x : for_compare) {
-            double thesis = -1;
+        auto thesis_of = [](const std::string& material, const std::string& column, int c) {
             for (const auto& row : thesis_table_6_3())
-                if (x.material == row.material && x.column == row.model)
-                    thesis = row.rgb[x.channel];
+                if (material == row.material && column == row.model) return row.rgb[c];
+            return -1.0;
+        };
+        // Within a material and channel the ratio to SVD rank-1 does not depend on how the table
+        // is normalised, nor on the grid's cell count: the like-for-like comparison.
+        std::map<std::pair<std::string, int>, double> svd1;
+        for (const auto& x : for_compare)
+            if (x.column == "svd1") svd1[{x.material, x.channel}] = x.rms;
+        std::ostringstream cmp;
+        cmp << "material,model,thesis_column,channel,rms,normalised,thesis_normalised,ratio,"
+               "over_svd1,thesis_over_svd1,ratio_over_svd1\n";
+        for (const auto& x : for_compare) {
+            const double thesis = thesis_of(x.material, x.column, x.channel);
             const double norm = ref > 0 ? x.rms / ref : 0;
+            const auto s1 = svd1.find({x.material, x.channel});
+            const double t1 = thesis_of(x.material, "svd1", x.channel);
+            const double ours = s1 != svd1.end() && s1->second > 0 ? x.rms / s1->second : -1;
+            const double theirs = thesis > 0 && t1 > 0 ? thesis / t1 : -1;
             cmp << x.material << ",\"" << x.spec << "\"," << x.column << ','
                 << kChannelNames[x.channel] << ',' << num(x.rms) << ',' << num(norm) << ','
                 << (thesis >= 0 ? num(thesis) : "") << ',' << (thesis > 0 ? num(norm / thesis) : "")
-                << '\n';
+                << ',' << (ours >= 0 ? num(ours) : "") << ',' << (theirs >= 0 ? num(theirs) : "")
+                << ',' << (ours >= 0 && theirs > 0 ? num(ours / theirs) : "") << '\n';
         }
         files["comparison.csv"] = cmp.str();
     }
+    if (!spec.models.empty()) {
+        // [Freude14 Table 5.1], filled from this study's measurements.
+        std::ostringstream pr;
+        pr << "model,label,rank,separable,convolutions_1d,closed_form,build_s_mean,build_s_max,"
+              "kernel_rms_mean,l1_error_max,image_rms_mean,taps_rms_mean\n";
+        for (size_t i = 0; i < spec.models.size(); ++i) {
+            const Aggregate& g = agg[i];
+            const approx::ModelSpec& m = spec.models[i];
+            pr << '"' << m.text << "\"," << m.label() << ',' << g.rank << ','
+               << (g.rank == 1 ? "yes" : "no") << ',' << g.convolutions << ','
+               << (m.closed_form() ? "yes" : "no") << ','
+               << num(g.kernels ? g.build_sum / g.kernels : 0) << ',' << num(g.build_max) << ','
+               << num(g.kernels ? g.kernel_rms_sum / g.kernels : 0) << ',' << num(g.l1_error_max)
+               << ',' << (g.images ? num(g.image_rms_sum / g.images) : "") << ','
+               << (g.taps_images ? num(g.taps_rms_sum / g.taps_images) : "") << '\n';
+        }
+        files["properties.csv"] = pr.str();
+    }
+    files["metrics.csv"] = metrics.str();
     std::ostringstream sum;
     sum << spec.materials.size() << " materials x " << spec.models.size() << " models";
     if (!spec.signals.empty()) sum << " x " << spec.signals.size() << " signals";
-    sum << " in " << num(std::chrono::duration<double>(Clock::now() - t0).count()) << " s";
+    char secs[32];
+    std::snprintf(secs, sizeof secs, "%.3g",
+                  std::chrono::duration<double>(Clock::now() - t0).count());
+    sum << " in " << secs << " s";
     summary = sum.str();
     return files;
 }

@@ -16,6 +16,8 @@
 //   kernel_plots   slices along the axis and the diagonal, as Freude14 Fig. 6.2 (default false)
 //   singular_values  the leading singular values per channel, 0 for none (Fig. 5.1)
 //   compare        "freude14_table_6_3" prints Table 6.3's normalised numbers beside ours
+//   reference      one of the models: every model's image is also compared with this model's
+//                  (e.g. how close guided optimization comes to pre-integration, Fig. 5.15)
 #pragma once
 
 #include "approx/image.h"
@@ -43,6 +45,7 @@ struct KernelStudySpec {
     bool kernel_plots = false;
     int singular_values = 0;
     std::string compare;
+    std::string reference;  ///< a model's spec text, or empty
 
     /// Canonical text of everything that determines the study's results (for its cache key).
     std::string canonical() const;

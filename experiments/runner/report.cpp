@@ -177,6 +177,26 @@ void channel_table(std::ostringstream& os, const std::string& csv,
     os << "</table>\n";
 }
 
+// A whole CSV as a table (string columns left-aligned, numbers to 4 digits).
+void csv_table(std::ostringstream& os, const std::string& csv, const char* title) {
+    const auto rows = parse_csv(csv);
+    if (rows.size() < 2) return;
+    os << "<p><b>" << title << "</b></p>\n<table>\n<tr>";
+    for (const auto& h : rows[0]) os << "<th>" << esc(h) << "</th>";
+    os << "</tr>\n";
+    for (size_t i = 1; i < rows.size(); ++i) {
+        os << "<tr>";
+        for (const auto& c : rows[i]) {
+            char* end = nullptr;
+            std::strtod(c.c_str(), &end);
+            const bool number = !c.empty() && *end == '\0';
+            os << (number ? "<td>" : "<td class=\"l\">") << cell_num(c) << "</td>";
+        }
+        os << "</tr>\n";
+    }
+    os << "</table>\n";
+}
+
 void study_section(std::ostringstream& os, const StudyOutput& so, const PlotResult& plots) {
     const KernelStudySpec& s = *so.spec;
     const std::string dir = "kernels/" + s.name + "/";
@@ -204,10 +224,30 @@ void study_section(std::ostringstream& os, const StudyOutput& so, const PlotResu
                       {}, "Freude14 Table 6.3 (the thesis's numbers)");
         channel_table(os, so.files.at("comparison.csv"), {"material", "model"}, "ratio", {},
                       "Ratio ours / thesis");
+        channel_table(os, so.files.at("comparison.csv"), {"material", "model"}, "over_svd1", {},
+                      "Kernel-space RMS over SVD rank-1's, per material and channel (ours): "
+                      "independent of the table's normalisation and of the grid's cell count");
+        channel_table(os, so.files.at("comparison.csv"), {"material", "model"}, "thesis_over_svd1",
+                      {}, "The same from Freude14 Table 6.3");
+        channel_table(os, so.files.at("comparison.csv"), {"material", "model"}, "ratio_over_svd1",
+                      {}, "Ratio ours / thesis of the RMS over SVD rank-1's");
     }
+    if (so.files.count("properties.csv"))
+        csv_table(os, so.files.at("properties.csv"),
+                  "Properties of the models as Freude14 Table 5.1, measured: rank (a separable "
+                  "kernel has rank 1), 1D convolutions per pass pair, closed form (no "
+                  "optimisation), build time per kernel (one channel), mean kernel-space RMS, "
+                  "largest energy (L1) error, mean image-space RMS over signals, materials and "
+                  "channels at full resolution and with taps");
     if (so.files.count("image.csv"))
         channel_table(os, so.files.at("image.csv"), {"material", "signal", "model", "sampling"},
                       "rms", {}, "Image-space RMS per channel against the exact 2D convolution");
+    if (so.files.count("image_vs_reference.csv"))
+        channel_table(os, so.files.at("image_vs_reference.csv"), {"material", "signal", "model"},
+                      "rms", {},
+                      ("Image-space RMS against the result of " + s.reference +
+                       " (full resolution): how close each model comes to it")
+                          .c_str());
     for (const auto& f : plots.plots)
         if (f.section == "study:" + s.name)
             os << "<figure><a href=\"" << esc(f.stem) << ".svg\"><img src=\"" << esc(f.stem)

@@ -190,6 +190,25 @@ std::string artifacts_csv(const ExperimentRun& r) {
     return os.str();
 }
 
+// A study's metrics.csv (metric,unit,value,tolerance): deterministic metrics for `ssslab check`.
+void append_study_metrics(const std::map<std::string, std::string>& files, const std::string& study,
+                          std::vector<Metric>& out) {
+    const auto it = files.find("metrics.csv");
+    if (it == files.end()) return;
+    std::istringstream in(it->second);
+    std::string line;
+    std::getline(in, line);  // header
+    while (std::getline(in, line)) {
+        std::vector<std::string> f;
+        std::stringstream ls(line);
+        for (std::string x; std::getline(ls, x, ',');) f.push_back(x);
+        if (f.size() != 4)
+            throw std::runtime_error("kernel study " + study + ": malformed metrics.csv line \"" +
+                                     line + "\"");
+        out.push_back({f[0], f[1], std::stod(f[2]), 0, false, std::stod(f[3])});
+    }
+}
+
 std::string metrics_csv(const std::vector<Metric>& ms) {
     std::ostringstream os;
     os << "metric,unit,value,se,kind,tolerance\n";
@@ -443,7 +462,6 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
             write_file_atomic(stage / "convergence" / (m + "_history.csv"), h);
             write_file_atomic(stage / "convergence" / (m + "_snapshots.csv"), s);
         }
-    write_file_atomic(stage / "metrics.csv", metrics_csv(r.metrics));
     write_file_atomic(stage / "artifacts.csv", artifacts_csv(r));
     for (const auto& study : r.exp.kernel_studies) {
         // A study is an artifact keyed by its spec and the ground-truth runs it reads.
@@ -486,8 +504,10 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
                         study.name.c_str(), so.summary.c_str());
         for (const auto& [name, content] : so.files)
             write_file_atomic(stage / "kernels" / study.name / name, content);
+        append_study_metrics(so.files, study.name, r.metrics);
         report.studies.push_back(std::move(so));
     }
+    write_file_atomic(stage / "metrics.csv", metrics_csv(r.metrics));
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     report.plots = make_plots(r, stage, cache, o.quiet);
     auto prov = provenance(o.command_line);
