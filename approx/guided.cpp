@@ -1,11 +1,17 @@
 #include "approx/models.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <Eigen/QR>
 
 #include <chrono>
 #include <cmath>
+#include <deque>
+#include <functional>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <vector>
 
@@ -58,20 +64,19 @@ struct LevelResult {
 // Solve the guided problem for a quadrant q (4 sum q = 1) from the start a (sum a = 1/2).
 constexpr double kTolerance = 1e-12;  // relative L1 change of a between steps
 
-LevelResult solve_level(const Eigen::MatrixXd& q, const GuideParams& g, Eigen::VectorXd a) {
-    const int n = static_cast<int>(q.rows());
-    // The guide on x, y in [-1, 1] spanning the grid: cell centres at (i + 1/2) / n.
+// The guide Gamma(x, y; k, b) on x, y in [-1, 1] spanning the grid, cell centres at (i + 1/2) / n
+// [Freude14 Eq. 5.20]. It is symmetric: column i is row i, so the products read contiguous
+// columns. Only j >= i is evaluated (the radial power is the costly part), then mirrored.
+Eigen::MatrixXd build_guide(int n, const GuideParams& g) {
     Eigen::VectorXd x(n), sx(n);
     for (int i = 0; i < n; ++i) {
         x(i) = (i + 0.5) / n;
         sx(i) = g.b > 0 ? 1.0 - std::exp(-g.b * x(i) * x(i)) : 1.0;
     }
-    // W and W o q are symmetric: column i is row i, so the products below read contiguous
-    // columns. Built and applied in parallel (oneTBB).
-    Eigen::MatrixXd W(n, n), WQ(n, n);
+    Eigen::MatrixXd W(n, n);
     const bool even_integer_k = g.k == std::floor(g.k) && static_cast<int>(g.k) % 2 == 0;
     tbb::parallel_for(0, n, [&](int j) {
-        for (int i = 0; i < n; ++i) {
+        for (int i = 0; i <= j; ++i) {
             const double r2 = x(i) * x(i) + x(j) * x(j);
             double radial;
             if (g.k == 0)
@@ -83,17 +88,57 @@ LevelResult solve_level(const Eigen::MatrixXd& q, const GuideParams& g, Eigen::V
             else
                 radial = std::pow(r2, 0.5 * g.k);
             W(i, j) = radial * sx(i) * sx(j);
-            WQ(i, j) = W(i, j) * q(i, j);
         }
     });
-    // B = (W o q) b and D = W (b o b), in one parallel pass over the columns.
+    tbb::parallel_for(0, n, [&](int j) {
+        for (int i = j + 1; i < n; ++i) W(i, j) = W(j, i);
+    });
+    return W;
+}
+
+// The guide depends on the grid size and (k, b) only, not on the kernel: the three channels of a
+// material share it. The last two guides built (a fine level and its coarse level) are kept.
+std::shared_ptr<const Eigen::MatrixXd> guide_matrix(int n, const GuideParams& g) {
+    struct Entry {
+        int n;
+        double k, b;
+        std::shared_ptr<const Eigen::MatrixXd> w;
+    };
+    static std::mutex mutex;
+    static std::deque<Entry> cache;
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const Entry& e : cache)
+            if (e.n == n && e.k == g.k && e.b == g.b) return e.w;
+    }
+    auto w = std::make_shared<const Eigen::MatrixXd>(build_guide(n, g));
+    std::lock_guard<std::mutex> lock(mutex);
+    cache.push_front({n, g.k, g.b, w});
+    if (cache.size() > 2) cache.pop_back();
+    return w;
+}
+
+LevelResult solve_level(const Eigen::MatrixXd& q, const GuideParams& g, Eigen::VectorXd a,
+                        double tolerance) {
+    const int n = static_cast<int>(q.rows());
+    const std::shared_ptr<const Eigen::MatrixXd> guide = guide_matrix(n, g);
+    const Eigen::MatrixXd& W = *guide;
+    // B = (W o q) b and D = W (b o b), in one parallel pass over the columns of W and q (both
+    // symmetric).
     auto products = [&](const Eigen::VectorXd& b, Eigen::VectorXd& B, Eigen::VectorXd& D) {
         const Eigen::VectorXd bb = b.cwiseProduct(b);
         B.resize(n);
         D.resize(n);
         tbb::parallel_for(0, n, [&](int i) {
-            B(i) = WQ.col(i).dot(b);
-            D(i) = W.col(i).dot(bb);
+            const double* w = W.col(i).data();
+            const double* qc = q.col(i).data();
+            double sb = 0, sd = 0;
+            for (int j = 0; j < n; ++j) {
+                sb += w[j] * qc[j] * b(j);
+                sd += w[j] * bb(j);
+            }
+            B(i) = sb;
+            D(i) = sd;
         });
     };
     const double s = 0.5;
@@ -117,7 +162,7 @@ LevelResult solve_level(const Eigen::MatrixXd& q, const GuideParams& g, Eigen::V
         const Eigen::VectorXd t = step(a);
         const Eigen::VectorXd f = t - a;  // residual
         change = f.lpNorm<1>() / a.lpNorm<1>();
-        if (change <= kTolerance) {
+        if (change <= tolerance) {
             a = t;
             break;
         }
@@ -152,7 +197,18 @@ LevelResult solve_level(const Eigen::MatrixXd& q, const GuideParams& g, Eigen::V
     res.a = a;
     res.iterations = it;
     res.change = change;
-    res.objective = 4.0 * (W.cwiseProduct((q - a * a.transpose()).cwiseAbs2())).sum();
+    // The objective over the whole kernel (four quadrants), without n x n temporaries.
+    res.objective = 4.0 * tbb::parallel_reduce(
+                              tbb::blocked_range<int>(0, n), 0.0,
+                              [&](const tbb::blocked_range<int>& r, double acc) {
+                                  for (int j = r.begin(); j < r.end(); ++j)
+                                      for (int i = 0; i < n; ++i) {
+                                          const double e = q(i, j) - a(i) * a(j);
+                                          acc += W(i, j) * e * e;
+                                      }
+                                  return acc;
+                              },
+                              std::plus<double>());
     return res;
 }
 
@@ -169,7 +225,26 @@ ModelResult guided(const Kernel2D& k, const GuideParams& g) {
     const Eigen::MatrixXd& q = k.quadrant();
     Eigen::VectorXd a = 2.0 * q.rowwise().sum();  // the pre-integrated kernel as first guess
     a *= 0.5 / a.sum();
-    const LevelResult res = solve_level(q, g, a);
+    // Two levels on large grids: the problem on 2 x 2 aggregated cells (the guide evaluated at the
+    // coarse cells' centres) gives the fine level a start close to its optimum, so the fine level,
+    // whose every step reads the n x n weights, needs a few steps only. The answer is the fine
+    // level's own fixed point, to the same tolerance.
+    if (q.rows() >= 512) {
+        const Eigen::Index m = q.rows() / 2;
+        Eigen::MatrixXd qc(m, m);
+        for (Eigen::Index j = 0; j < m; ++j)
+            for (Eigen::Index i = 0; i < m; ++i)
+                qc(i, j) = q(2 * i, 2 * j) + q(2 * i + 1, 2 * j) + q(2 * i, 2 * j + 1) +
+                           q(2 * i + 1, 2 * j + 1);
+        Eigen::VectorXd ac(m);
+        for (Eigen::Index i = 0; i < m; ++i) ac(i) = a(2 * i) + a(2 * i + 1);
+        ac *= 0.5 / ac.sum();
+        const LevelResult coarse = solve_level(qc, g, ac, 1e-6);
+        for (Eigen::Index i = 0; i < m; ++i) a(2 * i) = a(2 * i + 1) = 0.5 * coarse.a(i);
+        if (q.rows() % 2) a(q.rows() - 1) = a(q.rows() - 2);
+        a *= 0.5 / a.sum();
+    }
+    const LevelResult res = solve_level(q, g, a, kTolerance);
     a = res.a;
     const int n = k.n();
     const double change = res.change;

@@ -43,7 +43,10 @@ struct GuideParams {
 /// term (as the thesis treats it). For a >= 0 the constraint is linear, sum a = 1, and it is held
 /// exactly: each step of the solver minimises the objective over a for the other factor fixed,
 /// a separable quadratic with the linear constraint and bounds, solved in closed form up to one
-/// multiplier (found by bisection). info: constraint_error (relative), iterations, objective.
+/// multiplier (found by bisection). On grids of n >= 512 a solve on 2 x 2 aggregated cells gives
+/// the start. The weights depend on n, k and b only and are cached (the last two), so the three
+/// channels of a material share them. info: constraint_error (relative), iterations,
+/// last_change, objective.
 ModelResult guided(const Kernel2D& k, const GuideParams& g);
 
 // ---- Manual two-Gaussian model [Freude14 §5.4, Eq. 5.21, Table A.1] -------------------------

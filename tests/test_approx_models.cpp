@@ -8,6 +8,7 @@
 #include <Eigen/LU>
 
 #include <cmath>
+#include <cstdio>
 
 namespace ssslab::approx {
 namespace {
@@ -193,6 +194,51 @@ TEST(Guided, EveryGuideHoldsTheConstraintOnRealisticKernels) {
     }
     EXPECT_THROW(guided(Kernel2D(p, 0, KernelGrid::from_profile(p)), {5, 0}),
                  std::invalid_argument);
+}
+
+TEST(Guided, LargeGridsSolvedOnTwoLevelsMeetTheKktConditions) {
+    // n >= 512 takes the two-level path (a coarse solve as the start). Whatever the path, the
+    // result must be a KKT point of min sum Gamma (K - a a^T)^2, sum a = 1/2 (half vector), a >= 0:
+    // g_i = B_i - a_i D_i with B = (Gamma o K) a, D = Gamma (a o a) is one constant mu where
+    // a_i > 0 and at most mu where a_i = 0. Gamma is evaluated here from Eq. 5.20 independently.
+    const RadialProfile p = analytic_profile(600, 0.001, 0.004, 0.05);
+    for (GuideParams g : {GuideParams{1, 0}, GuideParams{1.55, 50}}) {
+        SCOPED_TRACE("k = " + std::to_string(g.k) + " b = " + std::to_string(g.b));
+        const Kernel2D k(p, 2, KernelGrid::from_profile(p));
+        ASSERT_GE(k.n(), 512);
+        const ModelResult m = guided(k, g);
+        EXPECT_LT(m.info.at("constraint_error"), 1e-6);
+        const std::vector<double>& a = m.kernel.terms[0].a;
+        const int n = k.n();
+        std::vector<double> grad(static_cast<size_t>(n));
+        double mu = 0, scale = 0;
+        int active = 0;
+        for (int i = 0; i < n; ++i) {
+            double B = 0, D = 0;
+            for (int j = 0; j < n; ++j) {
+                const double x = (i + 0.5) / n, y = (j + 0.5) / n;
+                const double gamma =
+                    std::pow(x * x + y * y, 0.5 * g.k) *
+                    (g.b > 0 ? (1 - std::exp(-g.b * x * x)) * (1 - std::exp(-g.b * y * y)) : 1.0);
+                B += gamma * k.quadrant()(i, j) * a[static_cast<size_t>(j)];
+                D += gamma * a[static_cast<size_t>(j)] * a[static_cast<size_t>(j)];
+            }
+            grad[static_cast<size_t>(i)] = B - a[static_cast<size_t>(i)] * D;
+            scale = std::max(scale, std::fabs(B));
+            if (a[static_cast<size_t>(i)] > 0) mu += grad[static_cast<size_t>(i)], ++active;
+        }
+        ASSERT_GT(active, 0);
+        mu /= active;
+        double worst = 0;
+        for (int i = 0; i < n; ++i) {
+            const double gi = grad[static_cast<size_t>(i)];
+            worst = std::max(
+                worst, a[static_cast<size_t>(i)] > 0 ? std::fabs(gi - mu) : std::max(0.0, gi - mu));
+        }
+        std::printf("n = %d, %d of %d cells active, KKT residual %.2e of max B, %g iterations\n", n,
+                    active, n, worst / scale, m.info.at("iterations"));
+        EXPECT_LT(worst, 1e-8 * scale);
+    }
 }
 
 TEST(Guided, LargerKApproximatesTheFalloffMoreClosely) {

@@ -378,7 +378,9 @@ int run_kernel_bench(const BenchArgs& a, int repeat) {
     std::printf(
         "Each time is the fastest of %d run%s (--repeat; default 1 with --kernels), wall time "
         "around approx::build_model (kernel2d: the Kernel2D constructor), with oneTBB limited to "
-        "%d thread%s (--threads). n = cells per quadrant side (2n per side), h = cell size.\n",
+        "%d thread%s (--threads). n = cells per quadrant side (2n per side), h = cell size. "
+        "Guided optimization's weight matrix depends only on the grid and (k, b): it is built "
+        "once per material, in the R channel's time.\n",
         repeat, repeat == 1 ? "" : "s", threads, threads == 1 ? "" : "s");
     std::printf("Columns:");
     for (const auto& m : models) std::printf(" %s = \"%s\";", m.header, m.spec);

@@ -94,7 +94,7 @@ std::string png_of(const approx::ImageRGB& img) {
 }  // namespace
 
 const char* kernel_study_version() {
-    return "kernel-study-3";
+    return "kernel-study-4";
 }
 
 std::string KernelStudySpec::canonical() const {
