@@ -64,4 +64,11 @@ double sidak(double alpha, int tests);
 double chi2_statistic(const std::vector<double>& observed, const std::vector<double>& expected,
                       int& dof);
 
+/// Chandrasekhar's H function for isotropic scattering with single-scattering albedo a in
+/// (0, 1], at mu in [0, 1]: the solution of 1 / H(mu) = sqrt(1 - a) + (a / 2) int_0^1 mu' H(mu')
+/// / (mu + mu') dmu' (Chandrasekhar 1950, Eq. V.(23)), by fixed-point iteration on 400
+/// Gauss-Legendre nodes. The index-matched half-space lit at normal incidence reflects
+/// 1 - H(1) sqrt(1 - a) of the beam.
+double chandrasekhar_h(double a, double mu);
+
 }  // namespace ssslab::testing

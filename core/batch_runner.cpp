@@ -1,0 +1,387 @@
+#include "core/batch_runner.h"
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+
+#include <tbb/concurrent_queue.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+
+namespace ssslab {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+constexpr char kCheckpointMagic[8] = {'S', 'S', 'S', 'L', 'B', 'C', 'K', '1'};
+constexpr char kResultMagic[8] = {'S', 'S', 'S', 'L', 'B', 'R', 'S', '1'};
+
+class Writer {
+  public:
+    explicit Writer(const char magic[8]) : out_(magic, 8) {}
+    template <class T>
+    void put(const T& v) {
+        out_.append(reinterpret_cast<const char*>(&v), sizeof(T));
+    }
+    void put_vec(const std::vector<double>& v) {
+        put<std::uint64_t>(v.size());
+        out_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(double));
+    }
+    void put_str(const std::string& s) {
+        put<std::uint64_t>(s.size());
+        out_ += s;
+    }
+    void put_progress(const std::vector<BatchProgress>& h, const std::vector<BatchSnapshot>& s) {
+        put<std::uint64_t>(h.size());
+        for (const auto& p : h) {
+            put(p.samples);
+            put(p.seconds);
+            put(p.value);
+            put(p.se);
+        }
+        put<std::uint64_t>(s.size());
+        for (const auto& sn : s) {
+            put(sn.samples);
+            put(sn.batches);
+            put(sn.seconds);
+            put_vec(sn.mean);
+        }
+    }
+    std::string& bytes() { return out_; }
+
+  private:
+    std::string out_;
+};
+
+class Reader {
+  public:
+    Reader(const std::string& data, const std::string& name, const char magic[8], const char* what)
+        : d_(data), name_(name) {
+        if (d_.size() < 8 || std::memcmp(d_.data(), magic, 8) != 0)
+            throw InputError({name_, 0, 0}, "", std::string("not an ssslab ") + what);
+    }
+    template <class T>
+    T get() {
+        need(sizeof(T));
+        T v;
+        std::memcpy(&v, d_.data() + pos_, sizeof(T));
+        pos_ += sizeof(T);
+        return v;
+    }
+    std::vector<double> get_vec() {
+        const auto n = get<std::uint64_t>();
+        need(n * sizeof(double));
+        std::vector<double> v(n);
+        std::memcpy(v.data(), d_.data() + pos_, n * sizeof(double));
+        pos_ += n * sizeof(double);
+        return v;
+    }
+    std::string get_str() {
+        const auto n = get<std::uint64_t>();
+        need(n);
+        std::string s = d_.substr(pos_, n);
+        pos_ += n;
+        return s;
+    }
+    void get_progress(std::vector<BatchProgress>& h, std::vector<BatchSnapshot>& s) {
+        const auto nh = get<std::uint64_t>();
+        need(nh * 32);
+        for (std::uint64_t i = 0; i < nh; ++i) {
+            BatchProgress p;
+            p.samples = get<std::uint64_t>();
+            p.seconds = get<double>();
+            p.value = get<double>();
+            p.se = get<double>();
+            h.push_back(p);
+        }
+        const auto ns = get<std::uint64_t>();
+        for (std::uint64_t i = 0; i < ns; ++i) {
+            BatchSnapshot sn;
+            sn.samples = get<std::uint64_t>();
+            sn.batches = get<std::uint64_t>();
+            sn.seconds = get<double>();
+            sn.mean = get_vec();
+            s.push_back(std::move(sn));
+        }
+    }
+    void expect_end() const {
+        if (pos_ != d_.size())
+            throw InputError({name_, 0, 0}, "", "trailing bytes: file is corrupt");
+    }
+
+  private:
+    void need(std::uint64_t n) const {
+        if (n > d_.size() - pos_)
+            throw InputError({name_, 0, 0}, "", "file is truncated or corrupt");
+    }
+    const std::string& d_;
+    const std::string& name_;
+    size_t pos_ = 8;
+};
+
+struct Checkpoint {
+    std::string fingerprint;
+    std::uint64_t samples = 0, batches = 0, work = 0;
+    double seconds = 0;
+    std::vector<double> sum, q;
+    std::vector<BatchProgress> history;
+    std::vector<BatchSnapshot> snapshots;
+};
+
+void save_checkpoint(const std::string& path, const Checkpoint& c) {
+    Writer w(kCheckpointMagic);
+    w.put_str(c.fingerprint);
+    w.put(c.samples);
+    w.put(c.batches);
+    w.put(c.work);
+    w.put(c.seconds);
+    w.put_vec(c.sum);
+    w.put_vec(c.q);
+    w.put_progress(c.history, c.snapshots);
+    write_file_atomic(path, w.bytes());
+}
+
+std::optional<Checkpoint> load_checkpoint(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) return std::nullopt;
+    const std::string data = read_file(path);
+    Reader r(data, path, kCheckpointMagic, "checkpoint");
+    Checkpoint k;
+    k.fingerprint = r.get_str();
+    k.samples = r.get<std::uint64_t>();
+    k.batches = r.get<std::uint64_t>();
+    k.work = r.get<std::uint64_t>();
+    k.seconds = r.get<double>();
+    k.sum = r.get_vec();
+    k.q = r.get_vec();
+    r.get_progress(k.history, k.snapshots);
+    r.expect_end();
+    return k;
+}
+
+}  // namespace
+
+const char* to_string(BatchStop s) {
+    switch (s) {
+        case BatchStop::kSamples:
+            return "samples";
+        case BatchStop::kTime:
+            return "time";
+        case BatchStop::kRelError:
+            return "rel_error";
+        case BatchStop::kInterrupted:
+            return "interrupted";
+    }
+    return "?";
+}
+
+BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simulate) {
+    const SampleBudget& b = opt.budget;
+    if (!b.any()) throw std::invalid_argument("run_batches: the budget has no limit");
+    if (opt.batch_samples <= 0) throw std::invalid_argument("run_batches: batch_samples <= 0");
+    if (b.rel_error && !opt.quantity)
+        throw std::invalid_argument("run_batches: a rel_error budget needs a quantity");
+    BatchRunResult res;
+    res.threads = opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency();
+
+    const std::uint64_t bs = static_cast<std::uint64_t>(opt.batch_samples);
+    const std::uint64_t total = b.samples ? static_cast<std::uint64_t>(*b.samples) : 0;
+    const std::uint64_t max_batches = total > 0 ? (total + bs - 1) / bs : ~std::uint64_t(0);
+    auto batch_size = [&](std::uint64_t index) -> std::int64_t {
+        if (total == 0) return opt.batch_samples;
+        return static_cast<std::int64_t>(std::min<std::uint64_t>(bs, total - index * bs));
+    };
+
+    BatchAccumulator acc(opt.tally_size);
+    double resumed_seconds = 0.0;
+    if (!opt.checkpoint_path.empty()) {
+        if (auto ck = load_checkpoint(opt.checkpoint_path)) {
+            if (ck->fingerprint != opt.fingerprint || ck->sum.size() != opt.tally_size ||
+                ck->q.size() != opt.tally_size)
+                throw InputError({opt.checkpoint_path, 0, 0}, "",
+                                 "checkpoint belongs to a different run (input, seed or batch "
+                                 "size differ); remove it to start afresh");
+            acc.raw_sum() = std::move(ck->sum);
+            acc.raw_q() = std::move(ck->q);
+            acc.set_counts(ck->samples, ck->batches);
+            res.work = ck->work;
+            resumed_seconds = ck->seconds;
+            res.history = std::move(ck->history);
+            res.snapshots = std::move(ck->snapshots);
+            res.resumed = true;
+        }
+    }
+
+    struct Work {
+        std::uint64_t index = 0, work = 0;
+        std::int64_t samples = 0;
+        std::vector<double> tally;
+    };
+    const size_t tokens = static_cast<size_t>(2 * res.threads);
+    std::vector<std::unique_ptr<Work>> pool;
+    tbb::concurrent_queue<Work*> free_list;
+    for (size_t i = 0; i < tokens; ++i) {
+        pool.push_back(std::make_unique<Work>());
+        pool.back()->tally.resize(opt.tally_size);
+        free_list.push(pool.back().get());
+    }
+
+    const auto t0 = Clock::now();
+    auto last_checkpoint = t0;
+    std::uint64_t next = acc.batches();
+    std::atomic<bool> stop_flag{next >= max_batches};
+    res.reason = BatchStop::kSamples;
+
+    auto write_checkpoint = [&]() {
+        Checkpoint ck;
+        ck.fingerprint = opt.fingerprint;
+        ck.samples = acc.samples();
+        ck.batches = acc.batches();
+        ck.work = res.work;
+        ck.seconds = resumed_seconds + seconds_since(t0);
+        ck.sum = acc.raw_sum();
+        ck.q = acc.raw_q();
+        ck.history = res.history;
+        ck.snapshots = res.snapshots;
+        save_checkpoint(opt.checkpoint_path, ck);
+    };
+
+    auto fold = [&](Work* w) {
+        if (stop_flag.load(std::memory_order_relaxed)) return;
+        acc.add_batch(w->tally.data(), static_cast<std::uint64_t>(w->samples));
+        res.work += w->work;
+        BatchProgress p{acc.samples(), resumed_seconds + seconds_since(t0), 0.0, 0.0};
+        if (opt.quantity) opt.quantity(acc, p.value, p.se);
+        res.history.push_back(p);
+        const std::uint64_t nb = acc.batches();
+        if (opt.snapshots && nb >= 4 && (nb & (nb - 1)) == 0)
+            res.snapshots.push_back({acc.samples(), nb, p.seconds, acc.means()});
+        if (opt.on_batch) opt.on_batch(p);
+        if (nb >= max_batches) {
+            res.reason = BatchStop::kSamples;
+            stop_flag = true;
+        } else if (b.seconds && p.seconds >= *b.seconds) {
+            res.reason = BatchStop::kTime;
+            stop_flag = true;
+        } else if (b.rel_error && nb >= static_cast<std::uint64_t>(opt.min_batches_for_error) &&
+                   p.value != 0 && p.se <= *b.rel_error * std::abs(p.value)) {
+            res.reason = BatchStop::kRelError;
+            stop_flag = true;
+        } else if (b.rel_error && !b.seconds && !b.samples && nb >= 10000 && p.value == 0) {
+            throw InfeasibleError(
+                "a relative-error budget cannot be met: the budget quantity is still 0 after "
+                "10000 batches");
+        }
+        if (!opt.checkpoint_path.empty() && !stop_flag &&
+            seconds_since(last_checkpoint) >= opt.checkpoint_seconds) {
+            write_checkpoint();
+            last_checkpoint = Clock::now();
+        }
+    };
+
+    auto body = [&] {
+        tbb::parallel_pipeline(
+            tokens,
+            tbb::make_filter<void, Work*>(
+                tbb::filter_mode::serial_in_order,
+                [&](tbb::flow_control& fc) -> Work* {
+                    if (stop_flag.load(std::memory_order_relaxed) || next >= max_batches ||
+                        (opt.cancel && opt.cancel->load(std::memory_order_relaxed))) {
+                        fc.stop();
+                        return nullptr;
+                    }
+                    Work* w = nullptr;
+                    if (!free_list.try_pop(w)) {
+                        pool.push_back(std::make_unique<Work>());
+                        w = pool.back().get();
+                        w->tally.resize(opt.tally_size);
+                    }
+                    w->index = next++;
+                    w->samples = batch_size(w->index);
+                    return w;
+                }) &
+                tbb::make_filter<Work*, Work*>(tbb::filter_mode::parallel,
+                                               [&](Work* w) -> Work* {
+                                                   std::fill(w->tally.begin(), w->tally.end(), 0.0);
+                                                   w->work = simulate(w->index, w->samples,
+                                                                      w->tally.data());
+                                                   return w;
+                                               }) &
+                tbb::make_filter<Work*, void>(tbb::filter_mode::serial_in_order, [&](Work* w) {
+                    fold(w);
+                    free_list.push(w);
+                }));
+    };
+    if (opt.threads > 0)
+        tbb::task_arena(res.threads).execute(body);
+    else
+        body();
+
+    res.seconds = resumed_seconds + seconds_since(t0);
+    const bool finished = stop_flag.load();
+    if (!finished) res.reason = BatchStop::kInterrupted;
+    if (!opt.checkpoint_path.empty()) {
+        if (finished) {
+            std::error_code ec;
+            std::filesystem::remove(opt.checkpoint_path, ec);
+        } else {
+            write_checkpoint();
+        }
+    }
+    res.samples = acc.samples();
+    res.batches = acc.batches();
+    res.mean = acc.means();
+    res.se = acc.standard_errors();
+    if (opt.snapshots && finished && res.batches > 0 &&
+        (res.snapshots.empty() || res.snapshots.back().batches != res.batches))
+        res.snapshots.push_back({res.samples, res.batches, res.history.back().seconds, res.mean});
+    return res;
+}
+
+std::string serialize_batch_result(const BatchRunResult& r) {
+    Writer w(kResultMagic);
+    w.put_vec(r.mean);
+    w.put_vec(r.se);
+    w.put(r.samples);
+    w.put(r.batches);
+    w.put(r.work);
+    w.put(r.seconds);
+    w.put<std::int32_t>(r.threads);
+    w.put<std::int32_t>(static_cast<std::int32_t>(r.reason));
+    w.put<std::int32_t>(r.resumed ? 1 : 0);
+    w.put_progress(r.history, r.snapshots);
+    return std::move(w.bytes());
+}
+
+BatchRunResult deserialize_batch_result(const std::string& bytes, const std::string& name) {
+    Reader rd(bytes, name, kResultMagic, "batch result file");
+    BatchRunResult r;
+    r.mean = rd.get_vec();
+    r.se = rd.get_vec();
+    r.samples = rd.get<std::uint64_t>();
+    r.batches = rd.get<std::uint64_t>();
+    r.work = rd.get<std::uint64_t>();
+    r.seconds = rd.get<double>();
+    r.threads = rd.get<std::int32_t>();
+    const auto reason = rd.get<std::int32_t>();
+    if (reason < 0 || reason > 3) throw InputError({name, 0, 0}, "", "corrupt stop reason");
+    r.reason = static_cast<BatchStop>(reason);
+    r.resumed = rd.get<std::int32_t>() != 0;
+    rd.get_progress(r.history, r.snapshots);
+    rd.expect_end();
+    if (r.mean.size() != r.se.size())
+        throw InputError({name, 0, 0}, "", "result file is inconsistent (sizes differ)");
+    return r;
+}
+
+}  // namespace ssslab

@@ -1,0 +1,100 @@
+// A Monte Carlo run as a sequence of fixed batches: the engine-independent driver that gives every
+// ssslab engine built on it the same guarantees (design.md, "Determinism", "Uncertainty", "Cost"):
+//
+// - batch b draws its random numbers from its own counter-based stream (the engine creates it from
+//   the batch index), and batches are folded into the statistics in batch order, so a result is
+//   bit-identical for any thread count;
+// - every tally element carries its batch-means standard error (core/stats.h);
+// - budgets in samples, wall time or relative error; a cancel flag (SIGINT); checkpoints written
+//   atomically every few seconds and on interruption, from which a run resumes bit for bit;
+// - a per-batch history (samples, seconds, budget quantity and its standard error) and snapshots
+//   of the whole tally after 4, 8, 16, ... batches, for error-vs-time plots.
+//
+// The MCML port keeps its own driver (mcml/engine.cpp), which predates this one and whose
+// checkpoint format is fixed; the volumetric path tracer uses this one.
+#pragma once
+
+#include "core/stats.h"
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ssslab {
+
+/// When to stop; the run stops at the first limit reached.
+struct SampleBudget {
+    std::optional<std::int64_t> samples;
+    std::optional<double> seconds;    ///< wall time
+    std::optional<double> rel_error;  ///< relative standard error of the budget quantity
+    bool any() const { return samples || seconds || rel_error; }
+};
+
+enum class BatchStop { kSamples, kTime, kRelError, kInterrupted };
+const char* to_string(BatchStop s);
+
+/// One point of a run's progress, recorded after every batch.
+struct BatchProgress {
+    std::uint64_t samples = 0;
+    double seconds = 0;
+    double value = 0;  ///< the budget quantity (per sample)
+    double se = 0;     ///< its standard error
+};
+
+/// The per-sample means of the whole tally after some batches.
+struct BatchSnapshot {
+    std::uint64_t samples = 0, batches = 0;
+    double seconds = 0;
+    std::vector<double> mean;
+};
+
+/// Simulates `samples` samples of batch `index` into `tally` (size elements, zeroed by the
+/// caller) and returns the work done (e.g. scattering events). Called concurrently for different
+/// batches; must depend only on (index, samples).
+using BatchFunction =
+    std::function<std::uint64_t(std::uint64_t index, std::int64_t samples, double* tally)>;
+
+/// The budget quantity's value and standard error from the accumulated statistics.
+using BudgetQuantity = std::function<void(const BatchAccumulator&, double& value, double& se)>;
+
+struct BatchRunOptions {
+    std::size_t tally_size = 0;
+    std::int64_t batch_samples = 1000;
+    SampleBudget budget;  ///< must have at least one limit
+    int threads = 0;      ///< 0: the caller's task arena; > 0: an arena of that many threads
+    /// Identifies everything that determines the result (engine version, input, seed, batch
+    /// size): a checkpoint is resumed only if its fingerprint matches.
+    std::string fingerprint;
+    std::string checkpoint_path;  ///< empty: no checkpoints
+    double checkpoint_seconds = 30.0;
+    const std::atomic<bool>* cancel = nullptr;
+    int min_batches_for_error = 16;
+    BudgetQuantity quantity;  ///< required for a rel_error budget; recorded in the history
+    std::function<void(const BatchProgress&)> on_batch;
+    bool snapshots = false;
+};
+
+struct BatchRunResult {
+    std::vector<double> mean, se;  ///< per sample
+    std::uint64_t samples = 0, batches = 0, work = 0;
+    double seconds = 0;
+    int threads = 1;
+    BatchStop reason = BatchStop::kSamples;
+    bool resumed = false;
+    std::vector<BatchProgress> history;
+    std::vector<BatchSnapshot> snapshots;
+};
+
+/// Run batches 0, 1, 2, ... until the budget is met or `cancel` is set. Throws InputError for a
+/// checkpoint of another run, InfeasibleError when a relative-error budget alone cannot be met
+/// (the quantity stays 0 for 10000 batches).
+BatchRunResult run_batches(const BatchRunOptions& options, const BatchFunction& simulate);
+
+/// A finished result as bytes (exact doubles), and back (InputError naming `name` if corrupt).
+std::string serialize_batch_result(const BatchRunResult& r);
+BatchRunResult deserialize_batch_result(const std::string& bytes, const std::string& name);
+
+}  // namespace ssslab

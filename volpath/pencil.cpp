@@ -1,0 +1,394 @@
+#include "volpath/pencil.h"
+
+#include "core/error.h"
+#include "core/rng.h"
+#include "volpath/sampling.h"
+
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace ssslab::volpath {
+
+namespace {
+
+// Bump when a change alters the numbers produced for a given seed.
+constexpr const char* kEngineVersion = "volpath-pencil-1";
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Russian roulette of the hero mode: a path whose largest channel weight falls below this
+// survives with probability weight / kRouletteThreshold.
+constexpr double kRouletteThreshold = 0.1;
+
+// Everything a path needs, per tally channel (one channel in kPerChannel mode, three in kHero).
+struct Setup {
+    int nc = 1;
+    std::array<double, 3> sigma_t{}, sigma_s{}, albedo{}, g{};
+    bool same_g = true;
+    double thickness = kInf;          // [cm]
+    double eta_top = 1, eta_bot = 1;  // outside index / medium index at the top and bottom
+    double rsp = 0;
+    double dr = 0;
+    int nr = 0;
+    PencilLayout layout;
+    std::int64_t long_events = 0;
+    double long_survival = 0.1;
+    FlightRule flight = FlightRule::kContinue;
+};
+
+double fresnel_normal(double n1, double n2) {
+    const double r = (n1 - n2) / (n1 + n2);
+    return r * r;
+}
+
+// Radial bin of an exit point (nr: beyond the grid).
+std::size_t radial_bin(const Setup& s, const Vec3& p) {
+    const double r = std::hypot(p.x, p.y);
+    const double b = r / s.dr;
+    return b < s.nr ? static_cast<std::size_t>(b) : static_cast<std::size_t>(s.nr);
+}
+
+// Trace one path from the entry point; add its contributions to `tally` (nc channels of
+// layout.per_channel() elements). Returns the number of scattering events. `hero` is the
+// sampling channel in hero mode (ignored with nc == 1).
+template <bool kHeroMode>
+std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
+    constexpr int kMaxC = 3;
+    const int nc = kHeroMode ? 3 : 1;
+    const int h = kHeroMode ? hero : 0;
+    // beta: the channel's path weight (contribution / sampling density of the hero's strategy,
+    // times the MIS weight); q: the channels' sampling densities over the mean of all three.
+    // Both are rescaled by mean(q) after every event, which leaves the balance-heuristic
+    // estimate beta_k / mean(q) unchanged and keeps mean(q) = 1.
+    double beta[kMaxC], q[kMaxC];
+    for (int c = 0; c < nc; ++c) {
+        beta[c] = 1.0 - s.rsp;
+        q[c] = 1.0;
+    }
+    Vec3 p{0, 0, 0}, w{0, 0, 1};
+    std::uint64_t events = 0;
+    const double sigma_t = s.sigma_t[static_cast<size_t>(h)];
+
+    auto rescale = [&]() {
+        if constexpr (kHeroMode) {
+            const double m = (q[0] + q[1] + q[2]) * (1.0 / 3.0);
+            const double inv = 1.0 / m;
+            for (int c = 0; c < 3; ++c) {
+                q[c] *= inv;
+                beta[c] *= inv;
+            }
+        }
+    };
+    // A flight of total length d through the medium ended at an interaction (scatter = true)
+    // or at an exit. Hero mode: the densities of the three strategies for that flight.
+    auto flight_weights = [&](double d, bool scatter) {
+        if constexpr (kHeroMode) {
+            for (int c = 0; c < 3; ++c) {
+                const double e = std::exp(-(s.sigma_t[static_cast<size_t>(c)] - sigma_t) * d);
+                if (scatter) {
+                    q[c] *= s.sigma_t[static_cast<size_t>(c)] / sigma_t * e;
+                    beta[c] *= s.sigma_s[static_cast<size_t>(c)] / sigma_t * e;
+                } else {
+                    q[c] *= e;
+                    beta[c] *= e;
+                }
+            }
+            rescale();
+        }
+    };
+
+    for (;;) {
+        double t = sigma_t > 0 ? -std::log(rng.uniform()) / sigma_t : kInf;
+        double travelled = 0;
+        bool exited = false, at_boundary = false;
+        for (;;) {
+            const double tb = w.z > 0 ? (s.thickness - p.z) / w.z : (w.z < 0 ? -p.z / w.z : kInf);
+            if (t < tb) {
+                p += w * t;
+                travelled += t;
+                break;
+            }
+            p += w * tb;
+            travelled += tb;
+            const bool top = w.z < 0;
+            p.z = top ? 0.0 : s.thickness;
+            const double F = fresnel_dielectric(std::abs(w.z), top ? s.eta_top : s.eta_bot);
+            if (rng.uniform() < F) {
+                w.z = -w.z;
+                if (s.flight == FlightRule::kContinue) {
+                    t -= tb;
+                } else if (s.flight == FlightRule::kResample) {
+                    t = sigma_t > 0 ? -std::log(rng.uniform()) / sigma_t : kInf;
+                } else {  // kInteractAtBoundary
+                    at_boundary = true;
+                    break;
+                }
+                continue;
+            }
+            // The path leaves the medium.
+            flight_weights(travelled, false);
+            const std::size_t bin = radial_bin(s, p);
+            const PencilLayout& L = s.layout;
+            const std::size_t stride = L.per_channel();
+            for (int c = 0; c < nc; ++c) {
+                double* T = tally + static_cast<size_t>(c) * stride;
+                if (top) {
+                    T[L.rd_r() + bin] += beta[c];
+                    T[L.rd()] += beta[c];
+                    if (events == 1) {
+                        T[L.ss_r() + bin] += beta[c];
+                        T[L.rd_ss()] += beta[c];
+                    }
+                } else {
+                    T[L.tt_r() + bin] += beta[c];
+                    T[L.tt()] += beta[c];
+                }
+            }
+            exited = true;
+            break;
+        }
+        if (exited) return events;
+        (void)at_boundary;
+
+        // Interaction.
+        ++events;
+        if constexpr (kHeroMode) {
+            flight_weights(travelled, true);
+            double m = std::max({beta[0], beta[1], beta[2]});
+            if (m < kRouletteThreshold) {
+                const double survive = m / kRouletteThreshold;
+                if (!(rng.uniform() < survive)) return events;
+                for (int c = 0; c < 3; ++c) beta[c] /= survive;
+            }
+        } else {
+            if (!(rng.uniform() < s.albedo[0])) return events;  // absorbed
+        }
+        if (static_cast<std::int64_t>(events) > s.long_events) {
+            if (static_cast<std::int64_t>(events) == s.long_events + 1)
+                for (int c = 0; c < nc; ++c)
+                    tally[static_cast<size_t>(c) * s.layout.per_channel() + s.layout.lost()] +=
+                        beta[c];
+            if (!(rng.uniform() < s.long_survival)) return events;
+            for (int c = 0; c < nc; ++c) beta[c] /= s.long_survival;
+        }
+        const double g = s.g[static_cast<size_t>(h)];
+        const double mu = sample_hg(g, rng.uniform());
+        const double phi = 2.0 * kPi * rng.uniform();
+        if constexpr (kHeroMode) {
+            if (!s.same_g) {
+                const double ph = hg_pdf(g, mu);
+                for (int c = 0; c < 3; ++c) {
+                    const double pc = hg_pdf(s.g[static_cast<size_t>(c)], mu) / ph;
+                    q[c] *= pc;
+                    beta[c] *= pc;
+                }
+                rescale();
+            }
+        }
+        w = rotate(w, mu, phi);
+    }
+}
+
+std::string fingerprint(const Medium& m, const PencilGrid& grid, const PencilOptions& o,
+                        std::int64_t batch, int run) {
+    char buf[1024];
+    std::snprintf(buf, sizeof buf,
+                  "%s\nmode=%s run=%d seed=%" PRIu64 " batch=%" PRId64 " flight=%d long=%" PRId64
+                  ",%.17g\ngrid=%.17g,%d\n",
+                  kEngineVersion, to_string(o.mode), run, o.seed, batch, static_cast<int>(o.flight),
+                  o.long_path_events, o.long_path_survival, grid.dr_cm, grid.nr);
+    std::string s = buf;
+    for (int c = 0; c < 3; ++c) {
+        std::snprintf(buf, sizeof buf, "c%d %.17g %.17g %.17g\n", c, m.sigma_a_per_cm[c],
+                      m.sigma_s_per_cm[c], m.g[c]);
+        s += buf;
+    }
+    std::snprintf(buf, sizeof buf, "eta %.17g %.17g %.17g d %.17g\n", m.eta, m.eta_above,
+                  m.eta_below, m.thickness_cm);
+    return s + buf;
+}
+
+}  // namespace
+
+const char* engine_version() {
+    return kEngineVersion;
+}
+
+const char* to_string(ChromaticMode m) {
+    return m == ChromaticMode::kHero ? "hero" : "per-channel";
+}
+
+double PencilRun::mean(int c, std::size_t i) const {
+    if (mode == ChromaticMode::kHero)
+        return runs[0].mean[static_cast<size_t>(c) * layout.per_channel() + i];
+    return runs[static_cast<size_t>(c)].mean[i];
+}
+
+double PencilRun::se(int c, std::size_t i) const {
+    if (mode == ChromaticMode::kHero)
+        return runs[0].se[static_cast<size_t>(c) * layout.per_channel() + i];
+    return runs[static_cast<size_t>(c)].se[i];
+}
+
+void check_pencil(const Medium& m, const PencilGrid& grid) {
+    if (!(grid.dr_cm > 0) || !std::isfinite(grid.dr_cm) || grid.nr < 1 || grid.nr > 10'000'000)
+        throw std::invalid_argument("volpath: grid needs dr > 0 and 1 <= nr <= 1e7");
+    if (!(m.eta > 0) || !(m.eta_above > 0) || !(m.eta_below > 0))
+        throw std::invalid_argument("volpath: indices of refraction must be positive");
+    if (!(m.thickness_cm > 0)) throw std::invalid_argument("volpath: thickness must be positive");
+    const bool half_space = m.thickness_cm >= 1e8;
+    for (int c = 0; c < 3; ++c) {
+        const double a = m.sigma_a_per_cm[c], s = m.sigma_s_per_cm[c], g = m.g[c];
+        if (!(a >= 0) || !(s >= 0) || !std::isfinite(a) || !std::isfinite(s))
+            throw std::invalid_argument("volpath: coefficients must be finite and >= 0");
+        if (!(g > -1 && g < 1)) throw std::invalid_argument("volpath: g must lie in (-1, 1)");
+        if (half_space && a + s == 0)
+            throw InfeasibleError(std::string("volpath: channel ") + kChannelNames[c] +
+                                  " has sigma_t = 0 in a half-space: the beam never returns");
+    }
+}
+
+PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilOptions& o) {
+    check_pencil(m, grid);
+    PencilRun out;
+    out.medium = m;
+    out.grid = grid;
+    out.mode = o.mode;
+    out.layout.nr = grid.nr;
+
+    SampleBudget budget = o.budget;
+    if (!budget.any()) budget.samples = 1'000'000;
+    std::int64_t batch = o.batch_paths;
+    if (batch <= 0)
+        batch = budget.samples && !budget.seconds && !budget.rel_error
+                    ? std::max<std::int64_t>(1000, (*budget.samples + 999) / 1000)
+                    : 1000;
+    if (o.mode == ChromaticMode::kHero) batch = (batch + 2) / 3 * 3;  // whole hero cycles
+
+    Setup base;
+    base.thickness = m.thickness_cm >= 1e8 ? kInf : m.thickness_cm;
+    base.eta_top = m.eta_above / m.eta;
+    base.eta_bot = m.eta_below / m.eta;
+    base.rsp = fresnel_normal(m.eta_above, m.eta);
+    base.dr = grid.dr_cm;
+    base.nr = grid.nr;
+    base.layout = out.layout;
+    base.long_events = o.long_path_events;
+    base.long_survival = o.long_path_survival;
+    base.flight = o.flight;
+
+    const bool hero = o.mode == ChromaticMode::kHero;
+    const int nruns = hero ? 1 : 3;
+    const std::size_t stride = out.layout.per_channel();
+    for (int run = 0; run < nruns; ++run) {
+        Setup s = base;
+        s.nc = hero ? 3 : 1;
+        for (int c = 0; c < s.nc; ++c) {
+            const int mc = hero ? c : run;
+            const size_t i = static_cast<size_t>(c);
+            s.sigma_t[i] = m.sigma_a_per_cm[mc] + m.sigma_s_per_cm[mc];
+            s.sigma_s[i] = m.sigma_s_per_cm[mc];
+            s.albedo[i] = s.sigma_t[i] > 0 ? s.sigma_s[i] / s.sigma_t[i] : 0.0;
+            s.g[i] = m.g[mc];
+        }
+        s.same_g = s.g[0] == s.g[1] && s.g[1] == s.g[2];
+        const int stream = hero ? 3 : run;
+
+        BatchRunOptions bo;
+        bo.tally_size = stride * static_cast<size_t>(s.nc);
+        bo.batch_samples = batch;
+        bo.budget = budget;
+        bo.threads = o.threads;
+        bo.fingerprint = fingerprint(m, grid, o, batch, stream);
+        if (!o.checkpoint_prefix.empty())
+            bo.checkpoint_path =
+                o.checkpoint_prefix + "." + (hero ? "hero" : kChannelNames[run]) + ".ckpt";
+        bo.checkpoint_seconds = o.checkpoint_seconds;
+        bo.cancel = o.cancel;
+        bo.snapshots = o.snapshots;
+        const PencilLayout L = out.layout;
+        const int nc = s.nc;
+        // Budget quantity: the least precise channel's larger of Rd and Tt.
+        bo.quantity = [L, stride, nc](const BatchAccumulator& acc, double& value, double& se) {
+            double worst = -1;
+            for (int c = 0; c < nc; ++c) {
+                const size_t b = static_cast<size_t>(c) * stride;
+                const double rd = acc.mean(b + L.rd()), tt = acc.mean(b + L.tt());
+                const size_t i = b + (rd >= tt ? L.rd() : L.tt());
+                const double v = acc.mean(i), e = acc.standard_error(i);
+                const double rel = v > 0 ? e / v : kInf;
+                if (rel > worst) {
+                    worst = rel;
+                    value = v;
+                    se = e;
+                }
+            }
+        };
+        if (o.on_batch)
+            bo.on_batch = [&o, stream](const BatchProgress& p) { o.on_batch(stream, p); };
+
+        const std::uint64_t seed = o.seed;
+        const std::uint64_t bsz = static_cast<std::uint64_t>(batch);
+        auto simulate = [&s, seed, stream, hero, bsz](std::uint64_t index, std::int64_t n,
+                                                      double* tally) -> std::uint64_t {
+            RngStream rng(seed, rng_domain::kVolpath + static_cast<std::uint32_t>(stream), index);
+            std::uint64_t events = 0;
+            for (std::int64_t i = 0; i < n; ++i) {
+                if (hero) {
+                    const int h =
+                        static_cast<int>((index * bsz + static_cast<std::uint64_t>(i)) % 3);
+                    events += trace<true>(s, rng, h, tally);
+                } else {
+                    events += trace<false>(s, rng, 0, tally);
+                }
+            }
+            return events;
+        };
+        out.runs.push_back(run_batches(bo, simulate));
+        const BatchRunResult& r = out.runs.back();
+        out.seconds += r.seconds;
+        out.paths += r.samples;
+        out.events += r.work;
+        if (r.reason == BatchStop::kInterrupted) {
+            out.interrupted = true;
+            return out;
+        }
+    }
+
+    for (RadialProfile* p : {&out.profile, &out.single}) {
+        p->name = m.name;
+        p->dr_cm = grid.dr_cm;
+        p->nr = grid.nr;
+    }
+    const PencilLayout& L = out.layout;
+    for (int c = 0; c < 3; ++c) {
+        for (auto [p, off] :
+             {std::pair{&out.profile, L.rd_r()}, std::pair{&out.single, L.ss_r()}}) {
+            p->rd_per_cm2[c].resize(static_cast<size_t>(grid.nr));
+            p->se_per_cm2[c].resize(static_cast<size_t>(grid.nr));
+            for (int i = 0; i < grid.nr; ++i) {
+                const double area = 2.0 * kPi * (i + 0.5) * grid.dr_cm * grid.dr_cm;
+                p->rd_per_cm2[c][static_cast<size_t>(i)] =
+                    out.mean(c, off + static_cast<size_t>(i)) / area;
+                p->se_per_cm2[c][static_cast<size_t>(i)] =
+                    out.se(c, off + static_cast<size_t>(i)) / area;
+            }
+            p->beyond[c] = out.mean(c, off + static_cast<size_t>(grid.nr));
+            p->beyond_se[c] = out.se(c, off + static_cast<size_t>(grid.nr));
+            p->rsp[c] = base.rsp;
+        }
+        out.profile.rd_total[c] = out.mean(c, L.rd());
+        out.profile.rd_total_se[c] = out.se(c, L.rd());
+        out.single.rd_total[c] = out.mean(c, L.rd_ss());
+        out.single.rd_total_se[c] = out.se(c, L.rd_ss());
+        out.tt[c] = out.mean(c, L.tt());
+        out.tt_se[c] = out.se(c, L.tt());
+        out.lost[c] = out.mean(c, L.lost());
+        out.lost_se[c] = out.se(c, L.lost());
+    }
+    return out;
+}
+
+}  // namespace ssslab::volpath

@@ -1,0 +1,126 @@
+// The searchlight problem by volumetric path tracing [Bitterli13 §2.3, §3.2, Alg. 1]: a pencil
+// beam at normal incidence on a homogeneous slab (half-infinite or finite) with a smooth
+// dielectric boundary. Exit positions are tallied into the radial bins MCML uses for Rd_r, so the
+// two engines' profiles compare bin by bin; also the total diffuse reflectance, its
+// single-scattering part, and for finite slabs the transmittance.
+#pragma once
+
+#include "core/batch_runner.h"
+#include "core/material.h"
+#include "core/profile.h"
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace ssslab::volpath {
+
+/// Version of the numbers this engine produces for a given seed (part of every checkpoint and
+/// cache key): bump it when a change alters them.
+const char* engine_version();
+
+/// How RGB media are traced.
+enum class ChromaticMode {
+    /// One run per channel, analog: free paths from that channel's sigma_t, absorption by
+    /// roulette with the single-scattering albedo (as MCML does) [Bitterli13 Alg. 1].
+    kPerChannel,
+    /// One path for all channels: a hero channel (cycled over the paths) samples free paths and
+    /// phase directions, and every channel's contribution carries the one-sample balance-heuristic
+    /// weight over the three channels' sampling densities (spectral MIS, as pbrt-v4 and
+    /// Mitsuba 3 do); absorption enters the weights, which Russian roulette keeps bounded.
+    kHero,
+};
+const char* to_string(ChromaticMode m);
+
+/// What happens to the sampled free path when it reaches the boundary and is reflected.
+enum class FlightRule {
+    /// Travel the rest of the sampled free path after the reflection [Bitterli13 Alg. 1, line 8].
+    kContinue,
+    /// Draw a fresh free path from the reflection point. Unbiased as well (the exponential
+    /// distribution is memoryless); kept to show that it agrees with kContinue.
+    kResample,
+    /// Interact (absorb or scatter) at the reflection point: biased; for the tests that show
+    /// the boundary treatment matters.
+    kInteractAtBoundary,
+};
+
+struct PencilGrid {
+    double dr_cm = 0;
+    int nr = 0;
+};
+
+struct PencilOptions {
+    std::uint64_t seed = 1;
+    int threads = 0;
+    /// Per channel in kPerChannel mode, for the single run in kHero mode; samples = paths. With
+    /// no limit, 1e6 paths.
+    SampleBudget budget;
+    std::int64_t batch_paths = 0;  ///< 0: budget paths / 1000 (at least 1000), 1000 otherwise
+    ChromaticMode mode = ChromaticMode::kPerChannel;
+    FlightRule flight = FlightRule::kContinue;
+    /// Long-path roulette [Bitterli13 §3.2]: after this many scattering events a path survives
+    /// each further event with probability `long_path_survival` and its weight is divided by it.
+    /// Unbiased; it bounds the expected path length (albedo -> 1 in a half-space has paths of
+    /// unbounded mean length) at the price of variance from the rare survivors.
+    std::int64_t long_path_events = 10000;
+    double long_path_survival = 0.1;
+    /// Checkpoints are <prefix>.<R|G|B|hero>.ckpt (empty: none).
+    std::string checkpoint_prefix;
+    double checkpoint_seconds = 30.0;
+    const std::atomic<bool>* cancel = nullptr;
+    /// run: 0..2 (channel) in kPerChannel mode, 3 in kHero mode.
+    std::function<void(int run, const BatchProgress&)> on_batch;
+    bool snapshots = false;
+};
+
+/// Tally layout of one channel: radial bins (the last is "beyond the grid") of all diffuse
+/// reflectance, of its single-scattering part and of transmittance, then the totals.
+struct PencilLayout {
+    int nr = 0;
+    std::size_t rd_r() const { return 0; }
+    std::size_t ss_r() const { return static_cast<std::size_t>(nr + 1); }
+    std::size_t tt_r() const { return static_cast<std::size_t>(2 * (nr + 1)); }
+    std::size_t rd() const { return static_cast<std::size_t>(3 * (nr + 1)); }
+    std::size_t rd_ss() const { return rd() + 1; }
+    std::size_t tt() const { return rd() + 2; }
+    /// Weight of the paths when they reach the long-path roulette (its first round): the mass
+    /// at risk. The roulette is unbiased, but in a half-space with albedo near 1 a survivor at
+    /// depth ~sqrt(N) mean free paths needs ~N more events to return, each another roulette,
+    /// so in practice the estimate behaves like a truncation that misses about this mass.
+    std::size_t lost() const { return rd() + 3; }
+    std::size_t per_channel() const { return rd() + 4; }
+};
+
+struct PencilRun {
+    Medium medium;
+    PencilGrid grid;
+    ChromaticMode mode = ChromaticMode::kPerChannel;
+    PencilLayout layout;
+    /// kPerChannel: three runs (R, G, B) of one channel each; kHero: one run of three channels.
+    std::vector<BatchRunResult> runs;
+    bool interrupted = false;
+    /// Filled unless interrupted: all diffuse reflectance, and its single-scattering part
+    /// (paths with exactly one scattering event). Both carry the entry factor 1 - Rsp.
+    RadialProfile profile, single;
+    std::array<double, 3> tt{}, tt_se{};      ///< total transmittance (finite slabs)
+    std::array<double, 3> lost{}, lost_se{};  ///< see PencilLayout::lost()
+    double seconds = 0;
+    std::uint64_t paths = 0, events = 0;
+
+    /// Mean and standard error of tally element i of channel c.
+    double mean(int c, std::size_t i) const;
+    double se(int c, std::size_t i) const;
+};
+
+/// Checks that the run can terminate in bounded expected time and memory; throws
+/// InfeasibleError saying why (e.g. sigma_t = 0 in a half-space: paths never end).
+void check_pencil(const Medium& m, const PencilGrid& grid);
+
+/// Simulate. Deterministic for any thread count: batch b of run s uses the stream
+/// (seed, kVolpath + s, b), s = channel or 3 for kHero.
+PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilOptions& o);
+
+}  // namespace ssslab::volpath

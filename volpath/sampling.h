@@ -1,0 +1,112 @@
+// The volumetric path tracer's own sampling and optics: vectors, Henyey-Greenstein phase
+// function, exact dielectric Fresnel reflectance and refraction. Written independently of
+// mcml/transport.h (design.md: the two engines are independent witnesses), with different
+// formulas where a choice exists (HG inversion, direction frames).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace ssslab::volpath {
+
+inline constexpr double kPi = std::numbers::pi;
+inline constexpr double kInv4Pi = 0.25 / std::numbers::pi;
+
+struct Vec3 {
+    double x = 0, y = 0, z = 0;
+    Vec3 operator+(const Vec3& o) const { return {x + o.x, y + o.y, z + o.z}; }
+    Vec3 operator-(const Vec3& o) const { return {x - o.x, y - o.y, z - o.z}; }
+    Vec3 operator*(double s) const { return {x * s, y * s, z * s}; }
+    Vec3 operator-() const { return {-x, -y, -z}; }
+    Vec3& operator+=(const Vec3& o) {
+        x += o.x;
+        y += o.y;
+        z += o.z;
+        return *this;
+    }
+};
+inline double dot(const Vec3& a, const Vec3& b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+inline Vec3 cross(const Vec3& a, const Vec3& b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline double length(const Vec3& a) {
+    return std::sqrt(dot(a, a));
+}
+inline Vec3 normalize(const Vec3& a) {
+    return a * (1.0 / length(a));
+}
+
+/// An orthonormal basis (s, t, n) around a unit vector n, continuous except on a measure-zero
+/// set (Duff et al., "Building an orthonormal basis, revisited", JCGT 2017).
+inline void basis(const Vec3& n, Vec3& s, Vec3& t) {
+    const double sign = std::copysign(1.0, n.z);
+    const double a = -1.0 / (sign + n.z);
+    const double b = n.x * n.y * a;
+    s = {1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x};
+    t = {b, sign + n.y * n.y * a, -n.y};
+}
+
+/// The direction with cosine `mu` to `w` and azimuth `phi` about it (w a unit vector).
+inline Vec3 rotate(const Vec3& w, double mu, double phi) {
+    Vec3 s, t;
+    basis(w, s, t);
+    const double sin_theta = std::sqrt(std::max(0.0, 1.0 - mu * mu));
+    return normalize(s * (sin_theta * std::cos(phi)) + t * (sin_theta * std::sin(phi)) + w * mu);
+}
+
+/// Henyey-Greenstein phase function per steradian, mu = cosine between the propagation
+/// directions before and after scattering: (1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^(3/2)).
+inline double hg_pdf(double g, double mu) {
+    const double d = 1.0 + g * g - 2.0 * g * mu;
+    return kInv4Pi * (1.0 - g * g) / (d * std::sqrt(d));
+}
+
+/// The cosine mu distributed by HG for uniform xi in (0, 1). The inverse CDF
+/// mu = (1 + g^2 - ((1 - g^2) / (1 + g u))^2) / (2 g), u = 2 xi - 1, written without the division
+/// by g: multiplying out gives the polynomial form
+///     mu = (u + g (u^2 + 3) / 2 + g^2 u + g^3 (u^2 - 1) / 2) / (1 + g u)^2,
+/// exact for every g in (-1, 1) including g = 0 (mu = u), so no small-|g| branch is needed.
+inline double sample_hg(double g, double xi) {
+    const double u = 2.0 * xi - 1.0;
+    const double d = 1.0 + g * u;
+    const double num = u + g * (0.5 * (u * u + 3.0) + g * (u + 0.5 * g * (u * u - 1.0)));
+    return std::clamp(num / (d * d), -1.0, 1.0);
+}
+
+/// Unpolarised Fresnel reflectance of a smooth dielectric interface for light arriving with
+/// cosine cos_i >= 0 to the normal, eta = n_transmitted / n_incident (any positive ratio; 1 gives
+/// exactly 0). Total internal reflection gives 1. Also returns the cosine of the refracted ray.
+inline double fresnel_dielectric(double cos_i, double eta, double& cos_t) {
+    cos_i = std::min(cos_i, 1.0);
+    const double sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    if (sin2_t >= 1.0) {
+        cos_t = 0.0;
+        return 1.0;
+    }
+    cos_t = std::sqrt(1.0 - sin2_t);
+    if (eta == 1.0) return 0.0;
+    const double rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    const double rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    return 0.5 * (rs * rs + rp * rp);
+}
+inline double fresnel_dielectric(double cos_i, double eta) {
+    double cos_t;
+    return fresnel_dielectric(cos_i, eta, cos_t);
+}
+
+/// Direction refracted through an interface with unit normal n on the incident side
+/// (dot(d, n) < 0), for the cosine cos_t from fresnel_dielectric and eta = n_t / n_i.
+inline Vec3 refract(const Vec3& d, const Vec3& n, double eta, double cos_t) {
+    const double cos_i = -dot(d, n);
+    return normalize(d * (1.0 / eta) + n * (cos_i / eta - cos_t));
+}
+
+/// Mirror reflection of d about the plane with normal n.
+inline Vec3 reflect(const Vec3& d, const Vec3& n) {
+    return d - n * (2.0 * dot(d, n));
+}
+
+}  // namespace ssslab::volpath
