@@ -286,7 +286,8 @@ TEST(VolpathCrossValidation, AgreesWithMcmlOnTheSkin1RedProfile) {
 }
 
 TEST(VolpathCrossValidation, HeroModeAgreesWithPerChannelRuns) {
-    // A strongly chromatic medium with a different g per channel (the phase MIS weights matter).
+    // Analog, weighted and hero estimators on a strongly chromatic medium with a different g per
+    // channel (the phase MIS weights matter).
     Medium m = slab(0, 0, 0, 1.4, 1e8);
     m.sigma_a_per_cm = {0.5, 3.0, 12.0};
     m.sigma_s_per_cm = {40.0, 25.0, 60.0};
@@ -294,9 +295,15 @@ TEST(VolpathCrossValidation, HeroModeAgreesWithPerChannelRuns) {
     const PencilGrid grid{0.01, 60};
     const PencilRun a = run(m, 1e5, ChromaticMode::kPerChannel, grid);
     const PencilRun h = run(m, 1e5, ChromaticMode::kHero, grid);
+    PencilOptions wo;
+    wo.budget.samples = scaled(1e5);
+    wo.absorption = Absorption::kWeighted;
+    const PencilRun wt = simulate_pencil(m, grid, wo);
     const double alpha = testing::sidak(0.001, 3);
     for (int c = 0; c < 3; ++c) {
         SCOPED_TRACE(kChannelNames[c]);
+        const BinComparison cw = compare(a.profile, wt.profile, c);
+        EXPECT_LT(cw.chi2, testing::chi2_critical(cw.bins, alpha)) << cw.bins << " bins";
         const BinComparison cmp = compare(a.profile, h.profile, c);
         EXPECT_GT(cmp.bins, 10);
         EXPECT_LT(cmp.chi2, testing::chi2_critical(cmp.bins, alpha)) << cmp.bins << " bins";

@@ -50,19 +50,22 @@ std::size_t radial_bin(const Setup& s, const Vec3& p) {
     return b < s.nr ? static_cast<std::size_t>(b) : static_cast<std::size_t>(s.nr);
 }
 
-// Trace one path from the entry point; add its contributions to `tally` (nc channels of
-// layout.per_channel() elements). Returns the number of scattering events. `hero` is the
-// sampling channel in hero mode (ignored with nc == 1).
-template <bool kHeroMode>
+// Trace one path from the entry point; add its contributions to `tally` (NC channels of
+// layout.per_channel() elements). Returns the number of scattering events.
+//   NC = 1, !kWeighted: analog [Bitterli13 Alg. 1]: absorption by roulette with the albedo.
+//   NC = 1, kWeighted: implicit absorption (the weight carries the albedo; Russian roulette).
+//   NC = 3 (weighted): hero channel `hero` samples; spectral MIS weights for all three.
+template <int NC, bool kWeighted>
 std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
-    constexpr int kMaxC = 3;
-    const int nc = kHeroMode ? 3 : 1;
+    static_assert(NC == 1 || (NC == 3 && kWeighted));
+    constexpr bool kHeroMode = NC == 3;
+    constexpr int nc = NC;
     const int h = kHeroMode ? hero : 0;
     // beta: the channel's path weight (contribution / sampling density of the hero's strategy,
     // times the MIS weight); q: the channels' sampling densities over the mean of all three.
     // Both are rescaled by mean(q) after every event, which leaves the balance-heuristic
     // estimate beta_k / mean(q) unchanged and keeps mean(q) = 1.
-    double beta[kMaxC], q[kMaxC];
+    double beta[NC], q[NC];
     for (int c = 0; c < nc; ++c) {
         beta[c] = 1.0 - s.rsp;
         q[c] = 1.0;
@@ -86,16 +89,19 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
     auto flight_weights = [&](double d, bool scatter) {
         if constexpr (kHeroMode) {
             for (int c = 0; c < 3; ++c) {
-                const double e = std::exp(-(s.sigma_t[static_cast<size_t>(c)] - sigma_t) * d);
+                const size_t i = static_cast<size_t>(c);
+                const double e = c == h ? 1.0 : std::exp(-(s.sigma_t[i] - sigma_t) * d);
                 if (scatter) {
-                    q[c] *= s.sigma_t[static_cast<size_t>(c)] / sigma_t * e;
-                    beta[c] *= s.sigma_s[static_cast<size_t>(c)] / sigma_t * e;
+                    q[c] *= s.sigma_t[i] / sigma_t * e;
+                    beta[c] *= s.sigma_s[i] / sigma_t * e;
                 } else {
                     q[c] *= e;
                     beta[c] *= e;
                 }
             }
             rescale();
+        } else if constexpr (kWeighted) {
+            if (scatter) beta[0] *= s.albedo[0];
         }
     };
 
@@ -154,13 +160,14 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
 
         // Interaction.
         ++events;
-        if constexpr (kHeroMode) {
+        if constexpr (kWeighted) {
             flight_weights(travelled, true);
-            double m = std::max({beta[0], beta[1], beta[2]});
+            double m = beta[0];
+            for (int c = 1; c < nc; ++c) m = std::max(m, beta[c]);
             if (m < kRouletteThreshold) {
                 const double survive = m / kRouletteThreshold;
                 if (!(rng.uniform() < survive)) return events;
-                for (int c = 0; c < 3; ++c) beta[c] /= survive;
+                for (int c = 0; c < nc; ++c) beta[c] /= survive;
             }
         } else {
             if (!(rng.uniform() < s.albedo[0])) return events;  // absorbed
@@ -195,10 +202,11 @@ std::string fingerprint(const Medium& m, const PencilGrid& grid, const PencilOpt
                         std::int64_t batch, int run) {
     char buf[1024];
     std::snprintf(buf, sizeof buf,
-                  "%s\nmode=%s run=%d seed=%" PRIu64 " batch=%" PRId64 " flight=%d long=%" PRId64
-                  ",%.17g\ngrid=%.17g,%d\n",
-                  kEngineVersion, to_string(o.mode), run, o.seed, batch, static_cast<int>(o.flight),
-                  o.long_path_events, o.long_path_survival, grid.dr_cm, grid.nr);
+                  "%s\nmode=%s absorption=%d run=%d seed=%" PRIu64 " batch=%" PRId64
+                  " flight=%d long=%" PRId64 ",%.17g\ngrid=%.17g,%d\n",
+                  kEngineVersion, to_string(o.mode), static_cast<int>(o.absorption), run, o.seed,
+                  batch, static_cast<int>(o.flight), o.long_path_events, o.long_path_survival,
+                  grid.dr_cm, grid.nr);
     std::string s = buf;
     for (int c = 0; c < 3; ++c) {
         std::snprintf(buf, sizeof buf, "c%d %.17g %.17g %.17g\n", c, m.sigma_a_per_cm[c],
@@ -330,18 +338,21 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
             bo.on_batch = [&o, stream](const BatchProgress& p) { o.on_batch(stream, p); };
 
         const std::uint64_t seed = o.seed;
+        const bool weighted = o.absorption == Absorption::kWeighted;
         const std::uint64_t bsz = static_cast<std::uint64_t>(batch);
-        auto simulate = [&s, seed, stream, hero, bsz](std::uint64_t index, std::int64_t n,
-                                                      double* tally) -> std::uint64_t {
+        auto simulate = [&s, seed, stream, hero, weighted, bsz](std::uint64_t index, std::int64_t n,
+                                                                double* tally) -> std::uint64_t {
             RngStream rng(seed, rng_domain::kVolpath + static_cast<std::uint32_t>(stream), index);
             std::uint64_t events = 0;
             for (std::int64_t i = 0; i < n; ++i) {
                 if (hero) {
                     const int h =
                         static_cast<int>((index * bsz + static_cast<std::uint64_t>(i)) % 3);
-                    events += trace<true>(s, rng, h, tally);
+                    events += trace<3, true>(s, rng, h, tally);
+                } else if (weighted) {
+                    events += trace<1, true>(s, rng, 0, tally);
                 } else {
-                    events += trace<false>(s, rng, 0, tally);
+                    events += trace<1, false>(s, rng, 0, tally);
                 }
             }
             return events;

@@ -35,6 +35,15 @@ enum class ChromaticMode {
 };
 const char* to_string(ChromaticMode m);
 
+/// How absorption enters a per-channel run (hero mode always weights).
+enum class Absorption {
+    /// Absorb by roulette with the single-scattering albedo; weights stay 1 [Bitterli13 Alg. 1].
+    kAnalog,
+    /// Multiply the weight by the albedo at every interaction and end paths by Russian roulette
+    /// when the weight falls below 0.1 (implicit capture, as MCML does with its own threshold).
+    kWeighted,
+};
+
 /// What happens to the sampled free path when it reaches the boundary and is reflected.
 enum class FlightRule {
     /// Travel the rest of the sampled free path after the reflection [Bitterli13 Alg. 1, line 8].
@@ -60,6 +69,7 @@ struct PencilOptions {
     SampleBudget budget;
     std::int64_t batch_paths = 0;  ///< 0: budget paths / 1000 (at least 1000), 1000 otherwise
     ChromaticMode mode = ChromaticMode::kPerChannel;
+    Absorption absorption = Absorption::kAnalog;  ///< kPerChannel only
     FlightRule flight = FlightRule::kContinue;
     /// Long-path roulette [Bitterli13 §3.2]: after this many scattering events a path survives
     /// each further event with probability `long_path_survival` and its weight is divided by it.
@@ -98,6 +108,7 @@ struct PencilRun {
     Medium medium;
     PencilGrid grid;
     ChromaticMode mode = ChromaticMode::kPerChannel;
+    Absorption absorption = Absorption::kAnalog;  ///< kPerChannel only
     PencilLayout layout;
     /// kPerChannel: three runs (R, G, B) of one channel each; kHero: one run of three channels.
     std::vector<BatchRunResult> runs;

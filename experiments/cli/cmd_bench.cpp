@@ -13,6 +13,7 @@
 #include "approx/model_spec.h"
 #include "core/atomic_file.h"
 #include "core/material.h"
+#include "experiments/cli/bench_volpath.h"
 #include "experiments/cli/commands.h"
 #include "mcml/engine.h"
 #include "mcml/mci.h"
@@ -76,6 +77,7 @@ struct BenchArgs {
     std::string write_mci;
     // --kernels
     bool kernels = false;
+    bool volpath = false;
     std::int64_t photons = 100'000;  ///< per channel, for the ground-truth profiles
     std::string csv;
 };
@@ -428,8 +430,14 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
         "--kernels", a->kernels,
         "Instead of MCML: time the kernel models' builds per channel for the eleven Freude14 "
         "materials on the thesis grid (the MCML ground truth is timed separately)");
+    CLI::Option* volpath = sub->add_flag(
+        "--volpath", a->volpath,
+        "Instead: the volumetric path tracer against MCML on the same slabs (per-channel and "
+        "hero modes), paths/ms and extrapolated time to 1 % relative error");
+    volpath->excludes(kernels);
     sub->add_option("--case", a->only, "Only the cases whose name contains this text")
-        ->excludes(kernels);
+        ->excludes(kernels)
+        ->excludes(volpath);
     sub->add_option("--write-mci", a->write_mci,
                     "Write the benchmark inputs as .mci files into this directory (to time the "
                     "original program on the same cases) and exit")
@@ -446,6 +454,10 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
     sub->callback([a, repeat, &action] {
         action = [a, explicit_repeat = repeat->count() > 0] {
             if (a->kernels) return run_kernel_bench(*a, explicit_repeat ? a->repeat : 1);
+            if (a->volpath)
+                return run_volpath_bench(
+                    a->threads > 0 ? a->threads : tbb::info::default_concurrency(), a->quick,
+                    explicit_repeat ? a->repeat : 1);
             return run_bench(*a);
         };
     });
