@@ -9,6 +9,7 @@
 #include "experiments/cli/common.h"
 #include "experiments/cli/profile_job.h"
 #include "mcml/profile.h"
+#include "volpath/pencil.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -19,7 +20,8 @@ namespace ssslab::cli {
 namespace fs = std::filesystem;
 
 ProfileJob read_profile_job(const std::string& config_path, const std::string& material,
-                            const CommonOptions& c, const std::string& unit_flag) {
+                            const CommonOptions& c, const std::string& unit_flag,
+                            const std::string& engine_flag, const std::string& mode_flag) {
     ProfileJob job;
     job.doc = config_path.empty() ? ConfigDocument::empty("<command line>")
                                   : ConfigDocument::parse_file(config_path);
@@ -76,6 +78,15 @@ ProfileJob read_profile_job(const std::string& config_path, const std::string& m
         budget.record("photons", mcml::kFreude14Photons);
     }
 
+    job.engine = root.choice("engine", "mcml", {"mcml", "volpath"});
+    if (!engine_flag.empty()) job.engine = engine_flag, root.record("engine", engine_flag);
+    ConfigTable vp = root.table_or_empty("volpath");
+    job.mode = vp.choice("mode", "analog", {"analog", "weighted", "hero"});
+    if (!mode_flag.empty()) job.mode = mode_flag, vp.record("mode", mode_flag);
+    if (job.engine != "volpath" && (root.has("volpath") || !mode_flag.empty()))
+        throw InputError({config_path.empty() ? "<command line>" : config_path, 0, 0}, "volpath",
+                         "[volpath] and --mode apply to engine = \"volpath\" only");
+
     ConfigTable output = root.table_or_empty("output");
     const std::string unit = output.choice("unit", "cm", {"cm", "mm"});
     job.unit = (unit_flag.empty() ? unit : unit_flag) == "mm" ? LengthUnit::kMm : LengthUnit::kCm;
@@ -84,8 +95,104 @@ ProfileJob read_profile_job(const std::string& config_path, const std::string& m
     return job;
 }
 
+namespace {
+
+SampleBudget sample_budget(const mcml::Budget& b) {
+    SampleBudget s;
+    s.samples = b.photons;
+    s.seconds = b.seconds;
+    s.rel_error = b.rel_error;
+    return s;
+}
+
+// The path tracer's branch of run_profile_job: <out> holds all diffuse reflectance,
+// <out>.single.csv its single-scattering part.
+int run_volpath_job(ProfileJob& job, const fs::path& out, const CommonOptions& c,
+                    const std::atomic<bool>* cancel) {
+    volpath::PencilOptions po;
+    po.seed = job.seed;
+    po.threads = c.threads;
+    po.budget = sample_budget(job.budget);
+    po.batch_paths = job.batch;
+    po.mode =
+        job.mode == "hero" ? volpath::ChromaticMode::kHero : volpath::ChromaticMode::kPerChannel;
+    po.absorption =
+        job.mode == "analog" ? volpath::Absorption::kAnalog : volpath::Absorption::kWeighted;
+    po.cancel = cancel;
+    po.checkpoint_prefix = out.string();
+    const double total = job.budget.photons ? static_cast<double>(*job.budget.photons) : 0.0;
+    std::unique_ptr<Progress> progress;
+    int current = -1;
+    po.on_batch = [&](int run, const BatchProgress& p) {
+        if (run != current) {
+            current = run;
+            progress = std::make_unique<Progress>(
+                job.medium.name + " " + (run < 3 ? kChannelNames[run] : "RGB (hero)"), total,
+                "paths");
+        }
+        progress->update(static_cast<double>(p.samples),
+                         p.value > 0 ? "rel.err " + std::to_string(p.se / p.value) : "");
+    };
+    const volpath::PencilRun run =
+        volpath::simulate_pencil(job.medium, {job.grid.dr_cm, job.grid.nr}, po);
+    progress.reset();
+    if (run.interrupted) {
+        std::fprintf(stderr,
+                     "ssslab profile: interrupted; checkpoints saved beside %s; run the same "
+                     "command again to resume\n",
+                     out.string().c_str());
+        return kExitInterrupted;
+    }
+    ConfigTable root = job.doc->root();
+    const volpath::PencilLayout& L = run.layout;
+    for (int ch = 0; ch < 3; ++ch) {
+        const BatchRunResult& r = run.runs[run.mode == volpath::ChromaticMode::kHero ? 0 : ch];
+        ConfigTable t = root.table_or_empty(std::string("result_") + kChannelNames[ch]);
+        t.record("engine", std::string(volpath::engine_version()));
+        t.record("stop_reason", std::string(to_string(r.reason)));
+        t.record("paths", static_cast<std::int64_t>(r.samples));
+        t.record("batches", static_cast<std::int64_t>(r.batches));
+        t.record("threads", static_cast<std::int64_t>(r.threads));
+        t.record("wall_seconds", r.seconds);
+        t.record("scattering_events_per_path",
+                 static_cast<double>(r.work) / static_cast<double>(r.samples));
+        t.record("Rsp", run.profile.rsp[ch]);
+        t.record("Rd", run.mean(ch, L.rd()));
+        t.record("Rd_se", run.se(ch, L.rd()));
+        t.record("Rd_single", run.mean(ch, L.rd_ss()));
+        t.record("Rd_single_se", run.se(ch, L.rd_ss()));
+        t.record("Rd_beyond_grid", run.profile.beyond[ch]);
+        t.record("Rd_beyond_grid_se", run.profile.beyond_se[ch]);
+        t.record("Tt", run.tt[ch]);
+        t.record("Tt_se", run.tt_se[ch]);
+        t.record("long_path_roulette_mass", run.lost[ch]);
+    }
+    job.doc->add_resolved_section("provenance", provenance(command_line()));
+    OutputTransaction tx;
+    tx.stage(out, run.profile.to_csv(job.unit));
+    tx.stage(out.string() + ".single.csv", run.single.to_csv(job.unit));
+    tx.stage(out.string() + ".toml",
+             "# ssslab profile: resolved configuration, results per channel, provenance\n" +
+                 job.doc->resolved_toml());
+    tx.commit();
+    if (!c.quiet) {
+        std::printf("%s: %d bins of %.4g %s (%s), volpath %s, %.3g s\n", out.string().c_str(),
+                    job.grid.nr, job.grid.dr_cm * (job.unit == LengthUnit::kMm ? 10 : 1),
+                    unit_name(job.unit), job.medium.name.c_str(), job.mode.c_str(), run.seconds);
+        for (int ch = 0; ch < 3; ++ch)
+            std::printf("  %s: Rd %s (single scattering %s, beyond grid %.2g)\n", kChannelNames[ch],
+                        pm(run.mean(ch, L.rd()), run.se(ch, L.rd())).c_str(),
+                        pm(run.mean(ch, L.rd_ss()), run.se(ch, L.rd_ss())).c_str(),
+                        run.profile.beyond[ch]);
+    }
+    return 0;
+}
+
+}  // namespace
+
 int run_profile_job(ProfileJob& job, const fs::path& out, const CommonOptions& c) {
     const std::atomic<bool>* cancel = install_interrupt_handler();
+    if (job.engine == "volpath") return run_volpath_job(job, out, c, cancel);
     mcml::ProfileOptions po;
     po.seed = job.seed;
     po.threads = c.threads;
@@ -162,12 +269,12 @@ int run_profile_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
 namespace {
 
 struct ProfileArgs {
-    std::string config, material, unit;
+    std::string config, material, unit, engine, mode;
     CommonOptions common;
 };
 
 int run_profile(ProfileArgs& a) {
-    ProfileJob job = read_profile_job(a.config, a.material, a.common, a.unit);
+    ProfileJob job = read_profile_job(a.config, a.material, a.common, a.unit, a.engine, a.mode);
     const fs::path out = a.common.out.empty()
                              ? fs::path("results") / "profiles" / (job.medium.name + ".csv")
                              : fs::path(a.common.out);
@@ -192,6 +299,15 @@ void register_profile(CLI::App& app, std::function<int()>& action) {
         ->check(CLI::ExistingFile);
     sub->add_option("--unit", a->unit, "Length unit of the CSV: cm (default) or mm")
         ->check(CLI::IsMember({"cm", "mm"}));
+    sub->add_option("--engine", a->engine,
+                    "Ground-truth engine: mcml (default) or volpath (the volumetric path tracer; "
+                    "also writes <out>.single.csv, the single-scattering part)")
+        ->check(CLI::IsMember({"mcml", "volpath"}));
+    sub->add_option("--mode", a->mode,
+                    "volpath estimator: analog (per channel, absorption by roulette; default), "
+                    "weighted (per channel, implicit absorption) or hero (one path for RGB, "
+                    "spectral MIS)")
+        ->check(CLI::IsMember({"analog", "weighted", "hero"}));
     add_common_options(*sub, a->common, "Output CSV (default results/profiles/<material>.csv)");
     sub->callback([a, &action] { action = [a] { return run_profile(*a); }; });
 }
