@@ -6,6 +6,9 @@ find_package(CLI11 CONFIG REQUIRED)           # libcli11-dev: command line
 find_package(tomlplusplus CONFIG REQUIRED)    # libtomlplusplus-dev: TOML with source positions
 find_package(PkgConfig REQUIRED)
 find_package(ZLIB REQUIRED)                  # zlib1g-dev: PNG images, gzipped test data
+# libopenexr-dev: layered float images. CONFIG, and before anything appends Debian's OpenVDB cmake
+# folder to CMAKE_MODULE_PATH: its FindOpenEXR.cmake would shadow the config package.
+find_package(OpenEXR CONFIG REQUIRED)
 pkg_check_modules(xxhash REQUIRED IMPORTED_TARGET libxxhash)  # libxxhash-dev: artifact content hashes
 find_path(RANDOM123_INCLUDE_DIR Random123/philox.h REQUIRED)  # librandom123-dev: Philox streams
 add_library(ssslab_random123 INTERFACE)

@@ -14,7 +14,7 @@ namespace ssslab::volpath {
 namespace {
 
 // Bump when a change alters the numbers produced for a given seed.
-constexpr const char* kEngineVersion = "volpath-pencil-1";
+constexpr const char* kEngineVersion = "volpath-pencil-2";
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -205,8 +205,8 @@ std::string fingerprint(const Medium& m, const PencilGrid& grid, const PencilOpt
                   "%s\nmode=%s absorption=%d run=%d seed=%" PRIu64 " batch=%" PRId64
                   " flight=%d long=%" PRId64 ",%.17g\ngrid=%.17g,%d\n",
                   kEngineVersion, to_string(o.mode), static_cast<int>(o.absorption), run, o.seed,
-                  batch, static_cast<int>(o.flight), o.long_path_events, o.long_path_survival,
-                  grid.dr_cm, grid.nr);
+                  batch, static_cast<int>(o.flight), long_path_threshold(m, o, run < 3 ? run : -1),
+                  o.long_path_survival, grid.dr_cm, grid.nr);
     std::string s = buf;
     for (int c = 0; c < 3; ++c) {
         std::snprintf(buf, sizeof buf, "c%d %.17g %.17g %.17g\n", c, m.sigma_a_per_cm[c],
@@ -258,6 +258,45 @@ void check_pencil(const Medium& m, const PencilGrid& grid) {
     }
 }
 
+std::int64_t long_path_threshold(const Medium& m, const PencilOptions& o, int channel) {
+    if (o.long_path_events > 0) return o.long_path_events;
+    double albedo = 0;
+    for (int c = 0; c < 3; ++c) {
+        if (channel >= 0 && c != channel) continue;
+        const double t = m.sigma_a_per_cm[c] + m.sigma_s_per_cm[c];
+        if (t > 0) albedo = std::max(albedo, m.sigma_s_per_cm[c] / t);
+    }
+    const double n = albedo < 1 ? 20.0 / (1.0 - albedo) : 1e6;
+    return static_cast<std::int64_t>(std::clamp(std::ceil(n), 1e4, 1e6));
+}
+
+double entry_specular(const Medium& m) {
+    return fresnel_normal(m.eta_above, m.eta);
+}
+
+void fill_profile(const BatchRunResult& r, std::size_t base, const PencilGrid& grid, int c,
+                  double rsp, RadialProfile& p, bool single) {
+    const PencilLayout L{grid.nr};
+    if (r.mean.size() < base + L.per_channel())
+        throw std::invalid_argument("volpath::fill_profile: result does not match the grid");
+    const size_t off = base + (single ? L.ss_r() : L.rd_r());
+    p.dr_cm = grid.dr_cm;
+    p.nr = grid.nr;
+    p.rd_per_cm2[c].resize(static_cast<size_t>(grid.nr));
+    p.se_per_cm2[c].resize(static_cast<size_t>(grid.nr));
+    for (int i = 0; i < grid.nr; ++i) {
+        const double area = 2.0 * kPi * (i + 0.5) * grid.dr_cm * grid.dr_cm;
+        p.rd_per_cm2[c][static_cast<size_t>(i)] = r.mean[off + static_cast<size_t>(i)] / area;
+        p.se_per_cm2[c][static_cast<size_t>(i)] = r.se[off + static_cast<size_t>(i)] / area;
+    }
+    p.beyond[c] = r.mean[off + static_cast<size_t>(grid.nr)];
+    p.beyond_se[c] = r.se[off + static_cast<size_t>(grid.nr)];
+    const size_t total = base + (single ? L.rd_ss() : L.rd());
+    p.rd_total[c] = r.mean[total];
+    p.rd_total_se[c] = r.se[total];
+    p.rsp[c] = rsp;
+}
+
 PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilOptions& o) {
     check_pencil(m, grid);
     PencilRun out;
@@ -283,16 +322,22 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
     base.dr = grid.dr_cm;
     base.nr = grid.nr;
     base.layout = out.layout;
-    base.long_events = o.long_path_events;
+
     base.long_survival = o.long_path_survival;
     base.flight = o.flight;
 
     const bool hero = o.mode == ChromaticMode::kHero;
+    if (hero && o.only_channel >= 0)
+        throw std::invalid_argument("volpath: only_channel needs the per-channel mode");
+    if (o.only_channel > 2) throw std::invalid_argument("volpath: only_channel must be -1..2");
     const int nruns = hero ? 1 : 3;
     const std::size_t stride = out.layout.per_channel();
+    out.runs.resize(static_cast<size_t>(nruns));
     for (int run = 0; run < nruns; ++run) {
+        if (o.only_channel >= 0 && run != o.only_channel) continue;
         Setup s = base;
         s.nc = hero ? 3 : 1;
+        s.long_events = long_path_threshold(m, o, hero ? -1 : run);
         for (int c = 0; c < s.nc; ++c) {
             const int mc = hero ? c : run;
             const size_t i = static_cast<size_t>(c);
@@ -357,8 +402,8 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
             }
             return events;
         };
-        out.runs.push_back(run_batches(bo, simulate));
-        const BatchRunResult& r = out.runs.back();
+        out.runs[static_cast<size_t>(run)] = run_batches(bo, simulate);
+        const BatchRunResult& r = out.runs[static_cast<size_t>(run)];
         out.seconds += r.seconds;
         out.paths += r.samples;
         out.events += r.work;
@@ -375,25 +420,11 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
     }
     const PencilLayout& L = out.layout;
     for (int c = 0; c < 3; ++c) {
-        for (auto [p, off] :
-             {std::pair{&out.profile, L.rd_r()}, std::pair{&out.single, L.ss_r()}}) {
-            p->rd_per_cm2[c].resize(static_cast<size_t>(grid.nr));
-            p->se_per_cm2[c].resize(static_cast<size_t>(grid.nr));
-            for (int i = 0; i < grid.nr; ++i) {
-                const double area = 2.0 * kPi * (i + 0.5) * grid.dr_cm * grid.dr_cm;
-                p->rd_per_cm2[c][static_cast<size_t>(i)] =
-                    out.mean(c, off + static_cast<size_t>(i)) / area;
-                p->se_per_cm2[c][static_cast<size_t>(i)] =
-                    out.se(c, off + static_cast<size_t>(i)) / area;
-            }
-            p->beyond[c] = out.mean(c, off + static_cast<size_t>(grid.nr));
-            p->beyond_se[c] = out.se(c, off + static_cast<size_t>(grid.nr));
-            p->rsp[c] = base.rsp;
-        }
-        out.profile.rd_total[c] = out.mean(c, L.rd());
-        out.profile.rd_total_se[c] = out.se(c, L.rd());
-        out.single.rd_total[c] = out.mean(c, L.rd_ss());
-        out.single.rd_total_se[c] = out.se(c, L.rd_ss());
+        if (o.only_channel >= 0 && c != o.only_channel) continue;
+        const BatchRunResult& r = out.runs[hero ? 0 : static_cast<size_t>(c)];
+        const size_t base_index = hero ? static_cast<size_t>(c) * stride : 0;
+        fill_profile(r, base_index, grid, c, base.rsp, out.profile, false);
+        fill_profile(r, base_index, grid, c, base.rsp, out.single, true);
         out.tt[c] = out.mean(c, L.tt());
         out.tt_se[c] = out.se(c, L.tt());
         out.lost[c] = out.mean(c, L.lost());

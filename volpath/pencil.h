@@ -70,12 +70,19 @@ struct PencilOptions {
     std::int64_t batch_paths = 0;  ///< 0: budget paths / 1000 (at least 1000), 1000 otherwise
     ChromaticMode mode = ChromaticMode::kPerChannel;
     Absorption absorption = Absorption::kAnalog;  ///< kPerChannel only
+    /// kPerChannel only: simulate just this channel (0..2); -1: all three. The other channels'
+    /// runs are left empty and their profiles unfilled.
+    int only_channel = -1;
     FlightRule flight = FlightRule::kContinue;
     /// Long-path roulette [Bitterli13 §3.2]: after this many scattering events a path survives
     /// each further event with probability `long_path_survival` and its weight is divided by it.
-    /// Unbiased; it bounds the expected path length (albedo -> 1 in a half-space has paths of
-    /// unbounded mean length) at the price of variance from the rare survivors.
-    std::int64_t long_path_events = 10000;
+    /// Unbiased in expectation; it bounds the expected path length (albedo -> 1 in a half-space
+    /// has paths of unbounded mean length), but a survivor deep in a half-space practically never
+    /// returns, so it acts like a truncation (PencilLayout::lost() measures the mass at risk).
+    /// 0 (default): 20 / (1 - albedo) of the run's channel (hero mode: the largest), clamped to
+    /// [1e4, 1e6], so that absorption, not the roulette, ends all but a fraction e^-20 of the
+    /// paths unless the medium is nearly white.
+    std::int64_t long_path_events = 0;
     double long_path_survival = 0.1;
     /// Checkpoints are <prefix>.<R|G|B|hero>.ckpt (empty: none).
     std::string checkpoint_prefix;
@@ -109,6 +116,9 @@ struct PencilRun {
     PencilGrid grid;
     ChromaticMode mode = ChromaticMode::kPerChannel;
     Absorption absorption = Absorption::kAnalog;  ///< kPerChannel only
+    /// kPerChannel only: simulate just this channel (0..2); -1: all three. The other channels'
+    /// runs are left empty and their profiles unfilled.
+    int only_channel = -1;
     PencilLayout layout;
     /// kPerChannel: three runs (R, G, B) of one channel each; kHero: one run of three channels.
     std::vector<BatchRunResult> runs;
@@ -125,6 +135,20 @@ struct PencilRun {
     double mean(int c, std::size_t i) const;
     double se(int c, std::size_t i) const;
 };
+
+/// Specular reflectance at entry (normal incidence, from the index above into the medium).
+double entry_specular(const Medium& m);
+
+/// Fill channel c of `p` (R_d per cm^2 and SE, beyond the grid, totals, Rsp) from a run's tally
+/// whose channel block starts at element `base` (0 for a per-channel run; c x per_channel() in
+/// hero mode); `single` selects the single-scattering part. MCML's scaling: bin weight /
+/// (2 pi (i + 1/2) dr^2).
+void fill_profile(const BatchRunResult& r, std::size_t base, const PencilGrid& grid, int c,
+                  double rsp, RadialProfile& p, bool single);
+
+/// The long-path roulette threshold of the run of `channel` (-1: all three, hero mode) for `o`
+/// on medium `m` (resolves long_path_events = 0).
+std::int64_t long_path_threshold(const Medium& m, const PencilOptions& o, int channel);
 
 /// Checks that the run can terminate in bounded expected time and memory; throws
 /// InfeasibleError saying why (e.g. sigma_t = 0 in a half-space: paths never end).
