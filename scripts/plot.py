@@ -187,6 +187,124 @@ def kernel_slices_plot(root, p):
     save(fig, root, p["out"])
 
 
+def z_histogram_plot(root, p):
+    rows = read_csv(os.path.join(root, p["csv"]))
+    z = [float(x["z"]) for x in rows]
+    fig, ax = plt.subplots(1, 2, figsize=(13, 4.6))
+    if z:
+        lim = max(4.5, max(abs(v) for v in z) + 0.5)
+        nb = 40
+        w = 2 * lim / nb
+        ax[0].hist(z, bins=nb, range=(-lim, lim), color="#777777", alpha=0.8,
+                   label="%d bins" % len(z))
+        xs = [-lim + 2 * lim * i / 400 for i in range(401)]
+        ax[0].plot(xs, [len(z) * w * math.exp(-0.5 * x * x) / math.sqrt(2 * math.pi) for x in xs],
+                   color="k", lw=1.2, label="N(0, 1)")
+        mats = sorted(set(x["material"] for x in rows))
+        for i, m in enumerate(mats):
+            for c in "RGB":
+                pts = [x for x in rows if x["material"] == m and x["channel"] == c]
+                ax[1].plot([float(x["r_mid_mm"]) for x in pts], [float(x["z"]) for x in pts], ".",
+                           ms=2, color=COLOURS[c], alpha=0.5)
+        ax[1].set_xscale("symlog", linthresh=0.1)
+        for y in (-3, 3):
+            ax[1].axhline(y, color="k", lw=0.6, ls="--")
+    ax[0].set_title("per-bin z-scores, all materials and channels")
+    ax[0].set_xlabel("z = (volpath - MCML) / sqrt(se_v^2 + se_m^2)")
+    ax[0].legend(fontsize=8)
+    ax[1].set_title("z against radius (colour: channel)")
+    ax[1].set_xlabel("r [mm]")
+    for a in ax:
+        a.grid(alpha=0.3)
+    fig.suptitle(p["title"], y=1.02)
+    save(fig, root, p["out"])
+
+
+def pencil_plot(root, p):
+    rows = read_csv(os.path.join(root, p["csv"]))
+    r = [float(x["r_mid_mm"]) for x in rows]
+    fig, ax = plt.subplots(3, 4, figsize=(18, 12))
+    styles = ["-", "--", "-.", ":", (0, (5, 1)), (0, (3, 1, 1, 1)), (0, (1, 1)), (0, (8, 2))]
+    model_colours = ["#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
+                     "#ff7f0e", "#000000"]
+    for row, c in enumerate("RGB"):
+        vp = [float(x["volpath_%s_per_mm2" % c]) for x in rows]
+        se = [float(x["volpath_%s_se_per_mm2" % c]) for x in rows]
+        ms = [float(x["volpath_ms_%s_per_mm2" % c]) for x in rows]
+        mc = [float(x["mcml_%s_per_mm2" % c]) for x in rows]
+        curves = [("volpath", vp, COLOURS[c], "-", 1.6), ("volpath, >= 2 events", ms, COLOURS[c],
+                                                            "--", 1.0)]
+        for i, m in enumerate(p["models"]):
+            key = "%s_%s_per_mm2" % (m, c)
+            if rows and rows[0].get(key, "") != "":
+                curves.append((m, [float(x[key]) for x in rows], model_colours[i % 8],
+                               styles[i % len(styles)], 1.0))
+        # The radius inside which 99 % of the tracer's reflectance leaves (trapezoid on r R dr).
+        cum, tot = [], 0.0
+        for i in range(len(r)):
+            lo_r = float(rows[i]["r_lo_mm"])
+            hi_r = float(rows[i]["r_hi_mm"])
+            tot += max(vp[i], 0) * (hi_r * hi_r - lo_r * lo_r)
+            cum.append(tot)
+        r99 = next((float(rows[i]["r_hi_mm"]) for i in range(len(r)) if cum[i] >= 0.99 * tot),
+                   r[-1] if r else 1)
+        transforms = [("linear", lambda v, rr: v), ("log", lambda v, rr: v),
+                      ("square root", lambda v, rr: math.sqrt(max(v, 0))),
+                      ("r R_d(r)", lambda v, rr: rr * v)]
+        for col, (name, f) in enumerate(transforms):
+            a = ax[row][col]
+            for label, v, colour, style, lw in curves:
+                a.plot(r, [f(x, rr) for x, rr in zip(v, r)], color=colour, ls=style, lw=lw,
+                       label=label)
+            a.plot(r, [f(x, rr) for x, rr in zip(mc, r)], ".", ms=3, color="k", label="MCML")
+            lo = [f(max(v - 2 * s, 0), rr) for v, s, rr in zip(vp, se, r)]
+            hi = [f(v + 2 * s, rr) for v, s, rr in zip(vp, se, r)]
+            a.fill_between(r, lo, hi, color=COLOURS[c], alpha=0.2, lw=0)
+            if name == "log":
+                a.set_yscale("log")
+                pos = [v for v in vp if v > 0]
+                if pos:
+                    a.set_ylim(min(pos) * 0.5, max(pos) * 2)
+            if name == "linear":
+                a.set_xlim(0, 0.25 * r99)
+            elif name != "log":
+                a.set_xlim(0, r99)
+            a.set_title("%s, %s" % (c, name), fontsize=9)
+            a.grid(alpha=0.3)
+            a.set_xlabel("r [mm]")
+        ax[row][0].set_ylabel("R_d [1/mm^2] per incident photon")
+    ax[0][0].legend(fontsize=7)
+    fig.suptitle("%s: analytic profiles against both Monte Carlo engines" % p["title"], y=1.0)
+    fig.tight_layout()
+    save(fig, root, p["out"])
+
+
+def efficiency_plot(root, p):
+    rows = read_csv(os.path.join(root, p["csv"]))
+    fig, ax = plt.subplots(1, 2, figsize=(13, 4.6))
+    engines = sorted(set(x["engine"] for x in rows))
+    for e_i, e in enumerate(engines):
+        style = "-" if e_i == 0 else "--"
+        for c in "RGB":
+            h = [x for x in rows if x["engine"] == e and x["channel"] == c
+                 and int(x["batches"]) >= MIN_BATCHES]
+            if not h:
+                continue
+            t = [float(x["seconds"]) for x in h]
+            ax[0].loglog(t, [float(x["rel_se"]) for x in h], style, lw=1.2, color=COLOURS[c],
+                         label="%s %s" % (e, c))
+            ax[1].loglog(t, [float(x["efficiency_per_s"]) for x in h], style, lw=1.2,
+                         color=COLOURS[c], label="%s %s" % (e, c))
+    ax[0].set_title("relative standard error of R_d against wall time")
+    ax[1].set_title("efficiency 1 / (relative variance x time)")
+    for a in ax:
+        a.set_xlabel("wall time [s]")
+        a.grid(alpha=0.3, which="both")
+        a.legend(fontsize=7)
+    fig.suptitle("%s: MCML (solid) and the path tracer (dashed)" % p["title"], y=1.02)
+    save(fig, root, p["out"])
+
+
 def main():
     with open(sys.argv[1]) as f:
         spec = json.load(f)
@@ -195,7 +313,8 @@ def main():
     for p in spec["plots"]:
         {"profile": profile_plot, "convergence": convergence_plot,
          "singular_values": singular_values_plot,
-         "kernel_slices": kernel_slices_plot}[p["kind"]](root, p)
+         "kernel_slices": kernel_slices_plot, "z_histogram": z_histogram_plot,
+         "pencil": pencil_plot, "efficiency": efficiency_plot}[p["kind"]](root, p)
 
 
 if __name__ == "__main__":

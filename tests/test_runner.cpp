@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include <spawn.h>
@@ -148,6 +149,60 @@ TEST(Runner, SecondRunComputesNothingAndWritesTheSameResults) {
     dir.write("small.toml", replace(kSmall, "eta = 1.4", "eta = 1.41"));
     const auto third = run_ssslab({"run", "small.toml"}, dir.path());
     EXPECT_NE(third.out.find("3 computed, 3 reused"), std::string::npos) << third.out;
+}
+
+TEST(Runner, BothEnginesSideBySideAreCachedCrossValidatedAndScored) {
+    // [volpath] adds one path-tracer node per material and channel; crossval, pencil and
+    // efficiency read both engines; a rerun computes nothing; the path tracer's nodes have keys
+    // of their own (changing its budget leaves MCML's alone).
+    const std::string text = std::string(kSmall) + R"(
+[volpath]
+photons = 20000
+mode = "weighted"
+
+[outputs.crossval]
+[outputs.pencil]
+models = ["dipole", "pbd"]
+[outputs.efficiency]
+materials = ["Skin1"]
+)";
+    testing::TempDir dir;
+    dir.write("small.toml", text);
+    const auto first = run_ssslab({"run", "small.toml"}, dir.path());
+    ASSERT_EQ(first.exit_code, 0) << first.err;
+    EXPECT_NE(first.out.find("12 computed, 0 reused"), std::string::npos) << first.out;
+    const fs::path res = dir / "results" / "small";
+    for (const char* f : {"crossval/summary.csv", "crossval/z_scores.csv", "pencil/errors.csv",
+                          "pencil/Skin1.csv", "pencil/Slab.csv", "efficiency/Skin1.csv"})
+        EXPECT_TRUE(fs::exists(res / f)) << f;
+    const std::string summary = testing::read_text(res / "crossval" / "summary.csv");
+    // Every material and channel has a chi-square over some bins and a finite z of the totals.
+    std::istringstream in(summary);
+    std::string line;
+    std::getline(in, line);
+    int rows = 0;
+    while (std::getline(in, line)) {
+        ++rows;
+        EXPECT_EQ(line.find("nan"), std::string::npos) << line;
+        EXPECT_EQ(line.find(",0,"), std::string::npos) << "no bins compared: " << line;
+    }
+    EXPECT_EQ(rows, 6);
+    const std::string metrics = testing::read_text(res / "metrics.csv");
+    for (const char* m : {"Skin1.R.volpath.Rd,", "Slab.B.volpath.Rd_single,",
+                          "Skin1.G.model.pbd.Rd,", "Slab.R.model.dipole.rel_l2_rR,"})
+        EXPECT_NE(metrics.find(m), std::string::npos) << m;
+    const std::string errors = testing::read_text(res / "pencil" / "errors.csv");
+    EXPECT_NE(errors.find("dipole,Skin1,R,volpath_multiple_scattering"), std::string::npos);
+    EXPECT_NE(errors.find("pbd,Skin1,R,volpath_total"), std::string::npos);
+
+    const auto second = run_ssslab({"run", "small.toml"}, dir.path());
+    ASSERT_EQ(second.exit_code, 0) << second.err;
+    EXPECT_NE(second.out.find("0 computed, 12 reused"), std::string::npos) << second.out;
+    EXPECT_EQ(testing::read_text(res / "crossval" / "summary.csv"), summary);
+
+    dir.write("small.toml", replace(text, "photons = 20000\nmode", "photons = 30000\nmode"));
+    const auto third = run_ssslab({"run", "small.toml"}, dir.path());
+    EXPECT_NE(third.out.find("6 computed, 6 reused"), std::string::npos) << third.out;
 }
 
 // Start ssslab in the background, kill it after `ms` milliseconds with `sig`, return its status.
@@ -378,6 +433,35 @@ TEST(Runner, BadExperimentConfigsAreRefusedWithTheirLocation) {
              "[[outputs.kernels]]\nname = \"k\"\nmodels = [\"preintegration\"]\nsignal = "
              "[\"edge\"]\n",
          {"e.toml:8:1", "did you mean 'signals'"}},
+        // The path tracer and the outputs that compare with it.
+        {"crossval without volpath",
+         head + mats + "[outputs.crossval]\n",
+         {"outputs.crossval", "add a [volpath] table"}},
+        {"pencil without volpath",
+         head + mats + "[outputs.pencil]\nmodels = [\"dipole\"]\n",
+         {"outputs.pencil", "add a [volpath] table"}},
+        {"unknown diffusion model",
+         head + mats + "[volpath]\n[outputs.pencil]\nmodels = [\"dipol\"]\n",
+         {"e.toml:7:", "outputs.pencil.models", "unknown diffusion model \"dipol\"",
+          "better-dipole"}},
+        {"pencil without models",
+         head + mats + "[volpath]\n[outputs.pencil]\nmodels = []\n",
+         {"outputs.pencil.models", "at least one"}},
+        {"bad volpath mode",
+         head + mats + "[volpath]\nmode = \"hero\"\n" + outs,
+         {"e.toml:6:", "volpath.mode", "analog", "weighted"}},
+        {"negative volpath budget",
+         head + mats + "[volpath]\nphotons = -5\n" + outs,
+         {"e.toml:6:", "volpath.photons"}},
+        {"unknown volpath key",
+         head + mats + "[volpath]\nphoton = 5\n" + outs,
+         {"e.toml:6:1", "did you mean 'photons'"}},
+        {"efficiency of an absent material",
+         head + mats + "[volpath]\n[outputs.efficiency]\nmaterials = [\"Apple\"]\n",
+         {"outputs.efficiency.materials", "not a material of this experiment"}},
+        {"crossval bad threshold",
+         head + mats + "[volpath]\n[outputs.crossval]\nmax_rel_se = 2\n",
+         {"e.toml:7:", "outputs.crossval.max_rel_se"}},
     };
     ASSERT_GE(cases.size(), 15u);
     for (const auto& c : cases) {

@@ -1,5 +1,6 @@
 #include "experiments/runner/experiment.h"
 
+#include "approx/diffusion.h"
 #include "core/error.h"
 
 #include <algorithm>
@@ -70,7 +71,56 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
     ConfigTable grid = mc.table_or_empty("grid");
     e.mcml.grid = mcml::read_grid_override(grid);
 
+    if (auto vp = root.table("volpath")) {
+        e.volpath.enabled = true;
+        const mcml::Budget b = mcml::read_budget(*vp);
+        e.volpath.budget.samples = b.photons;
+        e.volpath.budget.seconds = b.seconds;
+        e.volpath.budget.rel_error = b.rel_error;
+        if (!e.volpath.budget.any()) {
+            e.volpath.budget.samples = 1'000'000;
+            vp->record("photons", static_cast<std::int64_t>(1'000'000));
+        }
+        e.volpath.quick_factor = vp->number("quick_factor", 0.02, Range::left_open(0, 1));
+        e.volpath.batch_paths = vp->integer("batch_paths", 0, Range::nonnegative());
+        e.volpath.mode = vp->choice("mode", "analog", {"analog", "weighted"});
+    }
+
     ConfigTable outs = root.require_table("outputs");
+    auto need_volpath = [&](ConfigTable& t, const char* what) {
+        if (!e.volpath.enabled)
+            t.fail("enabled", std::string(what) +
+                                  " compares with the path tracer: add a [volpath] table (its "
+                                  "budget per channel, e.g. photons = 1e6)");
+    };
+    if (auto t = outs.table("crossval")) {
+        e.crossval.enabled = true;
+        e.crossval.max_rel_se = t->number("max_rel_se", 0.3, Range::left_open(0, 1));
+        need_volpath(*t, "[outputs.crossval]");
+    }
+    if (auto t = outs.table("pencil")) {
+        e.pencil.enabled = true;
+        e.pencil.models = t->string_list("models");
+        const auto& known = approx::diffusion_model_names();
+        for (const auto& m : e.pencil.models)
+            if (std::find(known.begin(), known.end(), m) == known.end()) {
+                std::string list;
+                for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+                t->fail("models", "unknown diffusion model \"" + m + "\"; known: " + list);
+            }
+        if (e.pencil.models.empty()) t->fail("models", "expected at least one diffusion model");
+        need_volpath(*t, "[outputs.pencil]");
+    }
+    if (auto t = outs.table("efficiency")) {
+        e.efficiency.enabled = true;
+        e.efficiency.materials = t->string_list("materials");
+        if (e.efficiency.materials.empty())
+            t->fail("materials", "expected at least one material of this experiment");
+        for (const auto& m : e.efficiency.materials)
+            if (!labels.count(m))
+                t->fail("materials", "\"" + m + "\" is not a material of this experiment");
+        need_volpath(*t, "[outputs.efficiency]");
+    }
     if (auto t = outs.table("profiles")) {
         e.profiles.enabled = true;
         e.profiles.unit =
@@ -108,10 +158,12 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
         }
     }
     if (!e.profiles.enabled && !e.profile_plots.enabled && !e.convergence.enabled &&
-        e.kernel_studies.empty())
+        e.kernel_studies.empty() && !e.crossval.enabled && !e.pencil.enabled &&
+        !e.efficiency.enabled)
         outs.fail("profiles",
                   "no outputs: give at least one of [outputs.profiles], "
-                  "[outputs.profile_plots], [outputs.convergence], [[outputs.kernels]]");
+                  "[outputs.profile_plots], [outputs.convergence], [[outputs.kernels]], "
+                  "[outputs.crossval], [outputs.pencil], [outputs.efficiency]");
     root.finish();
     return e;
 }

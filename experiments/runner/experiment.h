@@ -7,15 +7,26 @@
 //   [mcml]            the ground-truth engine's budget per RGB channel: photons, seconds or
 //                     rel_error; quick_factor (what --quick multiplies budgets by); batch_photons;
 //                     [mcml.grid] dr_mm / dr_cm and nr (default: Freude14 Table 6.1)
+//   [volpath]         the second engine (volumetric path tracer), run per material and channel
+//                     beside MCML when an output needs it: photons, seconds or rel_error per
+//                     channel; mode = "analog" | "weighted"; quick_factor; batch_paths
 //   [outputs.profiles]       CSV of R_d(r) per material and a summary table (unit = "mm"|"cm")
 //   [outputs.profile_plots]  linear plot near zero, log plot, r R(r) (linear_range_mfp)
 //   [outputs.convergence]    error against run time for `materials`, against an independent
 //                            reference run with reference_factor times the budget
+//   [outputs.crossval]       MCML against volpath bin by bin: per-bin z-scores, chi-square per
+//                            material and channel, the z histogram (needs [volpath])
+//   [outputs.pencil]         pencil-beam plots [Bitterli13 §3.6.3]: analytic diffusion models
+//                            (models = [...], approx/diffusion.h) against both engines, and a
+//                            table of each model's error (needs [volpath])
+//   [outputs.efficiency]     error against run time of both engines on the same problem
+//                            (materials = [...]; needs [volpath])
 //   [[outputs.kernels]]      kernel studies: separable models scored in kernel and image space
 //                            (experiments/runner/kernel_study.h)
 // Every error names file:line:column and the key.
 #pragma once
 
+#include "core/batch_runner.h"
 #include "core/config.h"
 #include "core/material.h"
 #include "core/profile.h"
@@ -42,6 +53,14 @@ struct McmlSetup {
     mcml::GridOverride grid;  ///< over Freude14 Table 6.1
 };
 
+struct VolpathSetup {
+    bool enabled = false;
+    SampleBudget budget;  ///< per RGB channel, before --quick
+    double quick_factor = 0.02;
+    std::int64_t batch_paths = 0;
+    std::string mode = "analog";  ///< "analog" | "weighted" (volpath::Absorption)
+};
+
 struct Experiment {
     std::string source;  ///< config file (or "<built-in>")
     std::string name, title, description;
@@ -62,6 +81,22 @@ struct Experiment {
         std::vector<std::string> materials;  ///< labels
         double reference_factor = 4.0;
     } convergence;
+
+    VolpathSetup volpath;
+    struct CrossVal {
+        bool enabled = false;
+        /// Bins enter the chi-square when both estimates have a relative SE below this (so
+        /// Gaussian statistics apply).
+        double max_rel_se = 0.3;
+    } crossval;
+    struct Pencil {
+        bool enabled = false;
+        std::vector<std::string> models;  ///< approx::make_diffusion_profile names
+    } pencil;
+    struct Efficiency {
+        bool enabled = false;
+        std::vector<std::string> materials;
+    } efficiency;
 
     std::vector<KernelStudySpec> kernel_studies;  ///< [[outputs.kernels]]
 

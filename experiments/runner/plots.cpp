@@ -1,5 +1,7 @@
 #include "experiments/runner/plots.h"
 
+#include "experiments/runner/engines.h"
+
 #include "core/atomic_file.h"
 #include "core/hash.h"
 #include "experiments/runner/cache.h"
@@ -140,6 +142,10 @@ PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const Artifac
                                          "diagonal (bottom) per channel, ground truth dotted (as "
                                          "Freude14 Fig. 6.2)."});
             }
+    }
+    for (const PlotRequest& q : engine_plots(r)) {
+        add(q.json, q.inputs);
+        out.plots.push_back(q.file);
     }
     if (out.plots.empty()) return out;
 

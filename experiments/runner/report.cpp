@@ -1,6 +1,7 @@
 #include "experiments/runner/report.h"
 
 #include "core/provenance.h"
+#include "experiments/runner/engines.h"
 #include "experiments/runner/kernel_study.h"
 #include "experiments/runner/runner.h"
 
@@ -13,8 +14,6 @@
 #include <sstream>
 
 namespace ssslab::runner {
-
-namespace {
 
 std::string esc(const std::string& s) {
     std::string o;
@@ -38,6 +37,8 @@ std::string esc(const std::string& s) {
     }
     return o;
 }
+
+namespace {
 
 std::string num(double v, int digits = 6) {
     char buf[40];
@@ -86,6 +87,8 @@ const ChannelNode* node(const ExperimentRun& r, const std::string& m, int c, con
     return nullptr;
 }
 
+}  // namespace
+
 void figures(std::ostringstream& os, const PlotResult& p, const std::string& section) {
     for (const auto& f : p.plots) {
         if (f.section != section) continue;
@@ -94,6 +97,8 @@ void figures(std::ostringstream& os, const PlotResult& p, const std::string& sec
            << " (<a href=\"" << esc(f.stem) << ".svg\">SVG</a>)</figcaption></figure>\n";
     }
 }
+
+namespace {
 
 // A CSV cell reader that honours double quotes (model specs contain commas).
 std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
@@ -177,6 +182,8 @@ void channel_table(std::ostringstream& os, const std::string& csv,
     os << "</table>\n";
 }
 
+}  // namespace
+
 // A whole CSV as a table (string columns left-aligned, numbers to 4 digits).
 void csv_table(std::ostringstream& os, const std::string& csv, const char* title) {
     const auto rows = parse_csv(csv);
@@ -196,6 +203,8 @@ void csv_table(std::ostringstream& os, const std::string& csv, const char* title
     }
     os << "</table>\n";
 }
+
+namespace {
 
 void study_section(std::ostringstream& os, const StudyOutput& so, const PlotResult& plots) {
     const KernelStudySpec& s = *so.spec;
@@ -380,6 +389,8 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
         os << "</p>\n";
         figures(os, c.plots, "convergence");
     }
+
+    if (c.engine_files) engine_report(r, *c.engine_files, c.plots, os);
 
     if (!c.studies.empty()) {
         os << "<h2 id=\"kernels\">Kernel studies</h2>\n";

@@ -5,6 +5,7 @@
 #include "experiments/runner/plots.h"
 
 #include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -26,9 +27,17 @@ struct StudyOutput {
 struct ReportContent {
     PlotResult plots;
     std::vector<StudyOutput> studies;
+    const std::map<std::string, std::string>* engine_files = nullptr;  ///< engines.h tables
 };
 
 std::string render_report(const ExperimentRun& r, const ReportContent& c);
+
+/// HTML-escaped text.
+std::string esc(const std::string& s);
+/// The figures of one report section.
+void figures(std::ostringstream& os, const PlotResult& p, const std::string& section);
+/// A whole CSV as an HTML table with a title.
+void csv_table(std::ostringstream& os, const std::string& csv, const char* title);
 
 /// "0.4315 ± 0.0004": a value with its standard error, two significant digits of the error.
 std::string with_error(double value, double se);

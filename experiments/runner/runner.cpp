@@ -5,10 +5,12 @@
 #include "core/error.h"
 #include "core/hash.h"
 #include "core/provenance.h"
+#include "experiments/runner/engines.h"
 #include "experiments/runner/kernel_study.h"
 #include "experiments/runner/plots.h"
 #include "experiments/runner/report.h"
 #include "mcml/transport.h"
+#include "volpath/pencil.h"
 
 #include <tbb/task_group.h>
 
@@ -29,6 +31,11 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* kKind = "mcml-channel";
+constexpr const char* kVolpathKind = "volpath-channel";
+
+const char* kind_of(const ChannelNode& n) {
+    return n.engine == "volpath" ? kVolpathKind : kKind;
+}
 
 std::string budget_text(const mcml::Budget& b) {
     std::ostringstream os;
@@ -62,7 +69,32 @@ std::uint64_t derive_seed(std::uint64_t seed, const Medium& m, int c, const std:
     return std::stoull(k.hex().substr(0, 16), nullptr, 16);
 }
 
+ContentKey volpath_key(const ChannelNode& n) {
+    const Medium& m = n.medium;
+    const int c = n.channel;
+    ContentKey k(kVolpathKind);
+    k.add("engine_version", volpath::engine_version())
+        .add("mode", n.volpath_mode)
+        .add("sigma_a_per_cm", m.sigma_a_per_cm[c])
+        .add("sigma_s_per_cm", m.sigma_s_per_cm[c])
+        .add("g", m.g[c])
+        .add("eta", m.eta)
+        .add("eta_above", m.eta_above)
+        .add("eta_below", m.eta_below)
+        .add("thickness_cm", m.thickness_cm)
+        .add("dr_cm", n.grid.dr_cm)
+        .add("nr", n.grid.nr)
+        .add("budget_photons", n.budget.photons ? *n.budget.photons : std::int64_t{-1})
+        .add("budget_seconds", n.budget.seconds ? *n.budget.seconds : -1.0)
+        .add("budget_rel_error", n.budget.rel_error ? *n.budget.rel_error : -1.0)
+        .add("batch_paths", n.batch_photons)
+        .add("seed", n.seed)
+        .add("snapshots", true);
+    return k;
+}
+
 ContentKey node_key(const ChannelNode& n) {
+    if (n.engine == "volpath") return volpath_key(n);
     const Medium& m = n.medium;
     const int c = n.channel;
     ContentKey k(kKind);
@@ -91,7 +123,37 @@ mcml::ProfileGrid grid_for(const Experiment& e, const Medium& m) {
     return e.mcml.grid.apply(mcml::freude14_grid(m));
 }
 
+std::string volpath_manifest_toml(const ChannelNode& n) {
+    auto doc = ConfigDocument::empty("manifest.toml");
+    ConfigTable root = doc->root();
+    ConfigTable a = root.table_or_empty("artifact");
+    a.record("kind", std::string(kVolpathKind));
+    a.record("key", n.key);
+    a.record("material", n.material);
+    a.record("channel", std::string(kChannelNames[n.channel]));
+    a.record("role", n.role);
+    a.record("canonical_description", n.key_text);
+    ConfigTable r = root.table_or_empty("run");
+    const BatchRunResult& res = n.vresult;
+    const volpath::PencilLayout L{n.grid.nr};
+    r.record("engine", std::string("volpath"));
+    r.record("engine_version", std::string(volpath::engine_version()) + " " + n.volpath_mode);
+    r.record("seed", static_cast<std::int64_t>(n.seed));
+    r.record("budget", budget_text(n.budget));
+    r.record("photons", static_cast<std::int64_t>(res.samples));
+    r.record("batches", static_cast<std::int64_t>(res.batches));
+    r.record("batch_photons", n.batch_photons);
+    r.record("wall_seconds", res.seconds);
+    r.record("stop_reason", std::string(to_string(res.reason)));
+    r.record("resumed_from_checkpoint", std::string(res.resumed ? "yes" : "no"));
+    r.record("Rd", res.mean[L.rd()]);
+    r.record("Rd_se", res.se[L.rd()]);
+    doc->add_resolved_section("provenance", provenance());
+    return doc->resolved_toml();
+}
+
 std::string manifest_toml(const ChannelNode& n) {
+    if (n.engine == "volpath") return volpath_manifest_toml(n);
     auto doc = ConfigDocument::empty("manifest.toml");
     ConfigTable root = doc->root();
     ConfigTable a = root.table_or_empty("artifact");
@@ -139,13 +201,6 @@ Provenance read_manifest(const fs::path& file, const std::string& key) {
     pv.revision = p.string("git_revision");
     pv.date_utc = p.string("date_utc");
     return pv;
-}
-
-const ChannelNode* find_node(const ExperimentRun& r, const std::string& material, int c,
-                             const std::string& role) {
-    for (const auto& n : r.nodes)
-        if (n.material == material && n.channel == c && n.role == role) return &n;
-    return nullptr;
 }
 
 std::string fmt(double v) {
@@ -276,6 +331,24 @@ void convergence_tables(const ExperimentRun& r, const std::string& material, std
 
 }  // namespace
 
+const ChannelNode* find_node(const ExperimentRun& r, const std::string& material, int c,
+                             const std::string& role) {
+    for (const auto& n : r.nodes)
+        if (n.material == material && n.channel == c && n.role == role) return &n;
+    return nullptr;
+}
+
+RadialProfile volpath_profile(const ExperimentRun& r, const std::string& material, bool single) {
+    RadialProfile p;
+    p.name = material;
+    for (int c = 0; c < 3; ++c) {
+        const ChannelNode* n = find_node(r, material, c, "volpath");
+        volpath::fill_profile(n->vresult, 0, {n->grid.dr_cm, n->grid.nr}, c,
+                              volpath::entry_specular(n->medium), p, single);
+    }
+    return p;
+}
+
 RadialProfile material_profile(const ExperimentRun& r, const std::string& material) {
     RadialProfile p;
     p.name = material;
@@ -306,15 +379,29 @@ ExperimentRun plan(const Experiment& e, const RunOptions& o) {
         n.grid = grid_for(e, m.medium);
         n.budget = budget;
         n.batch_photons = e.mcml.batch_photons;
+        if (role == "volpath") {
+            n.engine = "volpath";
+            n.volpath_mode = e.volpath.mode;
+            n.batch_photons = e.volpath.batch_paths;
+        }
         n.seed = derive_seed(e.seed, m.medium, c, role);
         const ContentKey k = node_key(n);
         n.key = k.hex();
         n.key_text = k.text();
-        n.cached = cache.find(kKind, n.key).has_value();
+        n.cached = cache.find(kind_of(n), n.key).has_value();
         r.nodes.push_back(std::move(n));
     };
     for (const auto& m : e.materials)
         for (int c = 0; c < 3; ++c) add(m, c, "main", main_budget);
+    if (e.volpath.enabled) {
+        mcml::Budget vb;
+        vb.photons = e.volpath.budget.samples;
+        vb.seconds = e.volpath.budget.seconds;
+        vb.rel_error = e.volpath.budget.rel_error;
+        if (o.quick) vb = scaled_budget(vb, e.volpath.quick_factor);
+        for (const auto& m : e.materials)
+            for (int c = 0; c < 3; ++c) add(m, c, "volpath", vb);
+    }
     if (e.convergence.enabled)
         for (const auto& label : e.convergence.materials)
             for (const auto& m : e.materials)
@@ -370,7 +457,45 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
     }
     std::mutex io;
     std::atomic<bool> interrupted{false};
+    auto compute_volpath = [&](ChannelNode& n) {
+        volpath::PencilOptions po;
+        po.seed = n.seed;
+        po.threads = o.threads;
+        po.budget.samples = n.budget.photons;
+        po.budget.seconds = n.budget.seconds;
+        po.budget.rel_error = n.budget.rel_error;
+        po.batch_paths = n.batch_photons;
+        po.absorption = n.volpath_mode == "weighted" ? volpath::Absorption::kWeighted
+                                                     : volpath::Absorption::kAnalog;
+        po.only_channel = n.channel;
+        po.cancel = o.cancel;
+        po.snapshots = true;
+        po.checkpoint_prefix = cache.checkpoint_prefix(kVolpathKind, n.key).string();
+        po.checkpoint_seconds = o.checkpoint_seconds;
+        volpath::PencilRun run = volpath::simulate_pencil(n.medium, {n.grid.dr_cm, n.grid.nr}, po);
+        n.vresult = std::move(run.runs[static_cast<size_t>(n.channel)]);
+        if (run.interrupted) {
+            interrupted = true;
+            return;
+        }
+        const std::string manifest = manifest_toml(n);
+        const fs::path dir = cache.store(
+            kVolpathKind, n.key,
+            {{"result.bin", serialize_batch_result(n.vresult)}, {"manifest.toml", manifest}});
+        n.provenance = read_manifest(dir / "manifest.toml", n.key);
+        n.provenance.computed_now = true;
+        if (!o.quiet) {
+            std::lock_guard<std::mutex> lock(io);
+            std::printf("  computed %-10s %s %-9s %10llu paths   in %7.2f s  [%s]%s\n",
+                        n.material.c_str(), kChannelNames[n.channel], n.role.c_str(),
+                        static_cast<unsigned long long>(n.vresult.samples), n.vresult.seconds,
+                        n.key.substr(0, 16).c_str(),
+                        n.vresult.resumed ? " (resumed from its checkpoint)" : "");
+            std::fflush(stdout);
+        }
+    };
     auto compute = [&](ChannelNode& n) {
+        if (n.engine == "volpath") return compute_volpath(n);
         mcml::Grid g;
         g.dr = n.grid.dr_cm;
         g.nr = n.grid.nr;
@@ -413,16 +538,22 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
     // Runs whose wall time is studied (the convergence materials) run alone, one after the
     // other with every core; the others run side by side.
     auto timed = [&](const ChannelNode& n) {
-        if (!r.exp.convergence.enabled) return false;
-        const auto& ms = r.exp.convergence.materials;
-        return std::find(ms.begin(), ms.end(), n.material) != ms.end();
+        auto in = [&](const std::vector<std::string>& ms) {
+            return std::find(ms.begin(), ms.end(), n.material) != ms.end();
+        };
+        return (r.exp.convergence.enabled && in(r.exp.convergence.materials)) ||
+               (r.exp.efficiency.enabled && in(r.exp.efficiency.materials));
     };
     tbb::task_group tg;
     for (auto& node : r.nodes) {
         if (node.cached) {
-            const fs::path dir = *cache.find(kKind, node.key);
-            node.result = mcml::deserialize_result(read_file(dir / "result.bin"),
-                                                   (dir / "result.bin").string());
+            const fs::path dir = *cache.find(kind_of(node), node.key);
+            if (node.engine == "volpath")
+                node.vresult = deserialize_batch_result(read_file(dir / "result.bin"),
+                                                        (dir / "result.bin").string());
+            else
+                node.result = mcml::deserialize_result(read_file(dir / "result.bin"),
+                                                       (dir / "result.bin").string());
             node.provenance = read_manifest(dir / "manifest.toml", node.key);
             ++r.reused;
             continue;
@@ -463,6 +594,8 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
             write_file_atomic(stage / "convergence" / (m + "_snapshots.csv"), s);
         }
     write_file_atomic(stage / "artifacts.csv", artifacts_csv(r));
+    const std::map<std::string, std::string> engine_files = engine_tables(r, r.metrics);
+    for (const auto& [name, content] : engine_files) write_file_atomic(stage / name, content);
     for (const auto& study : r.exp.kernel_studies) {
         // A study is an artifact keyed by its spec and the ground-truth runs it reads.
         ContentKey key("kernel-study");
@@ -516,6 +649,7 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
     write_file_atomic(stage / "experiment.toml",
                       "# ssslab run: the resolved experiment configuration and provenance\n" +
                           r.exp.doc->resolved_toml());
+    report.engine_files = &engine_files;
     write_file_atomic(stage / "report.html", render_report(r, report));
 
     const fs::path old = r.out_dir.string() + ".old-" + std::to_string(::getpid());

@@ -6,6 +6,7 @@
 // writes results/<experiment>/ in one step: nothing is replaced until every output is ready.
 #pragma once
 
+#include "core/batch_runner.h"
 #include "core/profile.h"
 #include "experiments/runner/cache.h"
 #include "experiments/runner/experiment.h"
@@ -46,11 +47,13 @@ struct Provenance {
     bool resumed = false;  ///< continued from a checkpoint of an interrupted run
 };
 
-/// One MCML run: a channel of a material, either the main estimate or an independent reference.
+/// One ground-truth run: a channel of a material, by MCML (role "main", or "reference" for an
+/// independent run of the convergence study) or by the path tracer (role "volpath").
 struct ChannelNode {
     std::string material;  ///< label
     int channel = 0;
-    std::string role;  ///< "main" or "reference"
+    std::string role;             ///< "main", "reference" or "volpath"
+    std::string engine = "mcml";  ///< "mcml" or "volpath"
     Medium medium;
     mcml::ProfileGrid grid;
     mcml::Budget budget;
@@ -58,7 +61,9 @@ struct ChannelNode {
     std::uint64_t seed = 0;  ///< derived from the experiment seed, the medium, channel and role
     std::string key, key_text;
     bool cached = false;
-    mcml::RunResult result;
+    mcml::RunResult result;    ///< engine "mcml"
+    BatchRunResult vresult;    ///< engine "volpath": the channel's tally (volpath/pencil.h)
+    std::string volpath_mode;  ///< engine "volpath": "analog" | "weighted"
     Provenance provenance;
 };
 
@@ -93,5 +98,12 @@ std::vector<Metric> compute_metrics(const ExperimentRun& r);
 
 /// The main-role profile of a material (needs executed nodes).
 RadialProfile material_profile(const ExperimentRun& r, const std::string& material);
+/// The path tracer's profile of a material (all diffuse reflectance, or with `single` its
+/// single-scattering part); needs executed volpath nodes.
+RadialProfile volpath_profile(const ExperimentRun& r, const std::string& material, bool single);
+
+/// The node of (material, channel, role), or nullptr.
+const ChannelNode* find_node(const ExperimentRun& r, const std::string& material, int channel,
+                             const std::string& role);
 
 }  // namespace ssslab::runner

@@ -1,0 +1,439 @@
+#include "experiments/runner/engines.h"
+
+#include "approx/diffusion.h"
+#include "experiments/runner/report.h"
+#include "volpath/pencil.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <numbers>
+
+namespace ssslab::runner {
+
+namespace {
+
+std::string fmt(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.10g", v);
+    return buf;
+}
+
+// Regularised upper incomplete gamma Q(a, x) (series below a + 1, Lentz's continued fraction
+// above; Numerical Recipes §6.2), for chi-square p-values: p = Q(dof / 2, chi2 / 2).
+double gamma_q(double a, double x) {
+    if (x <= 0) return 1.0;
+    const double lg = std::lgamma(a);
+    if (x < a + 1) {
+        double sum = 1.0 / a, del = sum, ap = a;
+        for (int n = 0; n < 100000; ++n) {
+            ap += 1;
+            del *= x / ap;
+            sum += del;
+            if (std::fabs(del) < std::fabs(sum) * 1e-15) break;
+        }
+        return std::max(0.0, 1.0 - sum * std::exp(-x + a * std::log(x) - lg));
+    }
+    const double tiny = 1e-300;
+    double b = x + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
+    for (int i = 1; i < 100000; ++i) {
+        const double an = -i * (i - a);
+        b += 2;
+        d = an * d + b;
+        if (std::fabs(d) < tiny) d = tiny;
+        c = b + an / c;
+        if (std::fabs(c) < tiny) c = tiny;
+        d = 1 / d;
+        const double del = d * c;
+        h *= del;
+        if (std::fabs(del - 1) < 1e-15) break;
+    }
+    return std::exp(-x + a * std::log(x) - lg) * h;
+}
+
+// ---- display bins: the engines' bins merged into at most ~160 annuli --------------------------
+
+struct Bins {
+    std::vector<int> first;  // first original bin of each display bin; back() = nr
+    double dr = 0;
+    size_t size() const { return first.size() - 1; }
+    double lo(size_t i) const { return first[i] * dr; }
+    double hi(size_t i) const { return first[i + 1] * dr; }
+};
+
+// The first 20 bins as they are, then groups of 2, 4, 8, ... bins, 20 groups of each size.
+Bins display_bins(int nr, double dr) {
+    Bins b;
+    b.dr = dr;
+    int at = 0, width = 1, count = 0;
+    while (at < nr) {
+        b.first.push_back(at);
+        at = std::min(nr, at + width);
+        if (++count == 20) {
+            count = 0;
+            width *= 2;
+        }
+    }
+    b.first.push_back(nr);
+    return b;
+}
+
+// Area-weighted mean over display bins of a profile channel, and its standard error (bins are
+// summed in quadrature: an upper bound, since a path leaves through one bin only).
+void merge(const RadialProfile& p, int c, const Bins& b, std::vector<double>& v,
+           std::vector<double>& se) {
+    v.assign(b.size(), 0.0);
+    se.assign(b.size(), 0.0);
+    for (size_t k = 0; k < b.size(); ++k) {
+        double w = 0, a = 0, e = 0;
+        for (int i = b.first[k]; i < b.first[k + 1]; ++i) {
+            const double area = (2.0 * i + 1.0);  // ring area / (pi dr^2)
+            w += p.rd_per_cm2[c][static_cast<size_t>(i)] * area;
+            e += std::pow(p.se_per_cm2[c][static_cast<size_t>(i)] * area, 2);
+            a += area;
+        }
+        v[k] = w / a;
+        se[k] = std::sqrt(e) / a;
+    }
+}
+
+// Relative L2 distance of r R(r) over the display bins: sqrt(sum dr_k (r_k (m_k - ref_k))^2 /
+// sum dr_k (r_k ref_k)^2), r_k the bin's mid radius.
+double rel_l2_rr(const Bins& b, const std::vector<double>& m, const std::vector<double>& ref) {
+    double num = 0, den = 0;
+    for (size_t k = 0; k < b.size(); ++k) {
+        const double w = b.hi(k) - b.lo(k), r = 0.5 * (b.lo(k) + b.hi(k));
+        num += w * std::pow(r * (m[k] - ref[k]), 2);
+        den += w * std::pow(r * ref[k], 2);
+    }
+    return den > 0 ? std::sqrt(num / den) : 0.0;
+}
+
+approx::DiffusionMedium diffusion_medium(const Medium& m, int c) {
+    approx::DiffusionMedium d;
+    d.sigma_a = m.sigma_a_per_cm[c];
+    d.sigma_s = m.sigma_s_per_cm[c];
+    d.g = m.g[c];
+    d.eta = m.eta / m.eta_above;
+    d.thickness = m.thickness_cm >= 1e8 ? std::numeric_limits<double>::infinity() : m.thickness_cm;
+    return d;
+}
+
+// What every model is compared with, per material and channel.
+struct Reference {
+    std::vector<double> all, all_se, ms, ms_se, mcml, mcml_se;
+    double rd = 0, rd_se = 0, rd_ms = 0, rd_ms_se = 0, rsp = 0;
+};
+
+struct ModelCurve {
+    std::string name;
+    bool single = false, fresnel = false;
+    std::vector<double> v;  // adjusted like for like (x (1 - Rsp) where needed)
+    double rd = 0;          // adjusted total
+    std::string error;      // why the model could not be evaluated (empty if it was)
+};
+
+struct MaterialPencil {
+    Bins bins;
+    std::array<Reference, 3> ref;
+    std::array<std::vector<ModelCurve>, 3> models;
+};
+
+MaterialPencil pencil_data(const ExperimentRun& r, const MaterialEntry& me, bool with_models) {
+    MaterialPencil out;
+    const RadialProfile all = volpath_profile(r, me.label, false);
+    const RadialProfile single = volpath_profile(r, me.label, true);
+    const RadialProfile mc = material_profile(r, me.label);
+    out.bins = display_bins(all.nr, all.dr_cm);
+    for (int c = 0; c < 3; ++c) {
+        Reference& f = out.ref[static_cast<size_t>(c)];
+        std::vector<double> ss, ss_se;
+        merge(all, c, out.bins, f.all, f.all_se);
+        merge(single, c, out.bins, ss, ss_se);
+        merge(mc, c, out.bins, f.mcml, f.mcml_se);
+        f.ms.resize(f.all.size());
+        // The multiple-scattering part's SE: the total's (Var(ms) = Var(all) - Var(ss) plus a
+        // term of order mean(ms) mean(ss) / N; the total's is the larger of the two in practice).
+        f.ms_se = f.all_se;
+        for (size_t k = 0; k < f.all.size(); ++k) f.ms[k] = f.all[k] - ss[k];
+        f.rd = all.rd_total[c];
+        f.rd_se = all.rd_total_se[c];
+        f.rd_ms = all.rd_total[c] - single.rd_total[c];
+        f.rd_ms_se = all.rd_total_se[c];
+        f.rsp = all.rsp[c];
+        if (!with_models) continue;
+        for (const std::string& name : r.exp.pencil.models) {
+            ModelCurve m;
+            m.name = name;
+            try {
+                const auto model =
+                    approx::make_diffusion_profile(name, diffusion_medium(me.medium, c));
+                m.single = model->includes_single_scattering();
+                m.fresnel = model->includes_entry_fresnel();
+                const double scale = m.fresnel ? 1.0 : 1.0 - f.rsp;
+                m.v.resize(out.bins.size());
+                for (size_t k = 0; k < out.bins.size(); ++k)
+                    m.v[k] = scale * model->annulus_mean(out.bins.lo(k), out.bins.hi(k));
+                m.rd = scale * model->total_rd();
+            } catch (const std::exception& e) {
+                m.error = e.what();
+            }
+            out.models[static_cast<size_t>(c)].push_back(std::move(m));
+        }
+    }
+    return out;
+}
+
+std::string pencil_csv(const MaterialPencil& p, const std::vector<std::string>& models) {
+    std::ostringstream os;
+    os << "r_lo_mm,r_hi_mm,r_mid_mm";
+    for (int c = 0; c < 3; ++c) {
+        const std::string ch = kChannelNames[c];
+        os << ",mcml_" << ch << "_per_mm2,mcml_" << ch << "_se_per_mm2,volpath_" << ch
+           << "_per_mm2,volpath_" << ch << "_se_per_mm2,volpath_ms_" << ch << "_per_mm2";
+        for (const auto& m : models) os << "," << m << "_" << ch << "_per_mm2";
+    }
+    os << "\n";
+    const double mm = 10.0, per_mm2 = 0.01;
+    for (size_t k = 0; k < p.bins.size(); ++k) {
+        os << fmt(p.bins.lo(k) * mm) << ',' << fmt(p.bins.hi(k) * mm) << ','
+           << fmt(0.5 * (p.bins.lo(k) + p.bins.hi(k)) * mm);
+        for (int c = 0; c < 3; ++c) {
+            const Reference& f = p.ref[static_cast<size_t>(c)];
+            os << ',' << fmt(f.mcml[k] * per_mm2) << ',' << fmt(f.mcml_se[k] * per_mm2) << ','
+               << fmt(f.all[k] * per_mm2) << ',' << fmt(f.all_se[k] * per_mm2) << ','
+               << fmt(f.ms[k] * per_mm2);
+            for (const auto& m : p.models[static_cast<size_t>(c)])
+                os << ',' << (m.error.empty() ? fmt(m.v[k] * per_mm2) : "");
+        }
+        os << "\n";
+    }
+    return os.str();
+}
+
+struct CrossRow {
+    int bins = 0;
+    double chi2 = 0, p = 1, max_abs_z = 0, rd_z = 0;
+    std::vector<std::pair<double, double>> z;  // (r_mid_mm, z)
+};
+
+CrossRow crossval(const RadialProfile& a, const RadialProfile& b, int c, double max_rel_se) {
+    CrossRow out;
+    for (size_t i = 0; i < a.rd_per_cm2[c].size(); ++i) {
+        const double va = a.rd_per_cm2[c][i], vb = b.rd_per_cm2[c][i];
+        const double sa = a.se_per_cm2[c][i], sb = b.se_per_cm2[c][i];
+        if (!(sa > 0 && sb > 0) || sa > max_rel_se * va || sb > max_rel_se * vb) continue;
+        const double z = (va - vb) / std::hypot(sa, sb);
+        out.chi2 += z * z;
+        out.max_abs_z = std::max(out.max_abs_z, std::fabs(z));
+        out.z.push_back({(static_cast<double>(i) + 0.5) * a.dr_cm * 10, z});
+        ++out.bins;
+    }
+    out.p = out.bins > 0 ? gamma_q(0.5 * out.bins, 0.5 * out.chi2) : 1.0;
+    out.rd_z = (a.rd_total[c] - b.rd_total[c]) / std::hypot(a.rd_total_se[c], b.rd_total_se[c]);
+    return out;
+}
+
+}  // namespace
+
+std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
+                                                 std::vector<Metric>& metrics) {
+    std::map<std::string, std::string> files;
+    const Experiment& e = r.exp;
+    if (e.volpath.enabled)
+        for (const auto& m : e.materials)
+            for (int c = 0; c < 3; ++c) {
+                const ChannelNode* n = find_node(r, m.label, c, "volpath");
+                const volpath::PencilLayout L{n->grid.nr};
+                const std::string base = m.label + "." + kChannelNames[c] + ".volpath.";
+                metrics.push_back(
+                    {base + "Rd", "1", n->vresult.mean[L.rd()], n->vresult.se[L.rd()], true, 0});
+                metrics.push_back({base + "Rd_single", "1", n->vresult.mean[L.rd_ss()],
+                                   n->vresult.se[L.rd_ss()], true, 0});
+            }
+    if (e.crossval.enabled) {
+        std::ostringstream sum, zs;
+        sum << "material,channel,bins,chi2,p_value,max_abs_z,Rd_mcml,Rd_mcml_se,Rd_volpath,"
+               "Rd_volpath_se,Rd_z,volpath_mode\n";
+        zs << "material,channel,r_mid_mm,z\n";
+        for (const auto& m : e.materials) {
+            const RadialProfile vp = volpath_profile(r, m.label, false);
+            const RadialProfile mc = material_profile(r, m.label);
+            for (int c = 0; c < 3; ++c) {
+                const CrossRow x = crossval(vp, mc, c, e.crossval.max_rel_se);
+                sum << m.label << ',' << kChannelNames[c] << ',' << x.bins << ',' << fmt(x.chi2)
+                    << ',' << fmt(x.p) << ',' << fmt(x.max_abs_z) << ',' << fmt(mc.rd_total[c])
+                    << ',' << fmt(mc.rd_total_se[c]) << ',' << fmt(vp.rd_total[c]) << ','
+                    << fmt(vp.rd_total_se[c]) << ',' << fmt(x.rd_z) << ',' << e.volpath.mode
+                    << '\n';
+                for (const auto& [rm, z] : x.z)
+                    zs << m.label << ',' << kChannelNames[c] << ',' << fmt(rm) << ',' << fmt(z)
+                       << '\n';
+            }
+        }
+        files["crossval/summary.csv"] = sum.str();
+        files["crossval/z_scores.csv"] = zs.str();
+    }
+    if (e.pencil.enabled) {
+        std::ostringstream err;
+        err << "model,material,channel,compared_with,rel_l2_rR,noise_floor_rel_l2_rR,Rd_model,"
+               "Rd_reference,Rd_reference_se,Rd_rel_error,Rd_z,note\n";
+        for (const auto& m : e.materials) {
+            const MaterialPencil p = pencil_data(r, m, true);
+            files["pencil/" + m.label + ".csv"] = pencil_csv(p, e.pencil.models);
+            for (int c = 0; c < 3; ++c) {
+                const Reference& f = p.ref[static_cast<size_t>(c)];
+                for (const ModelCurve& mc : p.models[static_cast<size_t>(c)]) {
+                    const std::vector<double>& ref = mc.single ? f.all : f.ms;
+                    const std::vector<double>& rse = mc.single ? f.all_se : f.ms_se;
+                    const double rd = mc.single ? f.rd : f.rd_ms;
+                    const double rd_se = mc.single ? f.rd_se : f.rd_ms_se;
+                    err << mc.name << ',' << m.label << ',' << kChannelNames[c] << ','
+                        << (mc.single ? "volpath_total" : "volpath_multiple_scattering");
+                    if (!mc.error.empty()) {
+                        err << ",,,,,,,,\"" << mc.error << "\"\n";
+                        continue;
+                    }
+                    std::vector<double> plus(ref.size());
+                    for (size_t k = 0; k < ref.size(); ++k) plus[k] = ref[k] + rse[k];
+                    const double l2 = rel_l2_rr(p.bins, mc.v, ref);
+                    const std::string mb =
+                        m.label + "." + kChannelNames[c] + ".model." + mc.name + ".";
+                    metrics.push_back({mb + "Rd", "1", mc.rd, 0, false, 1e-9});
+                    metrics.push_back({mb + "rel_l2_rR", "1", l2, 0, false, 1e-4});
+                    err << ',' << fmt(l2) << ',' << fmt(rel_l2_rr(p.bins, plus, ref)) << ','
+                        << fmt(mc.rd) << ',' << fmt(rd) << ',' << fmt(rd_se) << ','
+                        << fmt((mc.rd - rd) / rd) << ',' << fmt((mc.rd - rd) / rd_se) << ",\n";
+                }
+            }
+        }
+        files["pencil/errors.csv"] = err.str();
+    }
+    if (e.efficiency.enabled) {
+        for (const auto& label : e.efficiency.materials) {
+            std::ostringstream os;
+            os << "engine,channel,batches,paths,seconds,Rd,Rd_se,rel_se,efficiency_per_s\n";
+            for (int c = 0; c < 3; ++c) {
+                const ChannelNode* mc = find_node(r, label, c, "main");
+                const ChannelNode* vp = find_node(r, label, c, "volpath");
+                std::uint64_t b = 0;
+                for (const auto& p : mc->result.history) {
+                    if (++b < 2 || !(p.value > 0)) continue;
+                    const double rel = p.se / p.value;
+                    os << "mcml," << kChannelNames[c] << ',' << b << ',' << p.photons << ','
+                       << fmt(p.seconds) << ',' << fmt(p.value) << ',' << fmt(p.se) << ','
+                       << fmt(rel) << ',' << fmt(1 / (rel * rel * p.seconds)) << '\n';
+                }
+                b = 0;
+                for (const auto& p : vp->vresult.history) {
+                    if (++b < 2 || !(p.value > 0)) continue;
+                    const double rel = p.se / p.value;
+                    os << "volpath " << e.volpath.mode << ',' << kChannelNames[c] << ',' << b << ','
+                       << p.samples << ',' << fmt(p.seconds) << ',' << fmt(p.value) << ','
+                       << fmt(p.se) << ',' << fmt(rel) << ',' << fmt(1 / (rel * rel * p.seconds))
+                       << '\n';
+                }
+            }
+            files["efficiency/" + label + ".csv"] = os.str();
+        }
+    }
+    return files;
+}
+
+std::vector<PlotRequest> engine_plots(const ExperimentRun& r) {
+    std::vector<PlotRequest> out;
+    const Experiment& e = r.exp;
+    auto js = [](const std::string& s) {
+        std::string o = "\"";
+        for (char ch : s) {
+            if (ch == '"' || ch == '\\') o += '\\';
+            o += ch;
+        }
+        return o + "\"";
+    };
+    if (e.crossval.enabled) {
+        out.push_back(
+            {"{\"kind\": \"z_histogram\", \"csv\": \"crossval/z_scores.csv\", \"title\": " +
+                 js(e.name) + ", \"out\": \"plots/crossval_z\"}",
+             {"crossval/z_scores.csv"},
+             {"crossval", "z histogram", "plots/crossval_z",
+              "Per-bin z-scores of MCML against the path tracer, all materials and "
+              "channels pooled, with the standard normal density they should follow "
+              "(left), and against radius per material (right)."}});
+    }
+    if (e.pencil.enabled) {
+        std::string models = "[";
+        for (size_t i = 0; i < e.pencil.models.size(); ++i)
+            models += (i ? ", " : "") + js(e.pencil.models[i]);
+        models += "]";
+        for (const auto& m : e.materials) {
+            const std::string csv = "pencil/" + m.label + ".csv";
+            const std::string stem = "plots/pencil_" + m.label;
+            out.push_back(
+                {"{\"kind\": \"pencil\", \"csv\": " + js(csv) + ", \"models\": " + models +
+                     ", \"title\": " + js(m.label) + ", \"out\": " + js(stem) + "}",
+                 {csv},
+                 {"pencil", m.label, stem,
+                  m.label + ": R_d(r) of MCML (dots) and the path tracer (line, +-2 SE band; "
+                            "dashed: its multiple-scattering part) and of every analytic model, "
+                            "per channel, on linear, logarithmic and square-root axes and as "
+                            "r R_d(r) [Bitterli13 §3.6.3]. Every curve is per incident photon "
+                            "(models without the entry Fresnel factor are multiplied by 1 - Rsp) "
+                            "and averaged over the same annuli."}});
+        }
+    }
+    if (e.efficiency.enabled)
+        for (const auto& m : e.efficiency.materials) {
+            const std::string csv = "efficiency/" + m + ".csv";
+            const std::string stem = "plots/efficiency_" + m;
+            out.push_back({"{\"kind\": \"efficiency\", \"csv\": " + js(csv) +
+                               ", \"title\": " + js(m) + ", \"out\": " + js(stem) + "}",
+                           {csv},
+                           {"efficiency", m, stem,
+                            m + ": relative standard error of the total diffuse reflectance "
+                                "against wall time for both engines, per channel, and their "
+                                "efficiency 1 / (relative variance x time). Each run had every "
+                                "core to itself."}});
+        }
+    return out;
+}
+
+void engine_report(const ExperimentRun& r, const std::map<std::string, std::string>& files,
+                   const PlotResult& plots, std::ostringstream& os) {
+    const Experiment& e = r.exp;
+    if (e.crossval.enabled) {
+        os << "<h2 id=\"crossval\">MCML against the path tracer</h2>\n<p>The two engines share "
+              "no transport code. Per material and channel: the chi-square of the per-bin "
+              "z-scores (bins where both relative standard errors are below "
+           << e.crossval.max_rel_se
+           << "), its p-value, the largest |z|, and the z-score of the totals. The path tracer "
+              "runs in its "
+           << e.volpath.mode
+           << " mode. Tables: <a href=\"crossval/summary.csv\">summary.csv</a>, <a "
+              "href=\"crossval/z_scores.csv\">z_scores.csv</a>.</p>\n";
+        csv_table(os, files.at("crossval/summary.csv"), "Cross-validation");
+        figures(os, plots, "crossval");
+    }
+    if (e.pencil.enabled) {
+        os << "<h2 id=\"pencil\">Pencil beam: analytic profiles against ground truth</h2>\n<p>"
+              "Each model's relative L2 error of r R<sub>d</sub>(r) against the path tracer (the "
+              "noise floor is the same distance for the tracer's own +1 SE), and its error in "
+              "total diffuse reflectance. Like with like: models without single scattering are "
+              "compared with the multiple-scattering part (paths with two or more scattering "
+              "events), models without the entry Fresnel factor are multiplied by 1 - "
+              "R<sub>sp</sub>. Tables: <a href=\"pencil/errors.csv\">errors.csv</a>, "
+              "pencil/&lt;material&gt;.csv.</p>\n";
+        csv_table(os, files.at("pencil/errors.csv"), "Model errors");
+        figures(os, plots, "pencil");
+    }
+    if (e.efficiency.enabled) {
+        os << "<h2 id=\"efficiency\">Both engines against run time</h2>\n<p>Tables: ";
+        for (const auto& m : e.efficiency.materials)
+            os << "<a href=\"efficiency/" << esc(m) << ".csv\">" << esc(m) << ".csv</a> ";
+        os << "</p>\n";
+        figures(os, plots, "efficiency");
+    }
+}
+
+}  // namespace ssslab::runner
