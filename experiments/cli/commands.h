@@ -9,6 +9,7 @@ namespace ssslab::cli {
 
 void register_mcml(CLI::App& app, std::function<int()>& action);
 void register_profile(CLI::App& app, std::function<int()>& action);
+void register_sphere(CLI::App& app, std::function<int()>& action);
 void register_materials(CLI::App& app, std::function<int()>& action);
 void register_bench(CLI::App& app, std::function<int()>& action);
 void register_run(CLI::App& app, std::function<int()>& action);

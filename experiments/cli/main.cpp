@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
     register_check(app, action);
     register_mcml(app, action);
     register_profile(app, action);
+    register_sphere(app, action);
     register_materials(app, action);
     register_bench(app, action);
     // No command: `run` (the main job; options such as --quick or --dry-run go to it).
