@@ -34,6 +34,10 @@ struct Setup {
     int nr = 0;
     PencilLayout layout;
     std::int64_t long_events = 0;
+    // Hero mode: probability of each channel to be the hero (the one-sample MIS weights use
+    // them); uniform selection cycles R, G, B over the paths, otherwise a random draw.
+    std::array<double, 3> hero_prob{1.0 / 3, 1.0 / 3, 1.0 / 3};
+    bool hero_random = false;
     double long_survival = 0.1;
     FlightRule flight = FlightRule::kContinue;
 };
@@ -76,7 +80,7 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
 
     auto rescale = [&]() {
         if constexpr (kHeroMode) {
-            const double m = (q[0] + q[1] + q[2]) * (1.0 / 3.0);
+            const double m = s.hero_prob[0] * q[0] + s.hero_prob[1] * q[1] + s.hero_prob[2] * q[2];
             const double inv = 1.0 / m;
             for (int c = 0; c < 3; ++c) {
                 q[c] *= inv;
@@ -203,10 +207,11 @@ std::string fingerprint(const Medium& m, const PencilGrid& grid, const PencilOpt
     char buf[1024];
     std::snprintf(buf, sizeof buf,
                   "%s\nmode=%s absorption=%d run=%d seed=%" PRIu64 " batch=%" PRId64
-                  " flight=%d long=%" PRId64 ",%.17g\ngrid=%.17g,%d\n",
+                  " flight=%d hero_sel=%d long=%" PRId64 ",%.17g\ngrid=%.17g,%d\n",
                   kEngineVersion, to_string(o.mode), static_cast<int>(o.absorption), run, o.seed,
-                  batch, static_cast<int>(o.flight), long_path_threshold(m, o, run < 3 ? run : -1),
-                  o.long_path_survival, grid.dr_cm, grid.nr);
+                  batch, static_cast<int>(o.flight), static_cast<int>(o.hero_selection),
+                  long_path_threshold(m, o, run < 3 ? run : -1), o.long_path_survival, grid.dr_cm,
+                  grid.nr);
     std::string s = buf;
     for (int c = 0; c < 3; ++c) {
         std::snprintf(buf, sizeof buf, "c%d %.17g %.17g %.17g\n", c, m.sigma_a_per_cm[c],
@@ -347,6 +352,15 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
             s.g[i] = m.g[mc];
         }
         s.same_g = s.g[0] == s.g[1] && s.g[1] == s.g[2];
+        if (hero && o.hero_selection == HeroSelection::kMeanFreePath) {
+            // Channels with a longer reduced mean free path spread further and need more paths.
+            double sum = 0;
+            for (int c = 0; c < 3; ++c)
+                sum += s.hero_prob[static_cast<size_t>(c)] =
+                    1.0 / (m.sigma_a_per_cm[c] + m.sigma_s_per_cm[c] * (1 - m.g[c]));
+            for (double& x : s.hero_prob) x /= sum;
+            s.hero_random = true;
+        }
         const int stream = hero ? 3 : run;
 
         BatchRunOptions bo;
@@ -391,8 +405,11 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
             std::uint64_t events = 0;
             for (std::int64_t i = 0; i < n; ++i) {
                 if (hero) {
-                    const int h =
-                        static_cast<int>((index * bsz + static_cast<std::uint64_t>(i)) % 3);
+                    int h = static_cast<int>((index * bsz + static_cast<std::uint64_t>(i)) % 3);
+                    if (s.hero_random) {
+                        const double u = rng.uniform();
+                        h = u < s.hero_prob[0] ? 0 : (u < s.hero_prob[0] + s.hero_prob[1] ? 1 : 2);
+                    }
                     events += trace<3, true>(s, rng, h, tally);
                 } else if (weighted) {
                     events += trace<1, true>(s, rng, 0, tally);

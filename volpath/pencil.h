@@ -35,6 +35,12 @@ enum class ChromaticMode {
 };
 const char* to_string(ChromaticMode m);
 
+/// How hero mode picks the hero channel of a path.
+enum class HeroSelection {
+    kUniform,       ///< R, G, B in turn (probability 1/3 each, stratified)
+    kMeanFreePath,  ///< at random, with probability proportional to the reduced mean free path
+};
+
 /// How absorption enters a per-channel run (hero mode always weights).
 enum class Absorption {
     /// Absorb by roulette with the single-scattering albedo; weights stay 1 [Bitterli13 Alg. 1].
@@ -69,7 +75,8 @@ struct PencilOptions {
     SampleBudget budget;
     std::int64_t batch_paths = 0;  ///< 0: budget paths / 1000 (at least 1000), 1000 otherwise
     ChromaticMode mode = ChromaticMode::kPerChannel;
-    Absorption absorption = Absorption::kAnalog;  ///< kPerChannel only
+    Absorption absorption = Absorption::kAnalog;             ///< kPerChannel only
+    HeroSelection hero_selection = HeroSelection::kUniform;  ///< kHero only
     /// kPerChannel only: simulate just this channel (0..2); -1: all three. The other channels'
     /// runs are left empty and their profiles unfilled.
     int only_channel = -1;
@@ -115,7 +122,8 @@ struct PencilRun {
     Medium medium;
     PencilGrid grid;
     ChromaticMode mode = ChromaticMode::kPerChannel;
-    Absorption absorption = Absorption::kAnalog;  ///< kPerChannel only
+    Absorption absorption = Absorption::kAnalog;             ///< kPerChannel only
+    HeroSelection hero_selection = HeroSelection::kUniform;  ///< kHero only
     /// kPerChannel only: simulate just this channel (0..2); -1: all three. The other channels'
     /// runs are left empty and their profiles unfilled.
     int only_channel = -1;

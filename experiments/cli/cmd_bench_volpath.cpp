@@ -132,19 +132,25 @@ int run_volpath_bench(int threads, bool quick, int repeat) {
         const std::pair<volpath::ChromaticMode, volpath::Absorption> modes[] = {
             {volpath::ChromaticMode::kPerChannel, volpath::Absorption::kAnalog},
             {volpath::ChromaticMode::kPerChannel, volpath::Absorption::kWeighted},
-            {volpath::ChromaticMode::kHero, volpath::Absorption::kWeighted}};
+            {volpath::ChromaticMode::kHero, volpath::Absorption::kWeighted},
+            {volpath::ChromaticMode::kHero, volpath::Absorption::kAnalog}};
         for (const auto& [mode, absorption] : modes) {
             rows.push_back(best([&] {
                 volpath::PencilOptions o;
                 o.threads = threads;
                 o.mode = mode;
                 o.absorption = absorption;
+                // Hero with "analog" in this table stands for hero with mfp-proportional
+                // selection (hero mode always weights absorption).
+                const bool mfp_hero = mode == volpath::ChromaticMode::kHero &&
+                                      absorption == volpath::Absorption::kAnalog;
+                if (mfp_hero) o.hero_selection = volpath::HeroSelection::kMeanFreePath;
                 o.budget.samples = cs.photons;
                 const volpath::PencilRun r =
                     volpath::simulate_pencil(cs.medium, {cs.grid.dr_cm, cs.grid.nr}, o);
                 const std::string name =
                     mode == volpath::ChromaticMode::kHero
-                        ? "volpath hero"
+                        ? (mfp_hero ? "volpath hero mfp" : "volpath hero")
                         : (absorption == volpath::Absorption::kAnalog ? "volpath analog"
                                                                       : "volpath weighted");
                 return from_profile(name, r.profile, 3, r.seconds, r.paths, r.events);
@@ -170,11 +176,13 @@ int run_volpath_bench(int threads, bool quick, int repeat) {
         const double analog = time_to(rows[1], rows[1].profile_rel_se, true, 0.01);
         const double weighted = time_to(rows[2], rows[2].profile_rel_se, true, 0.01);
         const double hero = time_to(rows[3], rows[3].profile_rel_se, false, 0.01);
+        const double hero_mfp = time_to(rows[4], rows[4].profile_rel_se, false, 0.01);
         std::printf(
             "time to 1 %% on r R(r) in all channels, ratios: hero / weighted = %.2f, hero / "
-            "analog = %.2f; volpath analog / MCML = %.2f, weighted / MCML = %.2f, hero / MCML = "
-            "%.2f\n",
-            hero / weighted, hero / analog, analog / mc, weighted / mc, hero / mc);
+            "analog = %.2f, hero mfp / weighted = %.2f; volpath analog / MCML = %.2f, weighted / "
+            "MCML = %.2f, hero / MCML = %.2f, hero mfp / MCML = %.2f\n",
+            hero / weighted, hero / analog, hero_mfp / weighted, analog / mc, weighted / mc,
+            hero / mc, hero_mfp / mc);
     }
     std::printf(
         "\npaths/ms counts one path per channel for the per-channel engines and one path for all "
