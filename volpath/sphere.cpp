@@ -15,7 +15,7 @@ namespace ssslab::volpath {
 namespace {
 
 // Bump when a change alters the numbers produced for a given seed.
-constexpr const char* kEngineVersion = "volpath-sphere-1";
+constexpr const char* kEngineVersion = "volpath-sphere-2";
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -496,7 +496,6 @@ SphereRun simulate_sphere(const SphereScene& scene, const SphereOptions& o) {
     base.inv_pixel = sc.radius_cm / cam.pixel_cm;
     base.bins_per_rad = sc.beta_bins / kPi;
     base.layout = out.layout;
-    base.long_events = o.long_path_events;
     base.long_survival = o.long_path_survival;
 
     const bool hero = o.mode == ChromaticMode::kHero;
@@ -514,6 +513,9 @@ SphereRun simulate_sphere(const SphereScene& scene, const SphereOptions& o) {
             s.g[i] = m.g[mc];
         }
         s.same_g = s.g[0] == s.g[1] && s.g[1] == s.g[2];
+        PencilOptions rule;  // the pencil's rule for long_path_events = 0
+        rule.long_path_events = o.long_path_events;
+        s.long_events = long_path_threshold(m, rule, hero ? -1 : run);
         const int stream = hero ? 3 : run;
 
         BatchRunOptions bo;

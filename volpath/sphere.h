@@ -88,8 +88,9 @@ struct SphereOptions {
     /// 6.3 MB per tally, ~215 MB with 16 threads (snapshots add one per power of 2 batches).
     std::int64_t batch_paths = 0;
     ChromaticMode mode = ChromaticMode::kPerChannel;
-    /// Long-path roulette [Bitterli13 §3.2], as PencilOptions.
-    std::int64_t long_path_events = 10000;
+    /// Long-path roulette [Bitterli13 §3.2], as PencilOptions (0: its rule, 20 / (1 - albedo)
+    /// clamped to [1e4, 1e6]).
+    std::int64_t long_path_events = 0;
     double long_path_survival = 0.1;
     /// Checkpoints are <prefix>.<R|G|B|hero>.ckpt (empty: none).
     std::string checkpoint_prefix;

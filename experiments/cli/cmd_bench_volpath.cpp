@@ -1,5 +1,5 @@
 // `ssslab bench --volpath`: the volumetric path tracer against MCML's default engine on the same
-// slabs, and its two chromatic modes against each other.
+// slabs, its chromatic modes against each other, and the lit sphere.
 //
 // For each case and engine: paths per millisecond, ns per scattering event, and the time each
 // would need to reach 1 % relative standard error, both for the total diffuse reflectance and
@@ -12,6 +12,7 @@
 #include "mcml/engine.h"
 #include "mcml/profile.h"
 #include "volpath/pencil.h"
+#include "volpath/sphere.h"
 
 #include <algorithm>
 #include <cmath>
@@ -183,6 +184,57 @@ int run_volpath_bench(int threads, bool quick, int repeat) {
             "MCML = %.2f, hero / MCML = %.2f, hero mfp / MCML = %.2f\n",
             hero / weighted, hero / analog, hero_mfp / weighted, analog / mc, weighted / mc,
             hero / mc, hero_mfp / mc);
+    }
+    // The lit sphere (no MCML counterpart): Skin1, radius 5 mm, profile over beta only.
+    {
+        const Medium skin1 = *find_material("Skin1");
+        const std::int64_t photons = static_cast<std::int64_t>(200'000 * q);
+        std::printf(
+            "\nSkin1 sphere, radius 5 mm, directional light, exitance over beta (180 "
+            "bins, no image): %lld photons per channel\n",
+            static_cast<long long>(photons));
+        std::printf("%-18s %9s %10s %10s %9s | %-29s | %11s %11s\n", "engine", "wall_s", "paths/ms",
+                    "ns/event", "events/p", "diffuse exit (R, G, B)", "t_1%_tot_s", "t_1%_M_s");
+        const std::pair<volpath::ChromaticMode, const char*> modes[] = {
+            {volpath::ChromaticMode::kPerChannel, "volpath analog"},
+            {volpath::ChromaticMode::kHero, "volpath hero"}};
+        for (const auto& [mode, name] : modes) {
+            volpath::SphereScene sc;
+            sc.medium = skin1;
+            sc.radius_cm = 0.5;
+            volpath::SphereOptions o;
+            o.threads = threads;
+            o.mode = mode;
+            o.image = false;
+            o.budget.samples = photons;
+            volpath::SphereRun best;
+            for (int k = 0; k < repeat; ++k) {
+                volpath::SphereRun r = volpath::simulate_sphere(sc, o);
+                if (k == 0 || r.seconds < best.seconds) best = std::move(r);
+            }
+            const bool separate = mode == volpath::ChromaticMode::kPerChannel;
+            std::vector<double> rel_tot, rel_m;
+            for (int c = 0; c < 3; ++c) {
+                rel_tot.push_back(best.diffuse_se[c] / best.diffuse[c]);
+                double num = 0, den = 0;
+                for (size_t j = 0; j < best.exitance[c].size(); ++j) {
+                    num += best.exitance_se[c][j] * best.exitance_se[c][j];
+                    den += best.exitance[c][j] * best.exitance[c][j];
+                }
+                rel_m.push_back(den > 0 ? std::sqrt(num / den) : 0.0);
+            }
+            Row r;
+            r.seconds = best.seconds;
+            char dif[64];
+            std::snprintf(dif, sizeof dif, "%.4f %.4f %.4f", best.diffuse[0], best.diffuse[1],
+                          best.diffuse[2]);
+            std::printf("%-18s %9.3f %10.1f %10.1f %9.1f | %-29s | %11.3g %11.3g\n", name,
+                        best.seconds, static_cast<double>(best.paths) / (best.seconds * 1e3),
+                        best.seconds * 1e9 * threads /
+                            static_cast<double>(std::max<std::uint64_t>(1, best.events)),
+                        static_cast<double>(best.events) / static_cast<double>(best.paths), dif,
+                        time_to(r, rel_tot, separate, 0.01), time_to(r, rel_m, separate, 0.01));
+        }
     }
     std::printf(
         "\npaths/ms counts one path per channel for the per-channel engines and one path for all "
