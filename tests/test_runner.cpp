@@ -170,7 +170,7 @@ materials = ["Skin1"]
     dir.write("small.toml", text);
     const auto first = run_ssslab({"run", "small.toml"}, dir.path());
     ASSERT_EQ(first.exit_code, 0) << first.err;
-    EXPECT_NE(first.out.find("12 computed, 0 reused"), std::string::npos) << first.out;
+    EXPECT_NE(first.out.find("13 computed, 0 reused"), std::string::npos) << first.out;
     const fs::path res = dir / "results" / "small";
     for (const char* f : {"crossval/summary.csv", "crossval/z_scores.csv", "pencil/errors.csv",
                           "pencil/Skin1.csv", "pencil/Slab.csv", "efficiency/Skin1.csv"})
@@ -197,12 +197,12 @@ materials = ["Skin1"]
 
     const auto second = run_ssslab({"run", "small.toml"}, dir.path());
     ASSERT_EQ(second.exit_code, 0) << second.err;
-    EXPECT_NE(second.out.find("0 computed, 12 reused"), std::string::npos) << second.out;
+    EXPECT_NE(second.out.find("0 computed, 13 reused"), std::string::npos) << second.out;
     EXPECT_EQ(testing::read_text(res / "crossval" / "summary.csv"), summary);
 
     dir.write("small.toml", replace(text, "photons = 20000\nmode", "photons = 30000\nmode"));
     const auto third = run_ssslab({"run", "small.toml"}, dir.path());
-    EXPECT_NE(third.out.find("6 computed, 6 reused"), std::string::npos) << third.out;
+    EXPECT_NE(third.out.find("7 computed, 6 reused"), std::string::npos) << third.out;
 }
 
 // Start ssslab in the background, kill it after `ms` milliseconds with `sig`, return its status.

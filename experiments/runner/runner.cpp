@@ -264,6 +264,22 @@ void append_study_metrics(const std::map<std::string, std::string>& files, const
     }
 }
 
+// Inverse of metrics_csv() (values printed with 10 significant digits, as in metrics.csv).
+void read_metrics_csv(const std::string& text, std::vector<Metric>& out) {
+    std::istringstream in(text);
+    std::string line;
+    std::getline(in, line);  // header
+    while (std::getline(in, line)) {
+        std::vector<std::string> f;
+        std::stringstream ls(line);
+        for (std::string x; std::getline(ls, x, ',');) f.push_back(x);
+        if (f.size() != 6)
+            throw std::runtime_error("cached metrics.csv: malformed line \"" + line + "\"");
+        out.push_back(
+            {f[0], f[1], std::stod(f[2]), std::stod(f[3]), f[4] == "stochastic", std::stod(f[5])});
+    }
+}
+
 std::string metrics_csv(const std::vector<Metric>& ms) {
     std::ostringstream os;
     os << "metric,unit,value,se,kind,tolerance\n";
@@ -594,7 +610,40 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
             write_file_atomic(stage / "convergence" / (m + "_snapshots.csv"), s);
         }
     write_file_atomic(stage / "artifacts.csv", artifacts_csv(r));
-    const std::map<std::string, std::string> engine_files = engine_tables(r, r.metrics);
+    // The engines' tables (crossval, pencil models, efficiency) are an artifact keyed by their
+    // outputs' settings and the nodes they read: evaluating the models costs seconds.
+    std::map<std::string, std::string> engine_files;
+    if (r.exp.crossval.enabled || r.exp.pencil.enabled || r.exp.efficiency.enabled) {
+        ContentKey key("engine-tables");
+        key.add("version", "engine-tables-1")
+            .add("crossval", r.exp.crossval.enabled)
+            .add("max_rel_se", r.exp.crossval.max_rel_se)
+            .add("volpath_mode", r.exp.volpath.mode);
+        for (const auto& m : r.exp.pencil.models) key.add("model", m);
+        for (const auto& m : r.exp.efficiency.materials) key.add("efficiency", m);
+        for (const auto& n : r.nodes) key.add(n.material + "." + n.role, n.key);
+        const std::string k = key.hex();
+        if (const auto dir = cache.find("engine-tables", k)) {
+            for (const auto& f : fs::recursive_directory_iterator(*dir)) {
+                if (!f.is_regular_file()) continue;
+                const std::string rel = fs::relative(f.path(), *dir).string();
+                if (rel == "metrics.csv")
+                    read_metrics_csv(read_file(f.path()), r.metrics);
+                else if (rel != "manifest.toml")
+                    engine_files[rel] = read_file(f.path());
+            }
+            ++r.reused;
+        } else {
+            std::vector<Metric> ms;
+            engine_files = engine_tables(r, ms);
+            auto stored = engine_files;
+            stored["metrics.csv"] = metrics_csv(ms);
+            stored["manifest.toml"] = "[artifact]\nkind = \"engine-tables\"\nkey = \"" + k + "\"\n";
+            cache.store("engine-tables", k, stored);
+            r.metrics.insert(r.metrics.end(), ms.begin(), ms.end());
+            ++r.computed;
+        }
+    }
     for (const auto& [name, content] : engine_files) write_file_atomic(stage / name, content);
     for (const auto& study : r.exp.kernel_studies) {
         // A study is an artifact keyed by its spec and the ground-truth runs it reads.
