@@ -2,6 +2,7 @@
 #include "approx/sphere_bssrdf.h"
 
 #include "approx/diffusion.h"
+#include "core/quadrature.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -103,35 +104,6 @@ double adaptive(F&& f, const std::vector<Panel>& initial, double rel_tol, double
         heap.pop();
     }
     return value;
-}
-
-// ---- Gauss-Legendre nodes on [-1, 1] ----------------------------------------------------------
-
-void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w) {
-    x.assign(static_cast<size_t>(n), 0.0);
-    w.assign(static_cast<size_t>(n), 0.0);
-    // P_n(z) and P_n'(z) by the three-term recurrence.
-    auto legendre = [n](double z, double& dp) {
-        double p0 = 1, p1 = z;
-        for (int k = 2; k <= n; ++k) {
-            const double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
-            p0 = p1;
-            p1 = p2;
-        }
-        dp = n * (z * p1 - p0) / (z * z - 1);
-        return p1;
-    };
-    for (int i = 0; i < n; ++i) {
-        double z = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 1;  // Newton from Tricomi's guess
-        for (int it = 0; it < 100; ++it) {
-            const double dz = legendre(z, dp) / dp;
-            z -= dz;
-            if (std::abs(dz) < 1e-16) break;
-        }
-        legendre(z, dp);
-        x[static_cast<size_t>(n - 1 - i)] = z;  // increasing
-        w[static_cast<size_t>(n - 1 - i)] = 2.0 / ((1 - z * z) * dp * dp);
-    }
 }
 
 // ---- The entry weight -------------------------------------------------------------------------

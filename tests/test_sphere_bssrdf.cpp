@@ -7,6 +7,7 @@
 #include "approx/diffusion.h"
 #include "approx/sphere_bssrdf.h"
 #include "core/film_image.h"
+#include "core/quadrature.h"
 #include "testing.h"
 #include "volpath/sampling.h"
 #include "volpath/sphere.h"
@@ -31,29 +32,6 @@ double deg(double d) {
     return d * kPi / 180.0;
 }
 
-// Gauss-Legendre nodes and weights on [-1, 1] (Newton on P_n), for the brute-force quadrature.
-void legendre_rule(int n, std::vector<double>& x, std::vector<double>& w) {
-    x.resize(static_cast<size_t>(n));
-    w.resize(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i) {
-        double z = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1, p1 = z;
-            for (int k = 2; k <= n; ++k) {
-                const double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (z * p1 - p0) / (z * z - 1);
-            const double dz = p1 / dp;
-            z -= dz;
-            if (std::abs(dz) < 1e-15) break;
-        }
-        x[static_cast<size_t>(i)] = z;
-        w[static_cast<size_t>(i)] = 2 / ((1 - z * z) * dp * dp);
-    }
-}
-
 // E_t / E0 with volpath's Fresnel (an implementation independent of approx's).
 double entry(double mu, double eta, bool fresnel) {
     if (mu <= 0) return 0;
@@ -65,7 +43,7 @@ double entry(double mu, double eta, bool fresnel) {
 // crosses 0; dA = R^2 sin psi dpsi dphi, chord 2 R sin(psi / 2).
 double brute_force(const RadialFunction& rd, double radius, double beta, double eta, bool fresnel) {
     std::vector<double> x, w;
-    legendre_rule(16, x, w);
+    gauss_legendre(16, x, w);
     std::vector<double> tb = {0.0, 1.0};
     for (double psi : {std::abs(0.5 * kPi - beta), 0.5 * kPi + beta})
         if (psi > 0 && psi < kPi) tb.push_back(std::cbrt(psi / kPi));

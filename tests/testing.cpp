@@ -1,5 +1,7 @@
 #include "testing.h"
 
+#include "core/quadrature.h"
+
 #include <zlib.h>
 
 #include <algorithm>
@@ -161,36 +163,16 @@ double chi2_statistic(const std::vector<double>& observed, const std::vector<dou
     return chi2;
 }
 
-namespace {
-
-// Gauss-Legendre nodes and weights on [0, 1] (Newton on the Legendre recurrence).
-void gauss_legendre01(int n, std::vector<double>& x, std::vector<double>& w) {
-    x.resize(static_cast<size_t>(n));
-    w.resize(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i) {
-        double z = std::cos(M_PI * (i + 0.75) / (n + 0.5)), dp = 0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1, p1 = z;
-            for (int k = 2; k <= n; ++k) {
-                const double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (z * p1 - p0) / (z * z - 1);
-            const double dz = p1 / dp;
-            z -= dz;
-            if (std::fabs(dz) < 1e-16) break;
-        }
-        x[static_cast<size_t>(i)] = 0.5 * (1 - z);
-        w[static_cast<size_t>(i)] = 1.0 / ((1 - z * z) * dp * dp);
-    }
-}
-
-}  // namespace
-
 double chandrasekhar_h(double a, double mu) {
+    // 400 Gauss-Legendre nodes mapped to [0, 1].
     static thread_local std::vector<double> x, w;
-    if (x.empty()) gauss_legendre01(400, x, w);
+    if (x.empty()) {
+        gauss_legendre(400, x, w);
+        for (size_t i = 0; i < x.size(); ++i) {
+            x[i] = 0.5 * (1 + x[i]);
+            w[i] *= 0.5;
+        }
+    }
     const size_t n = x.size();
     std::vector<double> h(n, 1.0), next(n);
     auto integral = [&](double m, const std::vector<double>& hv) {

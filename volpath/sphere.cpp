@@ -1,6 +1,7 @@
 #include "volpath/sphere.h"
 
 #include "core/error.h"
+#include "core/quadrature.h"
 #include "core/rng.h"
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 namespace ssslab::volpath {
 
@@ -342,26 +344,9 @@ double sphere_specular_reflectance(double eta) {
     if (!(eta > 0) || !std::isfinite(eta))
         throw std::invalid_argument("sphere_specular_reflectance: eta must be positive");
     if (eta == 1.0) return 0.0;
-    // Gauss-Legendre nodes and weights (Newton on P_n from the Chebyshev guess).
     constexpr int kN = 20;
-    double x[kN], w[kN];
-    for (int i = 0; i < kN; ++i) {
-        double z = std::cos(kPi * (i + 0.75) / (kN + 0.5)), dp = 1;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1, p1 = z;
-            for (int k = 2; k <= kN; ++k) {
-                const double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = kN * (z * p1 - p0) / (z * z - 1);
-            const double dz = p1 / dp;
-            z -= dz;
-            if (std::abs(dz) < 1e-16) break;
-        }
-        x[i] = z;
-        w[i] = 2.0 / ((1 - z * z) * dp * dp);
-    }
+    std::vector<double> x, w;
+    gauss_legendre(kN, x, w);
     // Below the critical cosine (eta < 1: sin(theta) > eta) the reflection is total and
     // contributes mu_c^2; F has a square-root kink there, so the quadrature starts at it.
     const double mu_c = eta < 1 ? std::sqrt(1 - eta * eta) : 0.0;
@@ -374,7 +359,7 @@ double sphere_specular_reflectance(double eta) {
         }
         whole *= r;
     }
-    return mu_c * mu_c + fresnel_moment(eta, mu_c, 1.0, x, w, kN, whole, 0);
+    return mu_c * mu_c + fresnel_moment(eta, mu_c, 1.0, x.data(), w.data(), kN, whole, 0);
 }
 
 SphereCamera sphere_camera(const SphereScene& scene) {
