@@ -69,39 +69,19 @@ std::uint64_t derive_seed(std::uint64_t seed, const Medium& m, int c, const std:
     return std::stoull(k.hex().substr(0, 16), nullptr, 16);
 }
 
-ContentKey volpath_key(const ChannelNode& n) {
-    const Medium& m = n.medium;
-    const int c = n.channel;
-    ContentKey k(kVolpathKind);
-    k.add("engine_version", volpath::engine_version())
-        .add("mode", n.volpath_mode)
-        .add("sigma_a_per_cm", m.sigma_a_per_cm[c])
-        .add("sigma_s_per_cm", m.sigma_s_per_cm[c])
-        .add("g", m.g[c])
-        .add("eta", m.eta)
-        .add("eta_above", m.eta_above)
-        .add("eta_below", m.eta_below)
-        .add("thickness_cm", m.thickness_cm)
-        .add("dr_cm", n.grid.dr_cm)
-        .add("nr", n.grid.nr)
-        .add("budget_photons", n.budget.photons ? *n.budget.photons : std::int64_t{-1})
-        .add("budget_seconds", n.budget.seconds ? *n.budget.seconds : -1.0)
-        .add("budget_rel_error", n.budget.rel_error ? *n.budget.rel_error : -1.0)
-        .add("batch_paths", n.batch_photons)
-        .add("seed", n.seed)
-        .add("snapshots", true);
-    return k;
-}
-
 ContentKey node_key(const ChannelNode& n) {
-    if (n.engine == "volpath") return volpath_key(n);
     const Medium& m = n.medium;
     const int c = n.channel;
-    ContentKey k(kKind);
-    k.add("engine_version", mcml::engine_version())
-        .add("tally", "profile")
-        .add("snapshots", true)
-        .add("sigma_a_per_cm", m.sigma_a_per_cm[c])
+    const bool volpath = n.engine == "volpath";
+    ContentKey k(kind_of(n));
+    if (volpath)
+        k.add("engine_version", volpath::engine_version()).add("mode", n.volpath_mode);
+    else
+        k.add("engine_version", mcml::engine_version())
+            .add("tally", "profile")
+            .add("snapshots", true);
+    // What both engines' results depend on: the channel's medium, the grid and the budget.
+    k.add("sigma_a_per_cm", m.sigma_a_per_cm[c])
         .add("sigma_s_per_cm", m.sigma_s_per_cm[c])
         .add("g", m.g[c])
         .add("eta", m.eta)
@@ -112,10 +92,11 @@ ContentKey node_key(const ChannelNode& n) {
         .add("nr", n.grid.nr)
         .add("budget_photons", n.budget.photons ? *n.budget.photons : std::int64_t{-1})
         .add("budget_seconds", n.budget.seconds ? *n.budget.seconds : -1.0)
-        .add("budget_rel_error", n.budget.rel_error ? *n.budget.rel_error : -1.0)
-        .add("batch_photons", n.batch_photons)
-        .add("seed", n.seed)
-        .add("stream", std::int64_t{0});
+        .add("budget_rel_error", n.budget.rel_error ? *n.budget.rel_error : -1.0);
+    if (volpath)
+        k.add("batch_paths", n.batch_photons).add("seed", n.seed).add("snapshots", true);
+    else
+        k.add("batch_photons", n.batch_photons).add("seed", n.seed).add("stream", std::int64_t{0});
     return k;
 }
 
@@ -123,60 +104,36 @@ mcml::ProfileGrid grid_for(const Experiment& e, const Medium& m) {
     return e.mcml.grid.apply(mcml::freude14_grid(m));
 }
 
-std::string volpath_manifest_toml(const ChannelNode& n) {
-    auto doc = ConfigDocument::empty("manifest.toml");
-    ConfigTable root = doc->root();
-    ConfigTable a = root.table_or_empty("artifact");
-    a.record("kind", std::string(kVolpathKind));
-    a.record("key", n.key);
-    a.record("material", n.material);
-    a.record("channel", std::string(kChannelNames[n.channel]));
-    a.record("role", n.role);
-    a.record("canonical_description", n.key_text);
-    ConfigTable r = root.table_or_empty("run");
-    const BatchRunResult& res = n.vresult;
-    const volpath::PencilLayout L{n.grid.nr};
-    r.record("engine", std::string("volpath"));
-    r.record("engine_version", std::string(volpath::engine_version()) + " " + n.volpath_mode);
-    r.record("seed", static_cast<std::int64_t>(n.seed));
-    r.record("budget", budget_text(n.budget));
-    r.record("photons", static_cast<std::int64_t>(res.samples));
-    r.record("batches", static_cast<std::int64_t>(res.batches));
-    r.record("batch_photons", n.batch_photons);
-    r.record("wall_seconds", res.seconds);
-    r.record("stop_reason", std::string(to_string(res.reason)));
-    r.record("resumed_from_checkpoint", std::string(res.resumed ? "yes" : "no"));
-    r.record("Rd", res.mean[L.rd()]);
-    r.record("Rd_se", res.se[L.rd()]);
-    doc->add_resolved_section("provenance", provenance());
-    return doc->resolved_toml();
-}
-
 std::string manifest_toml(const ChannelNode& n) {
-    if (n.engine == "volpath") return volpath_manifest_toml(n);
     auto doc = ConfigDocument::empty("manifest.toml");
     ConfigTable root = doc->root();
     ConfigTable a = root.table_or_empty("artifact");
-    a.record("kind", std::string(kKind));
+    a.record("kind", std::string(kind_of(n)));
     a.record("key", n.key);
     a.record("material", n.material);
     a.record("channel", std::string(kChannelNames[n.channel]));
     a.record("role", n.role);
     a.record("canonical_description", n.key_text);
     ConfigTable r = root.table_or_empty("run");
-    const mcml::RunResult& res = n.result;
-    r.record("engine", std::string("mcml"));
-    r.record("engine_version", std::string(mcml::engine_version()));
+    r.record("engine", n.engine);
+    const bool volpath = n.engine == "volpath";
+    const BatchRunResult& v = n.vresult;
+    const mcml::RunResult& m = n.result;
+    const volpath::PencilLayout L{n.grid.nr};
+    r.record("engine_version", volpath
+                                   ? std::string(volpath::engine_version()) + " " + n.volpath_mode
+                                   : std::string(mcml::engine_version()));
     r.record("seed", static_cast<std::int64_t>(n.seed));
     r.record("budget", budget_text(n.budget));
-    r.record("photons", static_cast<std::int64_t>(res.photons));
-    r.record("batches", static_cast<std::int64_t>(res.batches));
-    r.record("batch_photons", res.batch_photons);
-    r.record("wall_seconds", res.seconds);
-    r.record("stop_reason", std::string(mcml::to_string(res.reason)));
-    r.record("resumed_from_checkpoint", std::string(res.resumed ? "yes" : "no"));
-    r.record("Rd", res.mean(res.layout.rd));
-    r.record("Rd_se", res.se[res.layout.rd]);
+    r.record("photons", static_cast<std::int64_t>(volpath ? v.samples : m.photons));
+    r.record("batches", static_cast<std::int64_t>(volpath ? v.batches : m.batches));
+    r.record("batch_photons", volpath ? n.batch_photons : m.batch_photons);
+    r.record("wall_seconds", volpath ? v.seconds : m.seconds);
+    r.record("stop_reason", std::string(volpath ? to_string(v.reason) : mcml::to_string(m.reason)));
+    r.record("resumed_from_checkpoint",
+             std::string((volpath ? v.resumed : m.resumed) ? "yes" : "no"));
+    r.record("Rd", volpath ? v.mean[L.rd()] : m.mean(m.layout.rd));
+    r.record("Rd_se", volpath ? v.se[L.rd()] : m.se[m.layout.rd]);
     doc->add_resolved_section("provenance", provenance());
     return doc->resolved_toml();
 }
