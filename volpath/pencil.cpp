@@ -112,7 +112,7 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
     for (;;) {
         double t = sigma_t > 0 ? -std::log(rng.uniform()) / sigma_t : kInf;
         double travelled = 0;
-        bool exited = false, at_boundary = false;
+        bool exited = false;
         for (;;) {
             const double tb = w.z > 0 ? (s.thickness - p.z) / w.z : (w.z < 0 ? -p.z / w.z : kInf);
             if (t < tb) {
@@ -131,8 +131,7 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
                     t -= tb;
                 } else if (s.flight == FlightRule::kResample) {
                     t = sigma_t > 0 ? -std::log(rng.uniform()) / sigma_t : kInf;
-                } else {  // kInteractAtBoundary
-                    at_boundary = true;
+                } else {  // kInteractAtBoundary: the interaction happens here
                     break;
                 }
                 continue;
@@ -160,7 +159,6 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
             break;
         }
         if (exited) return events;
-        (void)at_boundary;
 
         // Interaction.
         ++events;

@@ -59,14 +59,15 @@ Row from_profile(const std::string& engine, const RadialProfile& p, int channels
     return r;
 }
 
-// Time to reach `target` relative SE in every channel: channels of separate runs each run to
-// their own target (sum); one run for all channels runs until the worst channel meets it.
-double time_to(const Row& r, const std::vector<double>& rel, bool separate, double target) {
+// Time to reach `target` relative SE in every channel, from a run of `seconds` that reached
+// `rel`: channels of separate runs each run to their own target (sum); one run for all channels
+// runs until the worst channel meets it.
+double time_to(double seconds, const std::vector<double>& rel, bool separate, double target) {
     double t = 0;
-    const double per_channel = r.seconds / (separate ? static_cast<double>(rel.size()) : 1.0);
+    const double per_channel = seconds / (separate ? static_cast<double>(rel.size()) : 1.0);
     for (double x : rel) {
         const double f = (x / target) * (x / target);
-        t = separate ? t + per_channel * f : std::max(t, r.seconds * f);
+        t = separate ? t + per_channel * f : std::max(t, seconds * f);
     }
     return t;
 }
@@ -165,19 +166,20 @@ int run_volpath_bench(int threads, bool quick, int repeat) {
             std::snprintf(rd, sizeof rd, "%.4f %.4f %.4f", r.rd[0], r.rd[1], r.rd[2]);
             std::snprintf(pr, sizeof pr, "%.2e %.2e %.2e", r.profile_rel_se[0], r.profile_rel_se[1],
                           r.profile_rel_se[2]);
-            std::printf(
-                "%-18s %9.3f %10.1f %10.1f %9.1f | %-29s | %-29s | %11.3g %11.3g\n",
-                r.engine.c_str(), r.seconds, static_cast<double>(r.paths) / (r.seconds * 1e3),
-                r.seconds * 1e9 * threads /
-                    static_cast<double>(std::max<std::uint64_t>(1, r.events)),
-                static_cast<double>(r.events) / static_cast<double>(r.paths), rd, pr,
-                time_to(r, rel_rd, separate, 0.01), time_to(r, r.profile_rel_se, separate, 0.01));
+            std::printf("%-18s %9.3f %10.1f %10.1f %9.1f | %-29s | %-29s | %11.3g %11.3g\n",
+                        r.engine.c_str(), r.seconds,
+                        static_cast<double>(r.paths) / (r.seconds * 1e3),
+                        r.seconds * 1e9 * threads /
+                            static_cast<double>(std::max<std::uint64_t>(1, r.events)),
+                        static_cast<double>(r.events) / static_cast<double>(r.paths), rd, pr,
+                        time_to(r.seconds, rel_rd, separate, 0.01),
+                        time_to(r.seconds, r.profile_rel_se, separate, 0.01));
         }
-        const double mc = time_to(rows[0], rows[0].profile_rel_se, true, 0.01);
-        const double analog = time_to(rows[1], rows[1].profile_rel_se, true, 0.01);
-        const double weighted = time_to(rows[2], rows[2].profile_rel_se, true, 0.01);
-        const double hero = time_to(rows[3], rows[3].profile_rel_se, false, 0.01);
-        const double hero_mfp = time_to(rows[4], rows[4].profile_rel_se, false, 0.01);
+        const double mc = time_to(rows[0].seconds, rows[0].profile_rel_se, true, 0.01);
+        const double analog = time_to(rows[1].seconds, rows[1].profile_rel_se, true, 0.01);
+        const double weighted = time_to(rows[2].seconds, rows[2].profile_rel_se, true, 0.01);
+        const double hero = time_to(rows[3].seconds, rows[3].profile_rel_se, false, 0.01);
+        const double hero_mfp = time_to(rows[4].seconds, rows[4].profile_rel_se, false, 0.01);
         std::printf(
             "time to 1 %% on r R(r) in all channels, ratios: hero / weighted = %.2f, hero / "
             "analog = %.2f, hero mfp / weighted = %.2f; volpath analog / MCML = %.2f, weighted / "
@@ -223,8 +225,6 @@ int run_volpath_bench(int threads, bool quick, int repeat) {
                 }
                 rel_m.push_back(den > 0 ? std::sqrt(num / den) : 0.0);
             }
-            Row r;
-            r.seconds = best.seconds;
             char dif[64];
             std::snprintf(dif, sizeof dif, "%.4f %.4f %.4f", best.diffuse[0], best.diffuse[1],
                           best.diffuse[2]);
@@ -233,7 +233,8 @@ int run_volpath_bench(int threads, bool quick, int repeat) {
                         best.seconds * 1e9 * threads /
                             static_cast<double>(std::max<std::uint64_t>(1, best.events)),
                         static_cast<double>(best.events) / static_cast<double>(best.paths), dif,
-                        time_to(r, rel_tot, separate, 0.01), time_to(r, rel_m, separate, 0.01));
+                        time_to(best.seconds, rel_tot, separate, 0.01),
+                        time_to(best.seconds, rel_m, separate, 0.01));
         }
     }
     std::printf(

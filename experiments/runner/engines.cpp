@@ -344,18 +344,10 @@ std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
 std::vector<PlotRequest> engine_plots(const ExperimentRun& r) {
     std::vector<PlotRequest> out;
     const Experiment& e = r.exp;
-    auto js = [](const std::string& s) {
-        std::string o = "\"";
-        for (char ch : s) {
-            if (ch == '"' || ch == '\\') o += '\\';
-            o += ch;
-        }
-        return o + "\"";
-    };
     if (e.crossval.enabled) {
         out.push_back(
             {"{\"kind\": \"z_histogram\", \"csv\": \"crossval/z_scores.csv\", \"title\": " +
-                 js(e.name) + ", \"out\": \"plots/crossval_z\"}",
+                 json_string(e.name) + ", \"out\": \"plots/crossval_z\"}",
              {"crossval/z_scores.csv"},
              {"crossval", "z histogram", "plots/crossval_z",
               "Per-bin z-scores of MCML against the path tracer, all materials and "
@@ -365,14 +357,15 @@ std::vector<PlotRequest> engine_plots(const ExperimentRun& r) {
     if (e.pencil.enabled) {
         std::string models = "[";
         for (size_t i = 0; i < e.pencil.models.size(); ++i)
-            models += (i ? ", " : "") + js(e.pencil.models[i]);
+            models += (i ? ", " : "") + json_string(e.pencil.models[i]);
         models += "]";
         for (const auto& m : e.materials) {
             const std::string csv = "pencil/" + m.label + ".csv";
             const std::string stem = "plots/pencil_" + m.label;
             out.push_back(
-                {"{\"kind\": \"pencil\", \"csv\": " + js(csv) + ", \"models\": " + models +
-                     ", \"title\": " + js(m.label) + ", \"out\": " + js(stem) + "}",
+                {"{\"kind\": \"pencil\", \"csv\": " + json_string(csv) + ", \"models\": " + models +
+                     ", \"title\": " + json_string(m.label) + ", \"out\": " + json_string(stem) +
+                     "}",
                  {csv},
                  {"pencil", m.label, stem,
                   m.label + ": R_d(r) of MCML (dots) and the path tracer (line, +-2 SE band; "
@@ -387,8 +380,9 @@ std::vector<PlotRequest> engine_plots(const ExperimentRun& r) {
         for (const auto& m : e.efficiency.materials) {
             const std::string csv = "efficiency/" + m + ".csv";
             const std::string stem = "plots/efficiency_" + m;
-            out.push_back({"{\"kind\": \"efficiency\", \"csv\": " + js(csv) +
-                               ", \"title\": " + js(m) + ", \"out\": " + js(stem) + "}",
+            out.push_back({"{\"kind\": \"efficiency\", \"csv\": " + json_string(csv) +
+                               ", \"title\": " + json_string(m) +
+                               ", \"out\": " + json_string(stem) + "}",
                            {csv},
                            {"efficiency", m, stem,
                             m + ": relative standard error of the total diffuse reflectance "

@@ -27,6 +27,13 @@ std::string quote(const std::string& s) {
     return q + "'";
 }
 
+int run_shell(const std::string& cmd) {
+    const int status = std::system(cmd.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
+}  // namespace
+
 std::string json_string(const std::string& s) {
     std::string o = "\"";
     for (char c : s) {
@@ -39,13 +46,6 @@ std::string json_string(const std::string& s) {
     }
     return o + "\"";
 }
-
-int run_shell(const std::string& cmd) {
-    const int status = std::system(cmd.c_str());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-}
-
-}  // namespace
 
 std::string find_python() {
     std::vector<std::string> candidates;

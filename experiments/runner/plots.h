@@ -34,6 +34,9 @@ PlotResult make_plots(const ExperimentRun& r, const std::filesystem::path& dir,
 /// or python3 on the PATH. Empty if none.
 std::string find_python();
 
+/// A JSON string literal (quotes, backslashes and newlines escaped), for plot specs.
+std::string json_string(const std::string& s);
+
 /// scripts/plot.py, embedded at build time.
 std::string_view plot_script();
 
