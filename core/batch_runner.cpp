@@ -1,6 +1,7 @@
 #include "core/batch_runner.h"
 
 #include "core/atomic_file.h"
+#include "core/binary_io.h"
 #include "core/error.h"
 
 #include <tbb/concurrent_queue.h>
@@ -26,108 +27,46 @@ double seconds_since(Clock::time_point t0) {
 constexpr char kCheckpointMagic[8] = {'S', 'S', 'S', 'L', 'B', 'C', 'K', '1'};
 constexpr char kResultMagic[8] = {'S', 'S', 'S', 'L', 'B', 'R', 'S', '1'};
 
-class Writer {
-  public:
-    explicit Writer(const char magic[8]) : out_(magic, 8) {}
-    template <class T>
-    void put(const T& v) {
-        out_.append(reinterpret_cast<const char*>(&v), sizeof(T));
+// The per-batch history and the snapshots, in checkpoints and result files.
+void put_progress(BinaryWriter& w, const std::vector<BatchProgress>& h,
+                  const std::vector<BatchSnapshot>& s) {
+    w.put<std::uint64_t>(h.size());
+    for (const auto& p : h) {
+        w.put(p.samples);
+        w.put(p.seconds);
+        w.put(p.value);
+        w.put(p.se);
     }
-    void put_vec(const std::vector<double>& v) {
-        put<std::uint64_t>(v.size());
-        out_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(double));
+    w.put<std::uint64_t>(s.size());
+    for (const auto& sn : s) {
+        w.put(sn.samples);
+        w.put(sn.batches);
+        w.put(sn.seconds);
+        w.put_vec(sn.mean);
     }
-    void put_str(const std::string& s) {
-        put<std::uint64_t>(s.size());
-        out_ += s;
-    }
-    void put_progress(const std::vector<BatchProgress>& h, const std::vector<BatchSnapshot>& s) {
-        put<std::uint64_t>(h.size());
-        for (const auto& p : h) {
-            put(p.samples);
-            put(p.seconds);
-            put(p.value);
-            put(p.se);
-        }
-        put<std::uint64_t>(s.size());
-        for (const auto& sn : s) {
-            put(sn.samples);
-            put(sn.batches);
-            put(sn.seconds);
-            put_vec(sn.mean);
-        }
-    }
-    std::string& bytes() { return out_; }
+}
 
-  private:
-    std::string out_;
-};
-
-class Reader {
-  public:
-    Reader(const std::string& data, const std::string& name, const char magic[8], const char* what)
-        : d_(data), name_(name) {
-        if (d_.size() < 8 || std::memcmp(d_.data(), magic, 8) != 0)
-            throw InputError({name_, 0, 0}, "", std::string("not an ssslab ") + what);
+void get_progress(BinaryReader& r, std::vector<BatchProgress>& h, std::vector<BatchSnapshot>& s) {
+    const auto nh = r.get<std::uint64_t>();
+    r.need(nh * 32);
+    for (std::uint64_t i = 0; i < nh; ++i) {
+        BatchProgress p;
+        p.samples = r.get<std::uint64_t>();
+        p.seconds = r.get<double>();
+        p.value = r.get<double>();
+        p.se = r.get<double>();
+        h.push_back(p);
     }
-    template <class T>
-    T get() {
-        need(sizeof(T));
-        T v;
-        std::memcpy(&v, d_.data() + pos_, sizeof(T));
-        pos_ += sizeof(T);
-        return v;
+    const auto ns = r.get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < ns; ++i) {
+        BatchSnapshot sn;
+        sn.samples = r.get<std::uint64_t>();
+        sn.batches = r.get<std::uint64_t>();
+        sn.seconds = r.get<double>();
+        sn.mean = r.get_vec();
+        s.push_back(std::move(sn));
     }
-    std::vector<double> get_vec() {
-        const auto n = get<std::uint64_t>();
-        need(n * sizeof(double));
-        std::vector<double> v(n);
-        std::memcpy(v.data(), d_.data() + pos_, n * sizeof(double));
-        pos_ += n * sizeof(double);
-        return v;
-    }
-    std::string get_str() {
-        const auto n = get<std::uint64_t>();
-        need(n);
-        std::string s = d_.substr(pos_, n);
-        pos_ += n;
-        return s;
-    }
-    void get_progress(std::vector<BatchProgress>& h, std::vector<BatchSnapshot>& s) {
-        const auto nh = get<std::uint64_t>();
-        need(nh * 32);
-        for (std::uint64_t i = 0; i < nh; ++i) {
-            BatchProgress p;
-            p.samples = get<std::uint64_t>();
-            p.seconds = get<double>();
-            p.value = get<double>();
-            p.se = get<double>();
-            h.push_back(p);
-        }
-        const auto ns = get<std::uint64_t>();
-        for (std::uint64_t i = 0; i < ns; ++i) {
-            BatchSnapshot sn;
-            sn.samples = get<std::uint64_t>();
-            sn.batches = get<std::uint64_t>();
-            sn.seconds = get<double>();
-            sn.mean = get_vec();
-            s.push_back(std::move(sn));
-        }
-    }
-    void expect_end() const {
-        if (pos_ != d_.size())
-            throw InputError({name_, 0, 0}, "", "trailing bytes: file is corrupt");
-    }
-
-  private:
-    void need(std::uint64_t n) const {
-        if (n > d_.size() - pos_)
-            throw InputError({name_, 0, 0}, "", "file is truncated or corrupt");
-    }
-    const std::string& d_;
-    const std::string& name_;
-    size_t pos_ = 8;
-};
+}
 
 struct Checkpoint {
     std::string fingerprint;
@@ -139,7 +78,7 @@ struct Checkpoint {
 };
 
 void save_checkpoint(const std::string& path, const Checkpoint& c) {
-    Writer w(kCheckpointMagic);
+    BinaryWriter w(kCheckpointMagic);
     w.put_str(c.fingerprint);
     w.put(c.samples);
     w.put(c.batches);
@@ -147,7 +86,7 @@ void save_checkpoint(const std::string& path, const Checkpoint& c) {
     w.put(c.seconds);
     w.put_vec(c.sum);
     w.put_vec(c.q);
-    w.put_progress(c.history, c.snapshots);
+    put_progress(w, c.history, c.snapshots);
     write_file_atomic(path, w.bytes());
 }
 
@@ -155,7 +94,7 @@ std::optional<Checkpoint> load_checkpoint(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) return std::nullopt;
     const std::string data = read_file(path);
-    Reader r(data, path, kCheckpointMagic, "checkpoint");
+    BinaryReader r(data, path, kCheckpointMagic, "checkpoint");
     Checkpoint k;
     k.fingerprint = r.get_str();
     k.samples = r.get<std::uint64_t>();
@@ -164,7 +103,7 @@ std::optional<Checkpoint> load_checkpoint(const std::string& path) {
     k.seconds = r.get<double>();
     k.sum = r.get_vec();
     k.q = r.get_vec();
-    r.get_progress(k.history, k.snapshots);
+    get_progress(r, k.history, k.snapshots);
     r.expect_end();
     return k;
 }
@@ -349,7 +288,7 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
 }
 
 std::string serialize_batch_result(const BatchRunResult& r) {
-    Writer w(kResultMagic);
+    BinaryWriter w(kResultMagic);
     w.put_vec(r.mean);
     w.put_vec(r.se);
     w.put(r.samples);
@@ -359,12 +298,12 @@ std::string serialize_batch_result(const BatchRunResult& r) {
     w.put<std::int32_t>(r.threads);
     w.put<std::int32_t>(static_cast<std::int32_t>(r.reason));
     w.put<std::int32_t>(r.resumed ? 1 : 0);
-    w.put_progress(r.history, r.snapshots);
+    put_progress(w, r.history, r.snapshots);
     return std::move(w.bytes());
 }
 
 BatchRunResult deserialize_batch_result(const std::string& bytes, const std::string& name) {
-    Reader rd(bytes, name, kResultMagic, "batch result file");
+    BinaryReader rd(bytes, name, kResultMagic, "batch result file");
     BatchRunResult r;
     r.mean = rd.get_vec();
     r.se = rd.get_vec();
@@ -377,7 +316,7 @@ BatchRunResult deserialize_batch_result(const std::string& bytes, const std::str
     if (reason < 0 || reason > 3) throw InputError({name, 0, 0}, "", "corrupt stop reason");
     r.reason = static_cast<BatchStop>(reason);
     r.resumed = rd.get<std::int32_t>() != 0;
-    rd.get_progress(r.history, r.snapshots);
+    get_progress(rd, r.history, r.snapshots);
     rd.expect_end();
     if (r.mean.size() != r.se.size())
         throw InputError({name, 0, 0}, "", "result file is inconsistent (sizes differ)");

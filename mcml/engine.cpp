@@ -1,6 +1,7 @@
 #include "mcml/engine.h"
 
 #include "core/atomic_file.h"
+#include "core/binary_io.h"
 #include "core/error.h"
 #include "core/rng.h"
 #include "core/stats.h"
@@ -48,101 +49,53 @@ struct Checkpoint {
     std::vector<Snapshot> snapshots;
 };
 
-template <class T>
-void put(std::string& out, const T& v) {
-    out.append(reinterpret_cast<const char*>(&v), sizeof(T));
-}
-
-void put_vec(std::string& out, const std::vector<double>& v) {
-    put<std::uint64_t>(out, v.size());
-    out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(double));
-}
-
 // The per-batch history and the snapshots, shared by checkpoints and result files.
-void put_progress(std::string& out, const std::vector<ProgressPoint>& history,
+void put_progress(BinaryWriter& w, const std::vector<ProgressPoint>& history,
                   const std::vector<Snapshot>& snapshots) {
-    put<std::uint64_t>(out, history.size());
-    for (const auto& p : history) put(out, p);
-    put<std::uint64_t>(out, snapshots.size());
+    w.put<std::uint64_t>(history.size());
+    for (const auto& p : history) w.put(p);
+    w.put<std::uint64_t>(snapshots.size());
     for (const auto& sn : snapshots) {
-        put(out, sn.photons);
-        put(out, sn.batches);
-        put(out, sn.seconds);
-        put_vec(out, sn.mean);
+        w.put(sn.photons);
+        w.put(sn.batches);
+        w.put(sn.seconds);
+        w.put_vec(sn.mean);
+    }
+}
+
+void get_progress(BinaryReader& c, std::vector<ProgressPoint>& history,
+                  std::vector<Snapshot>& snapshots) {
+    const auto nh = c.get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < nh; ++i) history.push_back(c.get<ProgressPoint>());
+    const auto ns = c.get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < ns; ++i) {
+        Snapshot sn;
+        sn.photons = c.get<std::uint64_t>();
+        sn.batches = c.get<std::uint64_t>();
+        sn.seconds = c.get<double>();
+        sn.mean = c.get_vec();
+        snapshots.push_back(std::move(sn));
     }
 }
 
 void save_checkpoint(const std::string& path, const Checkpoint& c) {
-    std::string out(kMagic, 8);
-    put<std::uint64_t>(out, c.fingerprint.size());
-    out += c.fingerprint;
-    put(out, c.photons);
-    put(out, c.batches);
-    put(out, c.events);
-    put(out, c.seconds);
-    put_vec(out, c.sum);
-    put_vec(out, c.q);
-    put_progress(out, c.history, c.snapshots);
-    write_file_atomic(path, out);
+    BinaryWriter w(kMagic);
+    w.put_str(c.fingerprint);
+    w.put(c.photons);
+    w.put(c.batches);
+    w.put(c.events);
+    w.put(c.seconds);
+    w.put_vec(c.sum);
+    w.put_vec(c.q);
+    put_progress(w, c.history, c.snapshots);
+    write_file_atomic(path, w.bytes());
 }
-
-class Cursor {
-  public:
-    Cursor(const std::string& data, const std::string& path) : d_(data), path_(path) {}
-    template <class T>
-    T get() {
-        need(sizeof(T));
-        T v;
-        std::memcpy(&v, d_.data() + pos_, sizeof(T));
-        pos_ += sizeof(T);
-        return v;
-    }
-    std::vector<double> get_vec() {
-        const auto n = get<std::uint64_t>();
-        need(n * sizeof(double));
-        std::vector<double> v(n);
-        std::memcpy(v.data(), d_.data() + pos_, n * sizeof(double));
-        pos_ += n * sizeof(double);
-        return v;
-    }
-    std::string get_str() {
-        const auto n = get<std::uint64_t>();
-        need(n);
-        std::string s = d_.substr(pos_, n);
-        pos_ += n;
-        return s;
-    }
-    void get_progress(std::vector<ProgressPoint>& history, std::vector<Snapshot>& snapshots) {
-        const auto nh = get<std::uint64_t>();
-        for (std::uint64_t i = 0; i < nh; ++i) history.push_back(get<ProgressPoint>());
-        const auto ns = get<std::uint64_t>();
-        for (std::uint64_t i = 0; i < ns; ++i) {
-            Snapshot sn;
-            sn.photons = get<std::uint64_t>();
-            sn.batches = get<std::uint64_t>();
-            sn.seconds = get<double>();
-            sn.mean = get_vec();
-            snapshots.push_back(std::move(sn));
-        }
-    }
-    void need(size_t n) const {
-        if (pos_ + n > d_.size())
-            throw InputError({path_, 0, 0}, "", "file is truncated or corrupt");
-    }
-
-  private:
-    const std::string& d_;
-    const std::string& path_;
-    size_t pos_ = 8;
-};
 
 std::optional<Checkpoint> load_checkpoint(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) return std::nullopt;
     const std::string data = read_file(path);
-    if (data.size() < 8 || std::memcmp(data.data(), kMagic, 8) != 0)
-        throw InputError({path, 0, 0}, "", "not an ssslab MCML checkpoint");
-    Cursor c(data, path);
+    BinaryReader c(data, path, kMagic, "MCML checkpoint");
     Checkpoint k;
     k.fingerprint = c.get_str();
     k.photons = c.get<std::uint64_t>();
@@ -151,7 +104,7 @@ std::optional<Checkpoint> load_checkpoint(const std::string& path) {
     k.seconds = c.get<double>();
     k.sum = c.get_vec();
     k.q = c.get_vec();
-    c.get_progress(k.history, k.snapshots);
+    get_progress(c, k.history, k.snapshots);
     return k;
 }
 
@@ -449,31 +402,29 @@ RunResult run_compat(const RunSpec& run, Ran3& rng, const Budget& budget,
 }
 
 std::string serialize_result(const RunResult& r) {
-    std::string out(kResultMagic, 8);
+    BinaryWriter w(kResultMagic);
     const TallyLayout& l = r.layout;
-    put<std::int32_t>(out, l.mode == TallyMode::kFull ? 0 : 1);
-    for (int v : {l.nr, l.nz, l.na, l.nl}) put<std::int32_t>(out, v);
+    w.put<std::int32_t>(l.mode == TallyMode::kFull ? 0 : 1);
+    for (int v : {l.nr, l.nz, l.na, l.nl}) w.put<std::int32_t>(v);
     for (size_t v : {l.rd_ra, l.tt_ra, l.a_rz, l.rd_r, l.tt_r, l.a_layer, l.rd_a, l.tt_a, l.a_z,
                      l.a_l, l.rd, l.a, l.tt, l.energy, l.primary_size, l.size})
-        put<std::uint64_t>(out, v);
-    put_vec(out, r.values);
-    put(out, r.divisor);
-    put_vec(out, r.se);
-    put(out, r.rsp);
-    for (std::uint64_t v : {r.photons, r.batches, r.events}) put(out, v);
-    put(out, r.batch_photons);
-    put(out, r.seconds);
-    put<std::int32_t>(out, r.threads);
-    put<std::int32_t>(out, static_cast<std::int32_t>(r.reason));
-    put<std::int32_t>(out, r.resumed ? 1 : 0);
-    put_progress(out, r.history, r.snapshots);
-    return out;
+        w.put<std::uint64_t>(v);
+    w.put_vec(r.values);
+    w.put(r.divisor);
+    w.put_vec(r.se);
+    w.put(r.rsp);
+    for (std::uint64_t v : {r.photons, r.batches, r.events}) w.put(v);
+    w.put(r.batch_photons);
+    w.put(r.seconds);
+    w.put<std::int32_t>(r.threads);
+    w.put<std::int32_t>(static_cast<std::int32_t>(r.reason));
+    w.put<std::int32_t>(r.resumed ? 1 : 0);
+    put_progress(w, r.history, r.snapshots);
+    return std::move(w.bytes());
 }
 
 RunResult deserialize_result(const std::string& data, const std::string& name) {
-    if (data.size() < 8 || std::memcmp(data.data(), kResultMagic, 8) != 0)
-        throw InputError({name, 0, 0}, "", "not an ssslab MCML result file");
-    Cursor c(data, name);
+    BinaryReader c(data, name, kResultMagic, "MCML result file");
     RunResult r;
     TallyLayout& l = r.layout;
     l.mode = c.get<std::int32_t>() == 0 ? TallyMode::kFull : TallyMode::kProfile;
@@ -491,7 +442,7 @@ RunResult deserialize_result(const std::string& data, const std::string& name) {
     r.threads = c.get<std::int32_t>();
     r.reason = static_cast<StopReason>(c.get<std::int32_t>());
     r.resumed = c.get<std::int32_t>() != 0;
-    c.get_progress(r.history, r.snapshots);
+    get_progress(c, r.history, r.snapshots);
     if (r.values.size() != l.size || r.se.size() != l.size)
         throw InputError({name, 0, 0}, "", "result file is inconsistent (tally sizes differ)");
     return r;
