@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <stdexcept>
 
 namespace ssslab {
 
@@ -98,7 +99,14 @@ std::optional<double> optional_length_cm(ConfigTable& t, const std::string& base
     return t.optional_number(cm, r);
 }
 
-Medium medium_from_config(ConfigTable& t) {
+namespace {
+
+constexpr const char* kLayerKeys[] = {
+    "preset", "sigma_a_per_mm", "sigma_a_per_cm", "sigma_s_per_mm", "sigma_s_per_cm", "g",
+    "eta",    "thickness_mm",   "thickness_cm"};
+
+// The coefficients and index of one homogeneous slab: a preset or explicit coefficients.
+Medium read_homogeneous(ConfigTable& t) {
     Medium m;
     const bool explicit_coeffs = t.has("sigma_a_per_mm") || t.has("sigma_a_per_cm") ||
                                  t.has("sigma_s_per_mm") || t.has("sigma_s_per_cm");
@@ -119,7 +127,6 @@ Medium medium_from_config(ConfigTable& t) {
             t.fail("preset",
                    "expected `preset = \"<name>\"` (one of " + material_names() +
                        ") or explicit sigma_a_per_mm/_per_cm, sigma_s_per_mm/_per_cm, g, eta");
-        m.name = t.string("name", "custom");
         auto sa = coefficient_per_cm(t, "sigma_a");
         auto ss = coefficient_per_cm(t, "sigma_s");
         if (!sa) t.fail("sigma_a_per_mm", "missing: sigma_a_per_mm or sigma_a_per_cm (RGB)");
@@ -131,6 +138,69 @@ Medium medium_from_config(ConfigTable& t) {
         m.thickness_cm = 1e8;
     }
     if (auto d = optional_length_cm(t, "thickness", Range::positive())) m.thickness_cm = *d;
+    return m;
+}
+
+}  // namespace
+
+std::vector<MediumLayer> Medium::layers() const {
+    std::vector<MediumLayer> out;
+    out.reserve(1 + lower_layers.size());
+    out.push_back({sigma_a_per_cm, sigma_s_per_cm, g, eta, thickness_cm});
+    out.insert(out.end(), lower_layers.begin(), lower_layers.end());
+    return out;
+}
+
+double Medium::total_thickness_cm() const {
+    double d = thickness_cm;
+    for (const MediumLayer& l : lower_layers) d += l.thickness_cm;
+    return d;
+}
+
+void require_homogeneous(const Medium& m, const std::string& what) {
+    if (m.layered())
+        throw std::invalid_argument(what + " needs a homogeneous medium; \"" + m.name + "\" has " +
+                                    std::to_string(1 + m.lower_layers.size()) + " layers");
+}
+
+Medium medium_from_config(ConfigTable& t) {
+    if (t.has("layers")) {
+        for (const char* k : kLayerKeys)
+            if (t.has(k))
+                t.fail(k, std::string("a layered medium gives ") + k +
+                              " per layer: move it into its [[layers]] table");
+        std::vector<ConfigTable> ls = t.table_array("layers");
+        if (ls.empty()) t.fail("layers", "expected at least one [[layers]] table");
+        Medium m;
+        m.name = t.string("name", "layered");
+        for (size_t i = 0; i < ls.size(); ++i) {
+            ConfigTable& l = ls[i];
+            const bool has_thickness = l.has("thickness_mm") || l.has("thickness_cm");
+            const Medium one = read_homogeneous(l);
+            if (i + 1 < ls.size() && !has_thickness)
+                l.fail("thickness_mm",
+                       "missing: every layer but the last needs thickness_mm or thickness_cm");
+            if (i + 1 < ls.size() && one.thickness_cm >= 1e8)
+                l.fail(l.has("thickness_mm") ? "thickness_mm" : "thickness_cm",
+                       "only the last layer may be quasi-infinite (>= 1e8 cm)");
+            l.record("thickness_cm", one.thickness_cm);
+            if (i == 0) {
+                m.sigma_a_per_cm = one.sigma_a_per_cm;
+                m.sigma_s_per_cm = one.sigma_s_per_cm;
+                m.g = one.g;
+                m.eta = one.eta;
+                m.thickness_cm = one.thickness_cm;
+            } else {
+                m.lower_layers.push_back(
+                    {one.sigma_a_per_cm, one.sigma_s_per_cm, one.g, one.eta, one.thickness_cm});
+            }
+        }
+        m.eta_above = t.number("eta_above", 1.0, Range::positive());
+        m.eta_below = t.number("eta_below", 1.0, Range::positive());
+        return m;
+    }
+    Medium m = read_homogeneous(t);
+    if (!t.has("preset")) m.name = t.string("name", "custom");
     m.eta_above = t.number("eta_above", 1.0, Range::positive());
     m.eta_below = t.number("eta_below", 1.0, Range::positive());
     t.record("thickness_cm", m.thickness_cm);

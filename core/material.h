@@ -18,7 +18,30 @@ struct Range;
 /// One RGB channel index: 0 = R, 1 = G, 2 = B.
 inline constexpr const char* kChannelNames[3] = {"R", "G", "B"};
 
-/// A homogeneous slab of scattering medium, per RGB channel.
+/// One layer of a layered slab below the first (see Medium::lower_layers). Units as in Medium.
+/// A layer with sigma_a = sigma_s = 0 in every channel is clear (glass): light crosses it in a
+/// straight line, as in MCML.
+struct MediumLayer {
+    std::array<double, 3> sigma_a_per_cm{};  ///< absorption coefficient [1/cm]
+    std::array<double, 3> sigma_s_per_cm{};  ///< scattering coefficient [1/cm]
+    std::array<double, 3> g{};               ///< Henyey-Greenstein anisotropy [-]
+    double eta = 1.0;                        ///< index of refraction [-]
+    double thickness_cm = 1e8;               ///< [cm]; 1e8 (last layer only) is "quasi-infinite"
+
+    double sigma_t(int c) const { return sigma_a_per_cm[c] + sigma_s_per_cm[c]; }
+    /// Reduced mean free path 1 / (sigma_a + sigma_s (1 - g)) [cm] (infinite for glass).
+    double mfp_cm(int c) const {
+        return 1.0 / (sigma_a_per_cm[c] + sigma_s_per_cm[c] * (1.0 - g[c]));
+    }
+    bool clear() const {
+        for (int c = 0; c < 3; ++c)
+            if (sigma_t(c) != 0.0) return false;
+        return true;
+    }
+};
+
+/// A slab of scattering medium, per RGB channel: homogeneous, or the top layer of a layered
+/// stack (MCML's layered slabs [Wang95]) when `lower_layers` is not empty.
 struct Medium {
     std::string name;
     std::array<double, 3> sigma_a_per_cm{};  ///< absorption coefficient [1/cm]
@@ -28,6 +51,17 @@ struct Medium {
     double eta_above = 1.0;                  ///< ambient index above (light comes from here)
     double eta_below = 1.0;                  ///< ambient index below
     double thickness_cm = 1e8;               ///< slab thickness [cm]; 1e8 is "quasi-infinite"
+    /// The layers below this one, top to bottom; empty for a homogeneous slab. The fields above
+    /// describe the top layer (thickness_cm is then its thickness, and must be finite), eta_below
+    /// is the ambient index under the last layer. Homogeneous-only models (diffusion profiles,
+    /// the sphere) refuse layered media (require_homogeneous).
+    std::vector<MediumLayer> lower_layers;
+
+    bool layered() const { return !lower_layers.empty(); }
+    /// All layers, top first (one for a homogeneous slab).
+    std::vector<MediumLayer> layers() const;
+    /// Sum of the layers' thicknesses [cm] (>= 1e8: quasi-infinite).
+    double total_thickness_cm() const;
 
     /// Single-scattering albedo sigma_s / (sigma_a + sigma_s).
     double albedo(int c) const {
@@ -39,6 +73,10 @@ struct Medium {
         return 1.0 / (sigma_a_per_cm[c] + sigma_s_per_cm[c] * (1.0 - g[c]));
     }
 };
+
+/// Throws std::invalid_argument("<what> needs a homogeneous medium; <name> has N layers") for
+/// a layered medium.
+void require_homogeneous(const Medium& m, const std::string& what);
 
 /// A named measured material.
 struct MaterialPreset {
@@ -69,7 +107,10 @@ std::optional<double> optional_length_cm(ConfigTable& t, const std::string& base
 /// Read a medium from a config table: either `preset = "Skin1"` (optionally with `thickness_cm`
 /// or `thickness_mm`, `eta_above`, `eta_below`), or explicit coefficients with their unit in the
 /// key: sigma_a_per_mm / sigma_a_per_cm, sigma_s_per_mm / sigma_s_per_cm, g (in [-1, 1]; the
-/// original MCML rejects g < 0, ssslab's engines do not), eta.
+/// original MCML rejects g < 0, ssslab's engines do not), eta; or a layered slab: `eta_above`,
+/// `eta_below` and an array of tables `[[...layers]]`, top first, each a preset or explicit
+/// coefficients with its thickness (required for all but the last layer, whose default is
+/// quasi-infinite).
 Medium medium_from_config(ConfigTable& t);
 
 }  // namespace ssslab

@@ -5,15 +5,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace ssslab::mcml {
 
 ProfileGrid freude14_grid(const Medium& m) {
-    double mfp_min = m.mfp_cm(0), mfp_max = m.mfp_cm(0);
-    for (int c = 1; c < 3; ++c) {
-        mfp_min = std::min(mfp_min, m.mfp_cm(c));
-        mfp_max = std::max(mfp_max, m.mfp_cm(c));
+    // Layered media: the finest bins any (non-clear) layer needs, the extent the widest needs.
+    double mfp_min = std::numeric_limits<double>::infinity(), mfp_max = 0;
+    for (const MediumLayer& l : m.layers()) {
+        if (l.clear()) continue;
+        for (int c = 0; c < 3; ++c) {
+            mfp_min = std::min(mfp_min, l.mfp_cm(c));
+            mfp_max = std::max(mfp_max, l.mfp_cm(c));
+        }
     }
+    if (!(mfp_max > 0)) mfp_min = mfp_max = m.mfp_cm(0);  // all clear: refused by check_run
     ProfileGrid g;
     g.dr_cm = mfp_min / 20.0;
     g.nr = static_cast<int>(std::ceil(32.0 * mfp_max / g.dr_cm));
@@ -61,7 +67,7 @@ ProfileRun simulate_profile(const Medium& m, const ProfileGrid& grid, const Prof
     Grid g;
     g.dr = grid.dr_cm;
     g.nr = grid.nr;
-    g.dz = m.thickness_cm;  // unused by profile tallies
+    g.dz = m.total_thickness_cm();  // unused by profile tallies
     g.nz = 1;
     g.na = 1;
     for (int c = 0; c < 3; ++c) {

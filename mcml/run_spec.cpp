@@ -37,17 +37,23 @@ RunSpec run_for_channel(const Medium& m, int c, std::int64_t photons, const Grid
     run.out_name = m.name + "_" + kChannelNames[c] + ".mco";
     run.photons = photons;
     run.grid = grid;
-    run.layers.resize(3);
+    const std::vector<MediumLayer> layers = m.layers();
+    run.layers.resize(layers.size() + 2);
     run.layers[0].n = m.eta_above;
-    Layer& l = run.layers[1];
-    l.n = m.eta;
-    l.mua = m.sigma_a_per_cm[c];
-    l.mus = m.sigma_s_per_cm[c];
-    l.g = m.g[c];
-    l.z0 = 0.0;
-    l.z1 = m.thickness_cm;
-    run.layers[2].n = m.eta_below;
-    run.layers[2].z0 = run.layers[2].z1 = m.thickness_cm;
+    double z = 0.0;
+    for (size_t i = 0; i < layers.size(); ++i) {
+        Layer& l = run.layers[i + 1];
+        l.n = layers[i].eta;
+        l.mua = layers[i].sigma_a_per_cm[c];
+        l.mus = layers[i].sigma_s_per_cm[c];
+        l.g = layers[i].g[c];
+        l.z0 = z;
+        z += layers[i].thickness_cm;
+        l.z1 = z;
+    }
+    Layer& below = run.layers.back();
+    below.n = m.eta_below;
+    below.z0 = below.z1 = z;
     compute_critical_angles(run);
     return run;
 }

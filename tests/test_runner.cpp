@@ -151,6 +151,61 @@ TEST(Runner, SecondRunComputesNothingAndWritesTheSameResults) {
     EXPECT_NE(third.out.find("3 computed, 3 reused"), std::string::npos) << third.out;
 }
 
+TEST(Runner, LayeredMaterialRunsOnBothEnginesWithItsOwnKeys) {
+    // A layered custom material: MCML and the path tracer both simulate the stack, the
+    // crossval table carries its transmittance, and its nodes differ from those of its top
+    // layer alone (the lower layers are part of the key).
+    const std::string layered = R"(
+[experiment]
+name = "layered"
+seed = 3
+
+[[materials.custom]]
+name = "Top"
+sigma_a_per_mm = [0.1, 0.2, 0.3]
+sigma_s_per_mm = [5.0, 6.0, 7.0]
+g = 0.5
+eta = 1.4
+thickness_mm = 0.5
+
+[[materials.custom]]
+name = "Stack"
+[[materials.custom.layers]]
+sigma_a_per_mm = [0.1, 0.2, 0.3]
+sigma_s_per_mm = [5.0, 6.0, 7.0]
+g = 0.5
+eta = 1.4
+thickness_mm = 0.5
+[[materials.custom.layers]]
+sigma_a_per_mm = [0.05, 0.05, 0.05]
+sigma_s_per_mm = [2.0, 2.0, 2.0]
+g = -0.2
+eta = 1.6
+thickness_mm = 1
+
+[mcml]
+photons = 5000
+[volpath]
+photons = 5000
+[outputs.crossval]
+)";
+    const std::vector<std::string> k = keys(layered);
+    // 2 materials x 3 channels x 2 engines; Stack differs from Top only below its top layer.
+    ASSERT_EQ(k.size(), 12u);
+    EXPECT_EQ(std::set<std::string>(k.begin(), k.end()).size(), 12u);
+    testing::TempDir dir;
+    dir.write("l.toml", layered);
+    const auto r = run_ssslab({"run", "l.toml"}, dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string summary =
+        testing::read_text(dir / "results" / "layered" / "crossval" / "summary.csv");
+    EXPECT_NE(summary.find("\nStack,2,R,"), std::string::npos) << summary;
+    EXPECT_NE(summary.find("\nTop,1,B,"), std::string::npos) << summary;
+    EXPECT_EQ(summary.find("nan"), std::string::npos) << summary;
+    const std::string metrics = testing::read_text(dir / "results" / "layered" / "metrics.csv");
+    EXPECT_NE(metrics.find("Stack.G.volpath.Tt,"), std::string::npos);
+}
+
 TEST(Runner, BothEnginesSideBySideAreCachedCrossValidatedAndScored) {
     // [volpath] adds one path-tracer node per material and channel; crossval, pencil and
     // efficiency read both engines; a rerun computes nothing; the path tracer's nodes have keys
@@ -459,6 +514,18 @@ TEST(Runner, BadExperimentConfigsAreRefusedWithTheirLocation) {
         {"efficiency of an absent material",
          head + mats + "[volpath]\n[outputs.efficiency]\nmaterials = [\"Apple\"]\n",
          {"outputs.efficiency.materials", "not a material of this experiment"}},
+        {"layered material with the diffusion models",
+         head + mats +
+             "[[materials.custom]]\nname = \"L\"\n[[materials.custom.layers]]\npreset = "
+             "\"Apple\"\nthickness_mm = 1\n[[materials.custom.layers]]\npreset = \"Skin1\"\n"
+             "[volpath]\n[outputs.pencil]\nmodels = [\"dipole\"]\n",
+         {"outputs.pencil.models", "material \"L\" is layered (2 layers)"}},
+        {"layered material, middle layer without thickness",
+         head + mats +
+             "[[materials.custom]]\nname = \"L\"\n[[materials.custom.layers]]\npreset = "
+             "\"Apple\"\n[[materials.custom.layers]]\npreset = \"Skin1\"\n" +
+             outs,
+         {"e.toml:7:1", "materials.custom[0].layers[0].thickness_mm", "every layer but the last"}},
         {"crossval bad threshold",
          head + mats + "[volpath]\n[outputs.crossval]\nmax_rel_se = 2\n",
          {"e.toml:7:", "outputs.crossval.max_rel_se"}},

@@ -302,8 +302,9 @@ TEST(VolpathCrossValidation, AgreesWithMcmlOnTheSkin1RedProfile) {
 }
 
 TEST(VolpathCrossValidation, HeroModeAgreesWithPerChannelRuns) {
-    // Analog, weighted and hero estimators on a strongly chromatic medium with a different g per
-    // channel (the phase MIS weights matter).
+    // Analog, weighted and hero estimators (analog and weighted hero, uniform and mfp hero
+    // selection) on a strongly chromatic medium with a different g per channel (the phase MIS
+    // weights matter).
     Medium m = slab(0, 0, 0, 1.4, 1e8);
     m.sigma_a_per_cm = {0.5, 3.0, 12.0};
     m.sigma_s_per_cm = {40.0, 25.0, 60.0};
@@ -320,9 +321,14 @@ TEST(VolpathCrossValidation, HeroModeAgreesWithPerChannelRuns) {
     ho.mode = ChromaticMode::kHero;
     ho.hero_selection = HeroSelection::kMeanFreePath;
     const PencilRun hm = simulate_pencil(m, grid, ho);
+    ho.hero_selection = HeroSelection::kUniform;
+    ho.absorption = Absorption::kWeighted;
+    const PencilRun hw = simulate_pencil(m, grid, ho);
     const double alpha = testing::sidak(0.001, 3);
     for (int c = 0; c < 3; ++c) {
         SCOPED_TRACE(kChannelNames[c]);
+        const BinComparison chw = compare(a.profile, hw.profile, c);
+        EXPECT_LT(chw.chi2, testing::chi2_critical(chw.bins, alpha)) << chw.bins << " bins";
         const BinComparison cm = compare(a.profile, hm.profile, c);
         EXPECT_LT(cm.chi2, testing::chi2_critical(cm.bins, alpha)) << cm.bins << " bins";
         const BinComparison cw = compare(a.profile, wt.profile, c);

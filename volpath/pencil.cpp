@@ -22,13 +22,23 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // survives with probability weight / kRouletteThreshold.
 constexpr double kRouletteThreshold = 0.1;
 
-// Everything a path needs, per tally channel (one channel in kPerChannel mode, three in kHero).
-struct Setup {
-    int nc = 1;
+// Interface hits within one free flight after which a path is given up (tallied as lost).
+constexpr std::int64_t kMaxInterfaceHits = 1'000'000;
+
+// One layer of the slab, per tally channel (one channel in kPerChannel mode, three in kHero).
+struct LayerSetup {
     std::array<double, 3> sigma_t{}, sigma_s{}, albedo{}, g{};
     bool same_g = true;
-    double thickness = kInf;          // [cm]
-    double eta_top = 1, eta_bot = 1;  // outside index / medium index at the top and bottom
+    double z0 = 0, z1 = kInf;  // [cm]
+    double eta = 1;            // index of refraction
+};
+
+// Everything a path needs.
+struct Setup {
+    int nc = 1;
+    std::vector<LayerSetup> layers;  // top first
+    int first = 0;                   // the layer the beam enters (1 after a clear top layer)
+    double eta_above = 1, eta_below = 1;
     double rsp = 0;
     double dr = 0;
     int nr = 0;
@@ -58,13 +68,20 @@ std::size_t radial_bin(const Setup& s, const Vec3& p) {
 // layout.per_channel() elements). Returns the number of scattering events.
 //   NC = 1, !kWeighted: analog [Bitterli13 Alg. 1]: absorption by roulette with the albedo.
 //   NC = 1, kWeighted: implicit absorption (the weight carries the albedo; Russian roulette).
-//   NC = 3 (weighted): hero channel `hero` samples; spectral MIS weights for all three.
+//   NC = 3: hero channel `hero` samples; spectral MIS weights for all three channels.
+//     kWeighted: the strategies are free paths and directions; absorption enters the weights,
+//     Russian roulette bounds them from below.
+//     !kWeighted (analog hero): each strategy also absorbs by roulette with its own albedo, so
+//     a path's density under channel c is its contribution to c (equal phase functions): the
+//     estimate (1 - Rsp) q_c / sum_k P(k) q_k is at most (1 - Rsp) / P(c), no roulette needed.
 template <int NC, bool kWeighted>
 std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
-    static_assert(NC == 1 || (NC == 3 && kWeighted));
+    static_assert(NC == 1 || NC == 3);
     constexpr bool kHeroMode = NC == 3;
     constexpr int nc = NC;
     const int h = kHeroMode ? hero : 0;
+    const size_t hi = static_cast<size_t>(h);
+    const int nlayers = static_cast<int>(s.layers.size());
     // beta: the channel's path weight (contribution / sampling density of the hero's strategy,
     // times the MIS weight); q: the channels' sampling densities over the mean of all three.
     // Both are rescaled by mean(q) after every event, which leaves the balance-heuristic
@@ -74,9 +91,9 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
         beta[c] = 1.0 - s.rsp;
         q[c] = 1.0;
     }
-    Vec3 p{0, 0, 0}, w{0, 0, 1};
+    int li = s.first;  // the layer the path is in
+    Vec3 p{0, 0, s.layers[static_cast<size_t>(li)].z0}, w{0, 0, 1};
     std::uint64_t events = 0;
-    const double sigma_t = s.sigma_t[static_cast<size_t>(h)];
 
     auto rescale = [&]() {
         if constexpr (kHeroMode) {
@@ -88,16 +105,25 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
             }
         }
     };
-    // A flight of total length d through the medium ended at an interaction (scatter = true)
-    // or at an exit. Hero mode: the densities of the three strategies for that flight.
-    auto flight_weights = [&](double d, bool scatter) {
+    // Hero mode: (sigma_t of channel c - sigma_t of the hero) x distance, summed over the
+    // layers the flight crossed; the flight's densities differ between the channels by
+    // exp(-dod[c]).
+    double dod[NC];
+    // A flight ended at an interaction in layer L (scatter = true) or at an exit, after `d` in
+    // its last layer. Hero mode: the densities of the three strategies for that flight.
+    auto flight_weights = [&](const LayerSetup& L, double d, bool scatter) {
         if constexpr (kHeroMode) {
+            const double sigma_t = L.sigma_t[hi];
             for (int c = 0; c < 3; ++c) {
                 const size_t i = static_cast<size_t>(c);
-                const double e = c == h ? 1.0 : std::exp(-(s.sigma_t[i] - sigma_t) * d);
-                if (scatter) {
-                    q[c] *= s.sigma_t[i] / sigma_t * e;
-                    beta[c] *= s.sigma_s[i] / sigma_t * e;
+                const double e = c == h ? 1.0 : std::exp(-(dod[c] + (L.sigma_t[i] - sigma_t) * d));
+                if (scatter && !kWeighted) {  // survived the hero's absorption roulette
+                    const double f = L.sigma_s[i] / L.sigma_s[hi] * e;
+                    q[c] *= f;
+                    beta[c] *= f;
+                } else if (scatter) {
+                    q[c] *= L.sigma_t[i] / sigma_t * e;
+                    beta[c] *= L.sigma_s[i] / sigma_t * e;
                 } else {
                     q[c] *= e;
                     beta[c] *= e;
@@ -105,16 +131,39 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
             }
             rescale();
         } else if constexpr (kWeighted) {
-            if (scatter) beta[0] *= s.albedo[0];
+            if (scatter) beta[0] *= L.albedo[0];
         }
     };
 
     for (;;) {
-        double t = sigma_t > 0 ? -std::log(rng.uniform()) / sigma_t : kInf;
-        double travelled = 0;
+        // The free path is sampled as an optical depth (of the hero channel) and consumed layer
+        // by layer: t is what is left of it as a distance in the current layer, or, in a layer
+        // that does not attenuate (t infinite), `held` keeps it as optical depth.
+        const LayerSetup* L = &s.layers[static_cast<size_t>(li)];
+        double t = kInf, held = 0;
+        auto sample_flight = [&]() {
+            t = kInf;
+            held = 0;
+            if (L->sigma_t[hi] > 0)
+                t = -std::log(rng.uniform()) / L->sigma_t[hi];
+            else if (nlayers > 1)
+                held = -std::log(rng.uniform());
+        };
+        sample_flight();
+        double travelled = 0;  // in the current layer
+        for (int c = 0; c < nc; ++c) dod[c] = 0;
         bool exited = false;
-        for (;;) {
-            const double tb = w.z > 0 ? (s.thickness - p.z) / w.z : (w.z < 0 ? -p.z / w.z : kInf);
+        for (std::int64_t hits = 0;; ++hits) {
+            // Snell's invariant n sin(theta) keeps a path from being trapped between interfaces
+            // (it can always go back where it came from); this bounds the loop against rounding.
+            if (hits > kMaxInterfaceHits) {
+                for (int c = 0; c < nc; ++c)
+                    tally[static_cast<size_t>(c) * s.layout.per_channel() + s.layout.lost()] +=
+                        beta[c];
+                return events;
+            }
+            const double tb =
+                w.z > 0 ? (L->z1 - p.z) / w.z : (w.z < 0 ? (L->z0 - p.z) / w.z : kInf);
             if (t < tb) {
                 p += w * t;
                 travelled += t;
@@ -122,48 +171,71 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
             }
             p += w * tb;
             travelled += tb;
-            const bool top = w.z < 0;
-            p.z = top ? 0.0 : s.thickness;
-            const double F = fresnel_dielectric(std::abs(w.z), top ? s.eta_top : s.eta_bot);
-            if (rng.uniform() < F) {
+            const bool up = w.z < 0;
+            p.z = up ? L->z0 : L->z1;
+            const int next = up ? li - 1 : li + 1;
+            const bool outside = next < 0 || next >= nlayers;
+            const double n2 = outside ? (up ? s.eta_above : s.eta_below)
+                                      : s.layers[static_cast<size_t>(next)].eta;
+            // Inner interfaces between equal indices are crossed without a random number.
+            const bool matched = !outside && n2 == L->eta;
+            double cos_t = std::abs(w.z);
+            const double F = matched ? 0.0 : fresnel_dielectric(std::abs(w.z), n2 / L->eta, cos_t);
+            if (!matched && rng.uniform() < F) {
                 w.z = -w.z;
                 if (s.flight == FlightRule::kContinue) {
                     t -= tb;
                 } else if (s.flight == FlightRule::kResample) {
-                    t = sigma_t > 0 ? -std::log(rng.uniform()) / sigma_t : kInf;
+                    sample_flight();
                 } else {  // kInteractAtBoundary: the interaction happens here
                     break;
                 }
                 continue;
             }
-            // The path leaves the medium.
-            flight_weights(travelled, false);
-            const std::size_t bin = radial_bin(s, p);
-            const PencilLayout& L = s.layout;
-            const std::size_t stride = L.per_channel();
-            for (int c = 0; c < nc; ++c) {
-                double* T = tally + static_cast<size_t>(c) * stride;
-                if (top) {
-                    T[L.rd_r() + bin] += beta[c];
-                    T[L.rd()] += beta[c];
-                    if (events == 1) {
-                        T[L.ss_r() + bin] += beta[c];
-                        T[L.rd_ss()] += beta[c];
+            if (outside) {  // the path leaves the slab
+                flight_weights(*L, travelled, false);
+                const std::size_t bin = radial_bin(s, p);
+                const PencilLayout& PL = s.layout;
+                const std::size_t stride = PL.per_channel();
+                for (int c = 0; c < nc; ++c) {
+                    double* T = tally + static_cast<size_t>(c) * stride;
+                    if (up) {
+                        T[PL.rd_r() + bin] += beta[c];
+                        T[PL.rd()] += beta[c];
+                        if (events == 1) {
+                            T[PL.ss_r() + bin] += beta[c];
+                            T[PL.rd_ss()] += beta[c];
+                        }
+                    } else {
+                        T[PL.tt_r() + bin] += beta[c];
+                        T[PL.tt()] += beta[c];
                     }
-                } else {
-                    T[L.tt_r() + bin] += beta[c];
-                    T[L.tt()] += beta[c];
                 }
+                exited = true;
+                break;
             }
-            exited = true;
-            break;
+            // Refraction into the next layer (Snell: the tangential part scales by n1 / n2);
+            // the rest of the free path goes with it as optical depth.
+            if (n2 != L->eta) {
+                const double k = L->eta / n2;
+                w = {w.x * k, w.y * k, up ? -cos_t : cos_t};
+            }
+            const double tau = L->sigma_t[hi] > 0 ? (t - tb) * L->sigma_t[hi] : held;
+            if constexpr (kHeroMode)
+                for (int c = 0; c < 3; ++c)
+                    dod[c] += (L->sigma_t[static_cast<size_t>(c)] - L->sigma_t[hi]) * travelled;
+            travelled = 0;
+            li = next;
+            L = &s.layers[static_cast<size_t>(li)];
+            t = L->sigma_t[hi] > 0 ? tau / L->sigma_t[hi] : kInf;
+            held = L->sigma_t[hi] > 0 ? 0.0 : tau;
         }
         if (exited) return events;
 
-        // Interaction.
+        // Interaction in layer L.
         ++events;
         if constexpr (kWeighted) {
-            flight_weights(travelled, true);
+            flight_weights(*L, travelled, true);
             double m = beta[0];
             for (int c = 1; c < nc; ++c) m = std::max(m, beta[c]);
             if (m < kRouletteThreshold) {
@@ -172,7 +244,8 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
                 for (int c = 0; c < nc; ++c) beta[c] /= survive;
             }
         } else {
-            if (!(rng.uniform() < s.albedo[0])) return events;  // absorbed
+            if (!(rng.uniform() < L->albedo[hi])) return events;  // absorbed
+            if constexpr (kHeroMode) flight_weights(*L, travelled, true);
         }
         if (static_cast<std::int64_t>(events) > s.long_events) {
             if (static_cast<std::int64_t>(events) == s.long_events + 1)
@@ -182,14 +255,14 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
             if (!(rng.uniform() < s.long_survival)) return events;
             for (int c = 0; c < nc; ++c) beta[c] /= s.long_survival;
         }
-        const double g = s.g[static_cast<size_t>(h)];
+        const double g = L->g[hi];
         const double mu = sample_hg(g, rng.uniform());
         const double phi = 2.0 * kPi * rng.uniform();
         if constexpr (kHeroMode) {
-            if (!s.same_g) {
+            if (!L->same_g) {
                 const double ph = hg_pdf(g, mu);
                 for (int c = 0; c < 3; ++c) {
-                    const double pc = hg_pdf(s.g[static_cast<size_t>(c)], mu) / ph;
+                    const double pc = hg_pdf(L->g[static_cast<size_t>(c)], mu) / ph;
                     q[c] *= pc;
                     beta[c] *= pc;
                 }
@@ -204,10 +277,11 @@ std::string fingerprint(const Medium& m, const PencilGrid& grid, const PencilOpt
                         std::int64_t batch, int run) {
     char buf[1024];
     std::snprintf(buf, sizeof buf,
-                  "%s\nmode=%s absorption=%d run=%d seed=%" PRIu64 " batch=%" PRId64
+                  "%s\nmode=%s absorption=%s run=%d seed=%" PRIu64 " batch=%" PRId64
                   " flight=%d hero_sel=%d long=%" PRId64 ",%.17g\ngrid=%.17g,%d\n",
-                  kEngineVersion, to_string(o.mode), static_cast<int>(o.absorption), run, o.seed,
-                  batch, static_cast<int>(o.flight), static_cast<int>(o.hero_selection),
+                  kEngineVersion, to_string(o.mode),
+                  o.absorption == Absorption::kWeighted ? "weighted" : "analog", run, o.seed, batch,
+                  static_cast<int>(o.flight), static_cast<int>(o.hero_selection),
                   long_path_threshold(m, o, run < 3 ? run : -1), o.long_path_survival, grid.dr_cm,
                   grid.nr);
     std::string s = buf;
@@ -218,7 +292,19 @@ std::string fingerprint(const Medium& m, const PencilGrid& grid, const PencilOpt
     }
     std::snprintf(buf, sizeof buf, "eta %.17g %.17g %.17g d %.17g\n", m.eta, m.eta_above,
                   m.eta_below, m.thickness_cm);
-    return s + buf;
+    s += buf;
+    for (size_t i = 0; i < m.lower_layers.size(); ++i) {  // none for a homogeneous slab
+        const MediumLayer& l = m.lower_layers[i];
+        for (int c = 0; c < 3; ++c) {
+            std::snprintf(buf, sizeof buf, "layer%zu c%d %.17g %.17g %.17g\n", i + 1, c,
+                          l.sigma_a_per_cm[c], l.sigma_s_per_cm[c], l.g[c]);
+            s += buf;
+        }
+        std::snprintf(buf, sizeof buf, "layer%zu eta %.17g d %.17g\n", i + 1, l.eta,
+                      l.thickness_cm);
+        s += buf;
+    }
+    return s;
 }
 
 }  // namespace
@@ -246,35 +332,64 @@ double PencilRun::se(int c, std::size_t i) const {
 void check_pencil(const Medium& m, const PencilGrid& grid) {
     if (!(grid.dr_cm > 0) || !std::isfinite(grid.dr_cm) || grid.nr < 1 || grid.nr > 10'000'000)
         throw std::invalid_argument("volpath: grid needs dr > 0 and 1 <= nr <= 1e7");
-    if (!(m.eta > 0) || !(m.eta_above > 0) || !(m.eta_below > 0))
+    if (!(m.eta_above > 0) || !(m.eta_below > 0))
         throw std::invalid_argument("volpath: indices of refraction must be positive");
-    if (!(m.thickness_cm > 0)) throw std::invalid_argument("volpath: thickness must be positive");
-    const bool half_space = m.thickness_cm >= 1e8;
-    for (int c = 0; c < 3; ++c) {
-        const double a = m.sigma_a_per_cm[c], s = m.sigma_s_per_cm[c], g = m.g[c];
-        if (!(a >= 0) || !(s >= 0) || !std::isfinite(a) || !std::isfinite(s))
-            throw std::invalid_argument("volpath: coefficients must be finite and >= 0");
-        if (!(g > -1 && g < 1)) throw std::invalid_argument("volpath: g must lie in (-1, 1)");
-        if (half_space && a + s == 0)
-            throw InfeasibleError(std::string("volpath: channel ") + kChannelNames[c] +
-                                  " has sigma_t = 0 in a half-space: the beam never returns");
+    const std::vector<MediumLayer> layers = m.layers();
+    for (size_t i = 0; i < layers.size(); ++i) {
+        const MediumLayer& l = layers[i];
+        const bool last = i + 1 == layers.size();
+        const std::string where =
+            layers.size() > 1 ? "volpath: layer " + std::to_string(i + 1) + ": " : "volpath: ";
+        if (!(l.eta > 0))
+            throw std::invalid_argument(where + "indices of refraction must be positive");
+        if (!(l.thickness_cm > 0))
+            throw std::invalid_argument(where + "thickness must be positive");
+        if (!last && !(l.thickness_cm < 1e8))
+            throw std::invalid_argument(where + "only the last layer may be quasi-infinite");
+        const bool half_space = last && l.thickness_cm >= 1e8;
+        for (int c = 0; c < 3; ++c) {
+            const double a = l.sigma_a_per_cm[c], s = l.sigma_s_per_cm[c], g = l.g[c];
+            if (!(a >= 0) || !(s >= 0) || !std::isfinite(a) || !std::isfinite(s))
+                throw std::invalid_argument(where + "coefficients must be finite and >= 0");
+            if (!(g > -1 && g < 1)) throw std::invalid_argument(where + "g must lie in (-1, 1)");
+            if (half_space && a + s == 0)
+                throw InfeasibleError(where + "channel " + kChannelNames[c] +
+                                      " has sigma_t = 0 in a half-space: the beam never returns");
+        }
+    }
+    // A clear top layer of a stack is entered as MCML enters it (its Rspecular(): the
+    // reflections inside it at normal incidence are specular); that needs it clear in every
+    // channel, so that the entry is the same for all.
+    if (layers.size() > 1) {
+        int clear = 0;
+        for (int c = 0; c < 3; ++c) clear += layers[0].sigma_t(c) == 0.0;
+        if (clear != 0 && clear != 3)
+            throw std::invalid_argument(
+                "volpath: the top layer of a stack must be clear in all channels or in none");
     }
 }
 
 std::int64_t long_path_threshold(const Medium& m, const PencilOptions& o, int channel) {
     if (o.long_path_events > 0) return o.long_path_events;
     double albedo = 0;
-    for (int c = 0; c < 3; ++c) {
-        if (channel >= 0 && c != channel) continue;
-        const double t = m.sigma_a_per_cm[c] + m.sigma_s_per_cm[c];
-        if (t > 0) albedo = std::max(albedo, m.sigma_s_per_cm[c] / t);
-    }
+    for (const MediumLayer& l : m.layers())
+        for (int c = 0; c < 3; ++c) {
+            if (channel >= 0 && c != channel) continue;
+            const double t = l.sigma_t(c);
+            if (t > 0) albedo = std::max(albedo, l.sigma_s_per_cm[c] / t);
+        }
     const double n = albedo < 1 ? 20.0 / (1.0 - albedo) : 1e6;
     return static_cast<std::int64_t>(std::clamp(std::ceil(n), 1e4, 1e6));
 }
 
 double entry_specular(const Medium& m) {
-    return fresnel_normal(m.eta_above, m.eta);
+    double r1 = fresnel_normal(m.eta_above, m.eta);
+    if (m.layered() && m.layers()[0].clear()) {
+        // MCML's Rspecular(): the beam's reflections between the faces of a clear top layer.
+        const double r2 = fresnel_normal(m.eta, m.lower_layers[0].eta);
+        r1 = r1 + (1 - r1) * (1 - r1) * r2 / (1 - r1 * r2);
+    }
+    return r1;
 }
 
 void fill_profile(const BatchRunResult& r, std::size_t base, const PencilGrid& grid, int c,
@@ -318,10 +433,22 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
     if (o.mode == ChromaticMode::kHero) batch = (batch + 2) / 3 * 3;  // whole hero cycles
 
     Setup base;
-    base.thickness = m.thickness_cm >= 1e8 ? kInf : m.thickness_cm;
-    base.eta_top = m.eta_above / m.eta;
-    base.eta_bot = m.eta_below / m.eta;
-    base.rsp = fresnel_normal(m.eta_above, m.eta);
+    const std::vector<MediumLayer> layers = m.layers();
+    {
+        double z = 0;
+        for (const MediumLayer& l : layers) {
+            LayerSetup ls;
+            ls.z0 = z;
+            z = l.thickness_cm >= 1e8 ? kInf : z + l.thickness_cm;
+            ls.z1 = z;
+            ls.eta = l.eta;
+            base.layers.push_back(ls);
+        }
+    }
+    base.first = layers.size() > 1 && layers[0].clear() ? 1 : 0;
+    base.eta_above = m.eta_above;
+    base.eta_below = m.eta_below;
+    base.rsp = entry_specular(m);
     base.dr = grid.dr_cm;
     base.nr = grid.nr;
     base.layout = out.layout;
@@ -341,21 +468,24 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
         Setup s = base;
         s.nc = hero ? 3 : 1;
         s.long_events = long_path_threshold(m, o, hero ? -1 : run);
-        for (int c = 0; c < s.nc; ++c) {
-            const int mc = hero ? c : run;
-            const size_t i = static_cast<size_t>(c);
-            s.sigma_t[i] = m.sigma_a_per_cm[mc] + m.sigma_s_per_cm[mc];
-            s.sigma_s[i] = m.sigma_s_per_cm[mc];
-            s.albedo[i] = s.sigma_t[i] > 0 ? s.sigma_s[i] / s.sigma_t[i] : 0.0;
-            s.g[i] = m.g[mc];
+        for (size_t k = 0; k < layers.size(); ++k) {
+            LayerSetup& ls = s.layers[k];
+            for (int c = 0; c < s.nc; ++c) {
+                const int mc = hero ? c : run;
+                const size_t i = static_cast<size_t>(c);
+                ls.sigma_t[i] = layers[k].sigma_t(mc);
+                ls.sigma_s[i] = layers[k].sigma_s_per_cm[mc];
+                ls.albedo[i] = ls.sigma_t[i] > 0 ? ls.sigma_s[i] / ls.sigma_t[i] : 0.0;
+                ls.g[i] = layers[k].g[mc];
+            }
+            ls.same_g = ls.g[0] == ls.g[1] && ls.g[1] == ls.g[2];
         }
-        s.same_g = s.g[0] == s.g[1] && s.g[1] == s.g[2];
         if (hero && o.hero_selection == HeroSelection::kMeanFreePath) {
-            // Channels with a longer reduced mean free path spread further and need more paths.
+            // Channels with a longer reduced mean free path spread further and need more paths
+            // (those of the layer the beam enters).
+            const MediumLayer& top = layers[static_cast<size_t>(base.first)];
             double sum = 0;
-            for (int c = 0; c < 3; ++c)
-                sum += s.hero_prob[static_cast<size_t>(c)] =
-                    1.0 / (m.sigma_a_per_cm[c] + m.sigma_s_per_cm[c] * (1 - m.g[c]));
+            for (int c = 0; c < 3; ++c) sum += s.hero_prob[static_cast<size_t>(c)] = top.mfp_cm(c);
             for (double& x : s.hero_prob) x /= sum;
             s.hero_random = true;
         }
@@ -408,7 +538,8 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
                         const double u = rng.uniform();
                         h = u < s.hero_prob[0] ? 0 : (u < s.hero_prob[0] + s.hero_prob[1] ? 1 : 2);
                     }
-                    events += trace<3, true>(s, rng, h, tally);
+                    events += weighted ? trace<3, true>(s, rng, h, tally)
+                                       : trace<3, false>(s, rng, h, tally);
                 } else if (weighted) {
                     events += trace<1, true>(s, rng, 0, tally);
                 } else {

@@ -30,7 +30,9 @@ enum class ChromaticMode {
     /// One path for all channels: a hero channel (cycled over the paths) samples free paths and
     /// phase directions, and every channel's contribution carries the one-sample balance-heuristic
     /// weight over the three channels' sampling densities (spectral MIS, as pbrt-v4 and
-    /// Mitsuba 3 do); absorption enters the weights, which Russian roulette keeps bounded.
+    /// Mitsuba 3 do). Absorption: analog (the hero's albedo decides survival, and each
+    /// channel's strategy includes its own, so the weights stay below 1 / P(hero = c)) or
+    /// weighted (absorption in the weights, Russian roulette keeps them bounded).
     kHero,
 };
 const char* to_string(ChromaticMode m);
@@ -41,7 +43,7 @@ enum class HeroSelection {
     kMeanFreePath,  ///< at random, with probability proportional to the reduced mean free path
 };
 
-/// How absorption enters a per-channel run (hero mode always weights).
+/// How absorption enters a run.
 enum class Absorption {
     /// Absorb by roulette with the single-scattering albedo; weights stay 1 [Bitterli13 Alg. 1].
     kAnalog,
@@ -75,7 +77,7 @@ struct PencilOptions {
     SampleBudget budget;
     std::int64_t batch_paths = 0;  ///< 0: budget paths / 1000 (at least 1000), 1000 otherwise
     ChromaticMode mode = ChromaticMode::kPerChannel;
-    Absorption absorption = Absorption::kAnalog;             ///< kPerChannel only
+    Absorption absorption = Absorption::kAnalog;
     HeroSelection hero_selection = HeroSelection::kUniform;  ///< kHero only
     /// kPerChannel only: simulate just this channel (0..2); -1: all three. The other channels'
     /// runs are left empty and their profiles unfilled.
@@ -114,6 +116,8 @@ struct PencilLayout {
     /// at risk. The roulette is unbiased, but in a half-space with albedo near 1 a survivor at
     /// depth ~sqrt(N) mean free paths needs ~N more events to return, each another roulette,
     /// so in practice the estimate behaves like a truncation that misses about this mass.
+    /// Also the weight of paths given up after 1e6 interface hits in one free flight (a guard
+    /// against rounding; physics does not trap a path between parallel interfaces).
     std::size_t lost() const { return rd() + 3; }
     std::size_t per_channel() const { return rd() + 4; }
 };
@@ -122,7 +126,7 @@ struct PencilRun {
     Medium medium;
     PencilGrid grid;
     ChromaticMode mode = ChromaticMode::kPerChannel;
-    Absorption absorption = Absorption::kAnalog;             ///< kPerChannel only
+    Absorption absorption = Absorption::kAnalog;
     HeroSelection hero_selection = HeroSelection::kUniform;  ///< kHero only
     /// kPerChannel only: simulate just this channel (0..2); -1: all three. The other channels'
     /// runs are left empty and their profiles unfilled.

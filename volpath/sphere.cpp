@@ -382,6 +382,7 @@ SphereCamera sphere_camera(const SphereScene& scene) {
 }
 
 void check_sphere(const SphereScene& scene, bool image, ChromaticMode mode) {
+    require_homogeneous(scene.medium, "volpath: the sphere");
     auto fail = [](const std::string& what) {
         throw std::invalid_argument("volpath sphere: " + what);
     };

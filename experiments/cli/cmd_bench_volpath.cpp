@@ -131,31 +131,31 @@ int run_volpath_bench(int threads, bool quick, int repeat) {
             }
             return from_profile("mcml (per channel)", r.profile, 3, s, paths, events);
         }));
-        const std::pair<volpath::ChromaticMode, volpath::Absorption> modes[] = {
-            {volpath::ChromaticMode::kPerChannel, volpath::Absorption::kAnalog},
-            {volpath::ChromaticMode::kPerChannel, volpath::Absorption::kWeighted},
-            {volpath::ChromaticMode::kHero, volpath::Absorption::kWeighted},
-            {volpath::ChromaticMode::kHero, volpath::Absorption::kAnalog}};
-        for (const auto& [mode, absorption] : modes) {
+        struct Mode {
+            const char* name;
+            volpath::ChromaticMode mode;
+            volpath::Absorption absorption;
+            volpath::HeroSelection selection;
+        };
+        using CM = volpath::ChromaticMode;
+        using AB = volpath::Absorption;
+        using HS = volpath::HeroSelection;
+        const Mode modes[] = {{"volpath analog", CM::kPerChannel, AB::kAnalog, HS::kUniform},
+                              {"volpath weighted", CM::kPerChannel, AB::kWeighted, HS::kUniform},
+                              {"volpath hero", CM::kHero, AB::kAnalog, HS::kUniform},
+                              {"volpath hero mfp", CM::kHero, AB::kAnalog, HS::kMeanFreePath},
+                              {"volpath hero wtd", CM::kHero, AB::kWeighted, HS::kUniform}};
+        for (const Mode& md : modes) {
             rows.push_back(best([&] {
                 volpath::PencilOptions o;
                 o.threads = threads;
-                o.mode = mode;
-                o.absorption = absorption;
-                // Hero with "analog" in this table stands for hero with mfp-proportional
-                // selection (hero mode always weights absorption).
-                const bool mfp_hero = mode == volpath::ChromaticMode::kHero &&
-                                      absorption == volpath::Absorption::kAnalog;
-                if (mfp_hero) o.hero_selection = volpath::HeroSelection::kMeanFreePath;
+                o.mode = md.mode;
+                o.absorption = md.absorption;
+                o.hero_selection = md.selection;
                 o.budget.samples = cs.photons;
                 const volpath::PencilRun r =
                     volpath::simulate_pencil(cs.medium, {cs.grid.dr_cm, cs.grid.nr}, o);
-                const std::string name =
-                    mode == volpath::ChromaticMode::kHero
-                        ? (mfp_hero ? "volpath hero mfp" : "volpath hero")
-                        : (absorption == volpath::Absorption::kAnalog ? "volpath analog"
-                                                                      : "volpath weighted");
-                return from_profile(name, r.profile, 3, r.seconds, r.paths, r.events);
+                return from_profile(md.name, r.profile, 3, r.seconds, r.paths, r.events);
             }));
         }
         for (const Row& r : rows) {
@@ -180,12 +180,14 @@ int run_volpath_bench(int threads, bool quick, int repeat) {
         const double weighted = time_to(rows[2].seconds, rows[2].profile_rel_se, true, 0.01);
         const double hero = time_to(rows[3].seconds, rows[3].profile_rel_se, false, 0.01);
         const double hero_mfp = time_to(rows[4].seconds, rows[4].profile_rel_se, false, 0.01);
+        const double hero_w = time_to(rows[5].seconds, rows[5].profile_rel_se, false, 0.01);
         std::printf(
-            "time to 1 %% on r R(r) in all channels, ratios: hero / weighted = %.2f, hero / "
-            "analog = %.2f, hero mfp / weighted = %.2f; volpath analog / MCML = %.2f, weighted / "
-            "MCML = %.2f, hero / MCML = %.2f, hero mfp / MCML = %.2f\n",
-            hero / weighted, hero / analog, hero_mfp / weighted, analog / mc, weighted / mc,
-            hero / mc, hero_mfp / mc);
+            "time to 1 %% on r R(r) in all channels, ratios: hero / analog = %.2f, hero / "
+            "weighted = %.2f, hero mfp / analog = %.2f, hero wtd / weighted = %.2f; volpath "
+            "analog / MCML = %.2f, weighted / MCML = %.2f, hero / MCML = %.2f, hero mfp / MCML "
+            "= %.2f, hero wtd / MCML = %.2f\n",
+            hero / analog, hero / weighted, hero_mfp / analog, hero_w / weighted, analog / mc,
+            weighted / mc, hero / mc, hero_mfp / mc, hero_w / mc);
     }
     // The lit sphere (no MCML counterpart): Skin1, radius 5 mm, profile over beta only.
     {

@@ -81,7 +81,7 @@ ProfileJob read_profile_job(const std::string& config_path, const std::string& m
     job.engine = root.choice("engine", "mcml", {"mcml", "volpath"});
     if (!engine_flag.empty()) job.engine = engine_flag, root.record("engine", engine_flag);
     ConfigTable vp = root.table_or_empty("volpath");
-    job.mode = vp.choice("mode", "analog", {"analog", "weighted", "hero"});
+    job.mode = vp.choice("mode", "analog", {"analog", "weighted", "hero", "hero-weighted"});
     if (!mode_flag.empty()) job.mode = mode_flag, vp.record("mode", mode_flag);
     if (job.engine != "volpath" && (root.has("volpath") || !mode_flag.empty()))
         throw InputError({config_path.empty() ? "<command line>" : config_path, 0, 0}, "volpath",
@@ -114,10 +114,10 @@ int run_volpath_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
     po.threads = c.threads;
     po.budget = sample_budget(job.budget);
     po.batch_paths = job.batch;
-    po.mode =
-        job.mode == "hero" ? volpath::ChromaticMode::kHero : volpath::ChromaticMode::kPerChannel;
-    po.absorption =
-        job.mode == "analog" ? volpath::Absorption::kAnalog : volpath::Absorption::kWeighted;
+    const bool hero = job.mode == "hero" || job.mode == "hero-weighted";
+    po.mode = hero ? volpath::ChromaticMode::kHero : volpath::ChromaticMode::kPerChannel;
+    po.absorption = job.mode == "analog" || job.mode == "hero" ? volpath::Absorption::kAnalog
+                                                               : volpath::Absorption::kWeighted;
     po.cancel = cancel;
     po.checkpoint_prefix = out.string();
     const double total = job.budget.photons ? static_cast<double>(*job.budget.photons) : 0.0;
@@ -305,9 +305,10 @@ void register_profile(CLI::App& app, std::function<int()>& action) {
         ->check(CLI::IsMember({"mcml", "volpath"}));
     sub->add_option("--mode", a->mode,
                     "volpath estimator: analog (per channel, absorption by roulette; default), "
-                    "weighted (per channel, implicit absorption) or hero (one path for RGB, "
-                    "spectral MIS)")
-        ->check(CLI::IsMember({"analog", "weighted", "hero"}));
+                    "weighted (per channel, implicit absorption), hero (one path for RGB, "
+                    "spectral MIS, absorption by the hero's roulette) or hero-weighted (hero "
+                    "with implicit absorption)")
+        ->check(CLI::IsMember({"analog", "weighted", "hero", "hero-weighted"}));
     add_common_options(*sub, a->common, "Output CSV (default results/profiles/<material>.csv)");
     sub->callback([a, &action] { action = [a] { return run_profile(*a); }; });
 }

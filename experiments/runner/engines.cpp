@@ -111,6 +111,7 @@ double rel_l2_rr(const Bins& b, const std::vector<double>& m, const std::vector<
 }
 
 approx::DiffusionMedium diffusion_medium(const Medium& m, int c) {
+    require_homogeneous(m, "the diffusion models");
     approx::DiffusionMedium d;
     d.sigma_a = m.sigma_a_per_cm[c];
     d.sigma_s = m.sigma_s_per_cm[c];
@@ -251,22 +252,38 @@ std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
                     {base + "Rd", "1", n->vresult.mean[L.rd()], n->vresult.se[L.rd()], true, 0});
                 metrics.push_back({base + "Rd_single", "1", n->vresult.mean[L.rd_ss()],
                                    n->vresult.se[L.rd_ss()], true, 0});
+                if (m.medium.total_thickness_cm() < 1e8)
+                    metrics.push_back({base + "Tt", "1", n->vresult.mean[L.tt()],
+                                       n->vresult.se[L.tt()], true, 0});
             }
     if (e.crossval.enabled) {
         std::ostringstream sum, zs;
-        sum << "material,channel,bins,chi2,p_value,max_abs_z,Rd_mcml,Rd_mcml_se,Rd_volpath,"
-               "Rd_volpath_se,Rd_z,volpath_mode\n";
+        sum << "material,layers,channel,bins,chi2,p_value,max_abs_z,Rd_mcml,Rd_mcml_se,Rd_volpath,"
+               "Rd_volpath_se,Rd_z,Tt_mcml,Tt_mcml_se,Tt_volpath,Tt_volpath_se,Tt_z,volpath_mode\n";
         zs << "material,channel,r_mid_mm,z\n";
         for (const auto& m : e.materials) {
             const RadialProfile vp = volpath_profile(r, m.label, false);
             const RadialProfile mc = material_profile(r, m.label);
             for (int c = 0; c < 3; ++c) {
                 const CrossRow x = crossval(vp, mc, c, e.crossval.max_rel_se);
-                sum << m.label << ',' << kChannelNames[c] << ',' << x.bins << ',' << fmt(x.chi2)
-                    << ',' << fmt(x.p) << ',' << fmt(x.max_abs_z) << ',' << fmt(mc.rd_total[c])
-                    << ',' << fmt(mc.rd_total_se[c]) << ',' << fmt(vp.rd_total[c]) << ','
-                    << fmt(vp.rd_total_se[c]) << ',' << fmt(x.rd_z) << ',' << e.volpath.mode
-                    << '\n';
+                sum << m.label << ',' << 1 + m.medium.lower_layers.size() << ',' << kChannelNames[c]
+                    << ',' << x.bins << ',' << fmt(x.chi2) << ',' << fmt(x.p) << ','
+                    << fmt(x.max_abs_z) << ',' << fmt(mc.rd_total[c]) << ','
+                    << fmt(mc.rd_total_se[c]) << ',' << fmt(vp.rd_total[c]) << ','
+                    << fmt(vp.rd_total_se[c]) << ',' << fmt(x.rd_z) << ',';
+                // Transmittance of finite slabs (empty for half-spaces).
+                if (m.medium.total_thickness_cm() < 1e8) {
+                    const mcml::RunResult& mr = find_node(r, m.label, c, "main")->result;
+                    const ChannelNode* vn = find_node(r, m.label, c, "volpath");
+                    const volpath::PencilLayout VL{vn->grid.nr};
+                    const double tm = mr.mean(mr.layout.tt), tm_se = mr.se[mr.layout.tt];
+                    const double tv = vn->vresult.mean[VL.tt()], tv_se = vn->vresult.se[VL.tt()];
+                    sum << fmt(tm) << ',' << fmt(tm_se) << ',' << fmt(tv) << ',' << fmt(tv_se)
+                        << ',' << fmt((tv - tm) / std::hypot(tm_se, tv_se)) << ',';
+                } else {
+                    sum << ",,,,,";
+                }
+                sum << e.volpath.mode << '\n';
                 for (const auto& [rm, z] : x.z)
                     zs << m.label << ',' << kChannelNames[c] << ',' << fmt(rm) << ',' << fmt(z)
                        << '\n';

@@ -109,6 +109,12 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
                 t->fail("models", "unknown diffusion model \"" + m + "\"; known: " + list);
             }
         if (e.pencil.models.empty()) t->fail("models", "expected at least one diffusion model");
+        for (const MaterialEntry& m : e.materials)
+            if (m.medium.layered())
+                t->fail("models", "the diffusion models describe homogeneous slabs; material \"" +
+                                      m.label + "\" is layered (" +
+                                      std::to_string(1 + m.medium.lower_layers.size()) +
+                                      " layers): put it in an experiment without [outputs.pencil]");
         need_volpath(*t, "[outputs.pencil]");
     }
     if (auto t = outs.table("efficiency")) {

@@ -55,6 +55,20 @@ mcml::Budget scaled_budget(const mcml::Budget& b, double factor) {
     return s;
 }
 
+// The layers below the first of a layered medium (nothing for a homogeneous one, so that its
+// keys and seeds do not change).
+void add_lower_layers(ContentKey& k, const Medium& m, int c) {
+    for (size_t i = 0; i < m.lower_layers.size(); ++i) {
+        const MediumLayer& l = m.lower_layers[i];
+        const std::string p = "layer" + std::to_string(i + 1) + ".";
+        k.add(p + "sigma_a_per_cm", l.sigma_a_per_cm[c])
+            .add(p + "sigma_s_per_cm", l.sigma_s_per_cm[c])
+            .add(p + "g", l.g[c])
+            .add(p + "eta", l.eta)
+            .add(p + "thickness_cm", l.thickness_cm);
+    }
+}
+
 // The seed of a node: independent streams for every material, channel and role, the same for
 // the same medium whatever the experiment it appears in.
 std::uint64_t derive_seed(std::uint64_t seed, const Medium& m, int c, const std::string& role) {
@@ -66,6 +80,7 @@ std::uint64_t derive_seed(std::uint64_t seed, const Medium& m, int c, const std:
         .add("eta", m.eta)
         .add("channel", c)
         .add("role", role);
+    add_lower_layers(k, m, c);
     return std::stoull(k.hex().substr(0, 16), nullptr, 16);
 }
 
@@ -93,6 +108,7 @@ ContentKey node_key(const ChannelNode& n) {
         .add("budget_photons", n.budget.photons ? *n.budget.photons : std::int64_t{-1})
         .add("budget_seconds", n.budget.seconds ? *n.budget.seconds : -1.0)
         .add("budget_rel_error", n.budget.rel_error ? *n.budget.rel_error : -1.0);
+    add_lower_layers(k, m, c);
     if (volpath)
         k.add("batch_paths", n.batch_photons).add("seed", n.seed).add("snapshots", true);
     else
@@ -472,7 +488,7 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
         mcml::Grid g;
         g.dr = n.grid.dr_cm;
         g.nr = n.grid.nr;
-        g.dz = n.medium.thickness_cm;
+        g.dz = n.medium.total_thickness_cm();
         g.nz = 1;
         g.na = 1;
         const mcml::RunSpec spec = mcml::run_for_channel(n.medium, n.channel, 1, g);
