@@ -388,14 +388,17 @@ TEST(SphereCli, WritesImagesProfilesAndRecord) {
 
     const auto cols = csv_header(dir / "out" / "s_beta.csv");
     for (const char* c : {"beta_lo_deg", "beta_hi_deg", "M_volpath_R", "M_volpath_se_R",
-                          "M_dipole_R", "z_dipole_R", "M_better-dipole_B", "z_better-dipole_B"})
+                          "M_volpath_single_G", "M_volpath_single_se_B", "M_dipole_R", "z_dipole_R",
+                          "M_better-dipole_B", "z_better-dipole_B"})
         EXPECT_NE(std::find(cols.begin(), cols.end(), c), cols.end()) << c;
-    EXPECT_EQ(cols.size(), 2u + 3u * (2u + 2u * 2u));
+    EXPECT_EQ(cols.size(), 2u + 3u * (4u + 2u * 2u));
     EXPECT_EQ(csv_rows(dir / "out" / "s_beta.csv"), 36);
 
     const std::string rec = testing::read_text(dir / "out" / "s.toml");
-    for (const char* key : {"preset = 'Skin1'", "radius_mm = 5", "[result_R]", "dipole_chi2",
-                            "dipole_rel_l2_lit", "[timing]", "[provenance]", "git_revision"})
+    for (const char* key :
+         {"preset = 'Skin1'", "radius_mm = 5", "[result_R]", "dipole_chi2",
+          "diffuse_single_fraction", "dipole_compared_with = 'volpath_multiple_scattering'",
+          "dipole_rel_l2_lit", "[timing]", "[provenance]", "git_revision"})
         EXPECT_NE(rec.find(key), std::string::npos) << key << " in\n" << rec;
     for (const char* s : {"relL2 lit", "better-dipole", "chi2/dof"})
         EXPECT_NE(r.out.find(s), std::string::npos) << s << " in\n" << r.out;

@@ -17,7 +17,7 @@ namespace ssslab::volpath {
 namespace {
 
 // Bump when a change alters the numbers produced for a given seed.
-constexpr const char* kEngineVersion = "volpath-sphere-2";
+constexpr const char* kEngineVersion = "volpath-sphere-3";
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -206,6 +206,10 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
                 double* T = tally + static_cast<size_t>(c) * stride;
                 T[L.beta() + bin] += beta[c];
                 T[L.diffuse()] += beta[c];
+                if (events == 1) {
+                    T[L.beta_single() + bin] += beta[c];
+                    T[L.diffuse_single()] += beta[c];
+                }
             }
             tally_camera(s, n, refract(w, -n, s.eta_out, cos_o), beta, false, tally);
             return events;
@@ -578,7 +582,12 @@ SphereRun simulate_sphere(const SphereScene& scene, const SphereOptions& o) {
             const size_t i = L.beta() + static_cast<size_t>(j);
             out.exitance[c][static_cast<size_t>(j)] = out.mean(c, i) / zone;
             out.exitance_se[c][static_cast<size_t>(j)] = out.se(c, i) / zone;
+            const size_t is = L.beta_single() + static_cast<size_t>(j);
+            out.exitance_single[c].push_back(out.mean(c, is) / zone);
+            out.exitance_single_se[c].push_back(out.se(c, is) / zone);
         }
+        out.diffuse_single[c] = out.mean(c, L.diffuse_single());
+        out.diffuse_single_se[c] = out.se(c, L.diffuse_single());
         out.diffuse[c] = out.mean(c, L.diffuse());
         out.diffuse_se[c] = out.se(c, L.diffuse());
         out.specular[c] = out.mean(c, L.specular());

@@ -142,12 +142,17 @@ struct SphereLayout {
     /// Weight leaving within the acceptance cone, at visible points (subsurface, specular).
     std::size_t cone_subsurface() const { return diffuse() + 3; }
     std::size_t cone_specular() const { return diffuse() + 4; }
+    /// The single-scattering part (paths with exactly one scattering event) of diffuse() and
+    /// of the beta bins, for the models that leave it out.
+    std::size_t diffuse_single() const { return diffuse() + 5; }
+    std::size_t beta_single() const { return diffuse() + 6; }
     std::size_t pixels() const { return static_cast<size_t>(width) * static_cast<size_t>(height); }
     std::size_t layer(SphereLayer k) const {
-        return diffuse() + 5 + static_cast<size_t>(k) * pixels();
+        return beta_single() + static_cast<size_t>(beta_bins) + static_cast<size_t>(k) * pixels();
     }
     std::size_t per_channel() const {
-        return diffuse() + 5 + (image ? kSphereLayers * pixels() : 0);
+        return beta_single() + static_cast<size_t>(beta_bins) +
+               (image ? kSphereLayers * pixels() : 0);
     }
 };
 
@@ -177,10 +182,13 @@ struct SphereRun {
     /// the zone's area 2 pi R^2 (cos b0 - cos b1). The specular part is not included (it is
     /// E0 F(cos beta) cos beta on the lit side).
     std::array<std::vector<double>, 3> exitance, exitance_se;
+    /// Its single-scattering part (paths with exactly one scattering event), per beta bin.
+    std::array<std::vector<double>, 3> exitance_single, exitance_single_se;
     /// Fractions of the incident flux pi R^2 E0: leaving after entering the medium (the
     /// ballistic part included), reflected by the first surface, at risk in the long-path
     /// roulette (SphereLayout::lost()).
     std::array<double, 3> diffuse{}, diffuse_se{};
+    std::array<double, 3> diffuse_single{}, diffuse_single_se{};  ///< its single-scattering part
     std::array<double, 3> specular{}, specular_se{};
     std::array<double, 3> lost{}, lost_se{};
     /// What `specular` estimates, by quadrature: sphere_specular_reflectance(eta / eta_above).

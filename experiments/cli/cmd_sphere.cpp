@@ -16,7 +16,9 @@
 //                   in the order given, all at one exposure (the 99.5th percentile of volpath's
 //                   exitance values maps to 1)
 //   <out>_beta.csv  per beta bin: edges [deg], per channel volpath's M and its standard error,
-//                   each model's M and z = (model - volpath) / SE (nan where SE = 0)
+//                   its single-scattering part M_ss and that one's standard error, each model's
+//                   M and z = (model - volpath) / SE (nan where SE = 0), where volpath means M
+//                   for models with single scattering and M - M_ss for those without
 //   <out>.toml      resolved configuration, per-channel totals and errors, timing, provenance
 // Checkpoints of the path tracer are <out>.<R|G|B|hero>.ckpt; an interrupted run (SIGINT) saves
 // them and the same command resumes it.
@@ -511,15 +513,31 @@ int run_sphere(const SphereArgs& a) {
         bins_mc[static_cast<size_t>(ch)] = run.exitance[static_cast<size_t>(ch)];
         bins_se[static_cast<size_t>(ch)] = run.exitance_se[static_cast<size_t>(ch)];
     }
+    // Like with like: a model without single scattering is compared with volpath's multiple-
+    // scattering part M - M_ss (its SE taken as the total's: the two parts come from disjoint
+    // paths, Var(ms) = Var(all) - Var(ss) + O(mean(ms) mean(ss) / N)).
+    std::array<std::vector<double>, 3> bins_ms;
+    for (int ch = 0; ch < 3; ++ch) {
+        const size_t c3 = static_cast<size_t>(ch);
+        bins_ms[c3] = bins_mc[c3];
+        for (size_t j = 0; j < bins_ms[c3].size(); ++j)
+            bins_ms[c3][j] -= run.exitance_single[c3][j];
+    }
+    auto reference = [&](size_t k, size_t c3) -> const std::vector<double>& {
+        return job.profiles[k][c3]->includes_single_scattering() ? bins_mc[c3] : bins_ms[c3];
+    };
     for (size_t k = 0; k < job.models.size(); ++k)
         for (int ch = 0; ch < 3; ++ch) {
             const size_t c3 = static_cast<size_t>(ch);
-            cmp[k][c3] = compare(tables[k][c3].bin_mean, bins_mc[c3], bins_se[c3], tables[k][c3]);
+            cmp[k][c3] =
+                compare(tables[k][c3].bin_mean, reference(k, c3), bins_se[c3], tables[k][c3]);
         }
     std::string csv = "beta_lo_deg,beta_hi_deg";
     for (int ch = 0; ch < 3; ++ch) {
         const std::string cn = kChannelNames[ch];
-        csv += ",M_volpath_" + cn + ",M_volpath_se_" + cn;
+        csv += ",M_volpath_" + cn + ",M_volpath_se_" + cn + ",M_volpath_single_" + cn +
+               ",M_volpath_single_se_" + cn;
+        // z against the total for models with single scattering, else against M - M_ss.
         for (const auto& n : job.models) csv += ",M_" + n + "_" + cn + ",z_" + n + "_" + cn;
     }
     csv += "\n";
@@ -529,10 +547,12 @@ int run_sphere(const SphereArgs& a) {
         for (int ch = 0; ch < 3; ++ch) {
             const size_t c3 = static_cast<size_t>(ch);
             const double v = bins_mc[c3][jj], se = bins_se[c3][jj];
-            csv += "," + fmt(v) + "," + fmt(se);
+            csv += "," + fmt(v) + "," + fmt(se) + "," + fmt(run.exitance_single[c3][jj]) + "," +
+                   fmt(run.exitance_single_se[c3][jj]);
             for (size_t k = 0; k < job.models.size(); ++k) {
                 const double m = tables[k][c3].bin_mean[jj];
-                csv += "," + fmt(m) + "," + (se > 0 ? fmt((m - v) / se) : std::string("nan"));
+                const double ref = reference(k, c3)[jj];
+                csv += "," + fmt(m) + "," + (se > 0 ? fmt((m - ref) / se) : std::string("nan"));
             }
         }
         csv += "\n";
@@ -552,6 +572,8 @@ int run_sphere(const SphereArgs& a) {
         t.record("wall_seconds", r.seconds);
         t.record("diffuse_fraction", run.diffuse[c3]);
         t.record("diffuse_fraction_se", run.diffuse_se[c3]);
+        t.record("diffuse_single_fraction", run.diffuse_single[c3]);
+        t.record("diffuse_single_fraction_se", run.diffuse_single_se[c3]);
         t.record("specular_fraction", run.specular[c3]);
         t.record("specular_fraction_se", run.specular_se[c3]);
         t.record("specular_fraction_expected", run.specular_expected);
@@ -561,6 +583,10 @@ int run_sphere(const SphereArgs& a) {
             const approx::SphereExitance& tb = tables[k][c3];
             t.record(n + "_total_rd", job.profiles[k][c3]->total_rd());
             t.record(n + "_diffuse_fraction", tb.total_fraction());
+            t.record(n + "_compared_with",
+                     std::string(job.profiles[k][c3]->includes_single_scattering()
+                                     ? "volpath_total"
+                                     : "volpath_multiple_scattering"));
             t.record(n + "_rel_l2_lit", cmp[k][c3].rel_l2_lit);
             t.record(n + "_rel_l2_unlit", cmp[k][c3].rel_l2_unlit);
             t.record(n + "_chi2", cmp[k][c3].chi2);
