@@ -411,6 +411,30 @@ std::array<double, 3> ConfigTable::rgb(std::string_view key, Range range) {
     return *v;
 }
 
+std::optional<Vec3> ConfigTable::optional_vec3(std::string_view key, Range range) {
+    mark(key);
+    const toml::node* n = find(key);
+    if (!n) return std::nullopt;
+    if (!n->is_array() || n->as_array()->size() != 3)
+        fail_at(n, key,
+                "expected 3 numbers [x, y, z], got " +
+                    (n->is_array() ? "an array of " + std::to_string(n->as_array()->size())
+                                   : type_name(*n)));
+    const toml::array& a = *n->as_array();
+    const Vec3 v{to_number(key, *a.get(0), range), to_number(key, *a.get(1), range),
+                 to_number(key, *a.get(2), range)};
+    toml::array out;
+    for (double x : {v.x, v.y, v.z}) out.push_back(x);
+    resolved_->insert_or_assign(key, std::move(out));
+    return v;
+}
+
+Vec3 ConfigTable::vec3(std::string_view key, Range range) {
+    auto v = optional_vec3(key, range);
+    if (!v) fail(key, "required value is missing (expected 3 numbers [x, y, z])");
+    return *v;
+}
+
 std::optional<ConfigTable> ConfigTable::table(std::string_view key) {
     mark(key);
     const toml::node* n = find(key);

@@ -7,6 +7,8 @@
 // the fully resolved configuration, defaults filled in, can be written next to every output.
 #pragma once
 
+#include "core/vec3.h"
+
 #include "core/error.h"
 
 #include <array>
@@ -79,6 +81,10 @@ class ConfigTable {
     std::array<double, 3> rgb(std::string_view key, Range range = Range::any());
     std::optional<std::array<double, 3>> optional_rgb(std::string_view key,
                                                       Range range = Range::any());
+
+    /// A point or direction: exactly three numbers [x, y, z], each in `range`.
+    Vec3 vec3(std::string_view key, Range range = Range::any());
+    std::optional<Vec3> optional_vec3(std::string_view key, Range range = Range::any());
 
     /// A sub-table, if present (marks the key as used).
     std::optional<ConfigTable> table(std::string_view key);

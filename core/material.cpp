@@ -105,8 +105,9 @@ constexpr const char* kLayerKeys[] = {
     "preset", "sigma_a_per_mm", "sigma_a_per_cm", "sigma_s_per_mm", "sigma_s_per_cm", "g",
     "eta",    "thickness_mm",   "thickness_cm"};
 
-// The coefficients and index of one homogeneous slab: a preset or explicit coefficients.
-Medium read_homogeneous(ConfigTable& t) {
+// The coefficients and index of one homogeneous slab: a preset or explicit coefficients (and
+// its thickness, if `with_thickness`).
+Medium read_homogeneous(ConfigTable& t, bool with_thickness = true) {
     Medium m;
     const bool explicit_coeffs = t.has("sigma_a_per_mm") || t.has("sigma_a_per_cm") ||
                                  t.has("sigma_s_per_mm") || t.has("sigma_s_per_cm");
@@ -137,11 +138,18 @@ Medium read_homogeneous(ConfigTable& t) {
         m.eta = t.number("eta", Range::positive());
         m.thickness_cm = 1e8;
     }
-    if (auto d = optional_length_cm(t, "thickness", Range::positive())) m.thickness_cm = *d;
+    if (with_thickness)
+        if (auto d = optional_length_cm(t, "thickness", Range::positive())) m.thickness_cm = *d;
     return m;
 }
 
 }  // namespace
+
+Medium medium_coefficients_from_config(ConfigTable& t) {
+    Medium m = read_homogeneous(t, false);
+    if (!t.has("preset")) m.name.clear();
+    return m;
+}
 
 std::vector<MediumLayer> Medium::layers() const {
     std::vector<MediumLayer> out;

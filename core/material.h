@@ -113,4 +113,8 @@ std::optional<double> optional_length_cm(ConfigTable& t, const std::string& base
 /// quasi-infinite).
 Medium medium_from_config(ConfigTable& t);
 
+/// Only the coefficients and index of a medium from a config table (a preset or explicit
+/// coefficients as above, no thickness or ambient indices): for media bound to scene shapes.
+Medium medium_coefficients_from_config(ConfigTable& t);
+
 }  // namespace ssslab

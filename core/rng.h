@@ -78,6 +78,7 @@ namespace rng_domain {
 inline constexpr std::uint32_t kMcml = 0x1000;     ///< + run index or RGB channel (< 0x8000)
 inline constexpr std::uint32_t kTest = 0x9000;     ///< + test id
 inline constexpr std::uint32_t kVolpath = 0xA000;  ///< + run index (< 0x1000)
+inline constexpr std::uint32_t kScene = 0xB000;    ///< procedural scene geometry (+ shape index)
 }  // namespace rng_domain
 
 }  // namespace ssslab

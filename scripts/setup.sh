@@ -21,6 +21,7 @@ packages=(
   zlib1g-dev            # zlib: reading the gzipped MCML reference outputs in the tests
   libxxhash-dev         # xxHash: content hashes that key the artifact cache
   libopenexr-dev        # OpenEXR 3.1: layered float images (directly, not through OpenImageIO)
+  libtinyobjloader-dev  # tinyobjloader: Wavefront OBJ meshes of scene files
   python3-matplotlib    # plots of the experiment reports (run by Debian's /usr/bin/python3)
   chromium              # headless check that the HTML reports open and show their plots
 )

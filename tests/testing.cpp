@@ -22,6 +22,9 @@ namespace fs = std::filesystem;
 std::string data_path(const std::string& rel) {
     return std::string(SSSLAB_TEST_DATA_DIR) + "/" + rel;
 }
+std::string source_path(const std::string& rel) {
+    return std::string(SSSLAB_SOURCE_DIR) + "/" + rel;
+}
 std::string ssslab_binary() {
     return SSSLAB_BINARY;
 }

@@ -11,6 +11,8 @@ namespace ssslab::testing {
 
 /// tests/data/<rel>
 std::string data_path(const std::string& rel);
+/// <source tree>/<rel>
+std::string source_path(const std::string& rel);
 /// Path of the built `ssslab` executable.
 std::string ssslab_binary();
 

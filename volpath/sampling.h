@@ -4,6 +4,8 @@
 // formulas where a choice exists (HG inversion, direction frames).
 #pragma once
 
+#include "core/vec3.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -12,32 +14,6 @@ namespace ssslab::volpath {
 
 inline constexpr double kPi = std::numbers::pi;
 inline constexpr double kInv4Pi = 0.25 / std::numbers::pi;
-
-struct Vec3 {
-    double x = 0, y = 0, z = 0;
-    Vec3 operator+(const Vec3& o) const { return {x + o.x, y + o.y, z + o.z}; }
-    Vec3 operator-(const Vec3& o) const { return {x - o.x, y - o.y, z - o.z}; }
-    Vec3 operator*(double s) const { return {x * s, y * s, z * s}; }
-    Vec3 operator-() const { return {-x, -y, -z}; }
-    Vec3& operator+=(const Vec3& o) {
-        x += o.x;
-        y += o.y;
-        z += o.z;
-        return *this;
-    }
-};
-inline double dot(const Vec3& a, const Vec3& b) {
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-inline Vec3 cross(const Vec3& a, const Vec3& b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-inline double length(const Vec3& a) {
-    return std::sqrt(dot(a, a));
-}
-inline Vec3 normalize(const Vec3& a) {
-    return a * (1.0 / length(a));
-}
 
 /// An orthonormal basis (s, t, n) around a unit vector n, continuous except on a measure-zero
 /// set (Duff et al., "Building an orthonormal basis, revisited", JCGT 2017).

@@ -325,7 +325,7 @@ void check_same_camera(const volpath::SphereScene& sc, const approx::SphereView&
     const approx::SphereViewFrame f = approx::resolve_view(view);
     const double R = sc.radius_cm;
     double worst = 0;
-    auto cmp = [&](const volpath::Vec3& a, const std::array<double, 3>& b) {
+    auto cmp = [&](const Vec3& a, const std::array<double, 3>& b) {
         worst = std::max({worst, std::abs(a.x - b[0]), std::abs(a.y - b[1]), std::abs(a.z - b[2])});
     };
     cmp(cam.v, f.v);

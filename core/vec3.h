@@ -1,0 +1,39 @@
+// A 3-vector of doubles for geometry shared between modules (scenes, meshes, the path tracer).
+#pragma once
+
+#include <cmath>
+
+namespace ssslab {
+
+struct Vec3 {
+    double x = 0, y = 0, z = 0;
+    Vec3 operator+(const Vec3& o) const { return {x + o.x, y + o.y, z + o.z}; }
+    Vec3 operator-(const Vec3& o) const { return {x - o.x, y - o.y, z - o.z}; }
+    Vec3 operator*(double s) const { return {x * s, y * s, z * s}; }
+    Vec3 operator-() const { return {-x, -y, -z}; }
+    Vec3& operator+=(const Vec3& o) {
+        x += o.x;
+        y += o.y;
+        z += o.z;
+        return *this;
+    }
+    double operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+    bool operator==(const Vec3&) const = default;
+};
+inline double dot(const Vec3& a, const Vec3& b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+inline Vec3 cross(const Vec3& a, const Vec3& b) {
+    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline double length(const Vec3& a) {
+    return std::sqrt(dot(a, a));
+}
+inline Vec3 normalize(const Vec3& a) {
+    return a * (1.0 / length(a));
+}
+inline bool all_finite(const Vec3& a) {
+    return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
+}
+
+}  // namespace ssslab
