@@ -9,6 +9,7 @@ find_package(ZLIB REQUIRED)                  # zlib1g-dev: PNG images, gzipped t
 # libopenexr-dev: layered float images. CONFIG, and before anything appends Debian's OpenVDB cmake
 # folder to CMAKE_MODULE_PATH: its FindOpenEXR.cmake would shadow the config package.
 find_package(OpenEXR CONFIG REQUIRED)
+find_package(embree 3 CONFIG REQUIRED)        # libembree-dev: ray queries against scene meshes
 find_package(tinyobjloader CONFIG REQUIRED)  # libtinyobjloader-dev: OBJ meshes of scene files
 pkg_check_modules(xxhash REQUIRED IMPORTED_TARGET libxxhash)  # libxxhash-dev: artifact content hashes
 find_path(RANDOM123_INCLUDE_DIR Random123/philox.h REQUIRED)  # librandom123-dev: Philox streams

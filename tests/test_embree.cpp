@@ -1,0 +1,89 @@
+// Ray queries through Embree (volpath/embree_scene.h) against closed forms: distances to a
+// tessellated sphere and box, outward normals from inside and outside, the nearest of several
+// shapes, occlusion, and watertightness (no ray from inside a closed mesh escapes).
+#include "core/mesh.h"
+#include "core/rng.h"
+#include "testing.h"
+#include "volpath/embree_scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace ssslab::volpath {
+namespace {
+
+Vec3 random_direction(RngStream& rng) {
+    const double z = 2 * rng.uniform() - 1, phi = 2 * std::numbers::pi * rng.uniform();
+    const double s = std::sqrt(std::max(0.0, 1 - z * z));
+    return {s * std::cos(phi), s * std::sin(phi), z};
+}
+
+TEST(Embree, DistancesAndNormalsMatchTheShapes) {
+    const double R = 2.0;
+    const TriangleMesh sphere = transformed(make_sphere(R, 5), {{1, 1, 1}, {0, 0, 0}, {1, 2, 3}});
+    const TriangleMesh box = transformed(make_box({2, 4, 6}), {{1, 1, 1}, {0, 0, 0}, {30, 2, 3}});
+    const EmbreeScene es({&sphere, &box});
+    EXPECT_EQ(es.triangles(), sphere.triangles.size() + 12);
+    // The icosphere (5 subdivisions) lies within R (1 - 2e-3) .. R of the sphere.
+    const double tol = 2e-3 * R;
+    RngStream rng(1, rng_domain::kTest + 40, 0);
+    for (int i = 0; i < 1000; ++i) {
+        const Vec3 d = random_direction(rng);
+        // From outside, aimed at the centre.
+        const Vec3 o = Vec3{1, 2, 3} - d * 10.0;
+        const RayHit h = es.intersect(o, d);
+        ASSERT_TRUE(h.hit());
+        EXPECT_EQ(h.shape, 0u);
+        EXPECT_NEAR(h.t, 10.0 - R, tol);
+        EXPECT_LT(dot(h.normal, d), -0.99);  // outward, facing the ray
+        // From the centre outwards: the far side, normal along the ray.
+        const RayHit e = es.intersect({1, 2, 3}, d);
+        ASSERT_TRUE(e.hit());
+        EXPECT_NEAR(e.t, R, tol);
+        EXPECT_GT(dot(e.normal, d), 0.99);
+    }
+    // The box, exactly: along +x from x = 24 its face at x = 29.
+    const RayHit b = es.intersect({24, 2, 3}, {1, 0, 0});
+    EXPECT_EQ(b.shape, 1u);
+    EXPECT_NEAR(b.t, 5.0, 1e-6);
+    EXPECT_NEAR(b.normal.x, -1.0, 1e-12);
+    // Nearest of two along one ray; t_min skips the sphere; occlusion of segments.
+    const RayHit both = es.intersect({-5, 2, 3}, {1, 0, 0});
+    EXPECT_EQ(both.shape, 0u);
+    EXPECT_NEAR(both.t, 6 - R, tol);
+    const RayHit past = es.intersect({-5, 2, 3}, {1, 0, 0}, 6 + R + 0.1);
+    EXPECT_EQ(past.shape, 1u);
+    EXPECT_NEAR(past.t, 34.0, 1e-5);
+    EXPECT_TRUE(es.occluded({-5, 2, 3}, {1, 0, 0}, 0, 10));
+    EXPECT_FALSE(es.occluded({-5, 2, 3}, {1, 0, 0}, 0, 6 - R - 0.01));
+    EXPECT_FALSE(es.occluded({-5, 2, 3}, {1, 0, 0}, 6 + R + 0.1, 33.9));
+    EXPECT_FALSE(es.intersect({0, 50, 0}, {0, 1, 0}).hit());
+}
+
+TEST(Embree, ClosedMeshesAreWatertight) {
+    // Rays from random points inside a closed mesh (through vertices and edges as often as
+    // chance has it) always find the boundary: a leak would let a photon escape a medium.
+    const TriangleMesh bumpy = make_bumpy_sphere(1.0, 0.1, 6.0, 3, 4);
+    const TriangleMesh torus =
+        transformed(make_torus(3, 1, 64, 32), {{1, 1, 1}, {0, 0, 0}, {10, 0, 0}});
+    const EmbreeScene es({&bumpy, &torus});
+    RngStream rng(2, rng_domain::kTest + 41, 0);
+    int misses = 0;
+    for (int i = 0; i < 200000; ++i) {
+        const Vec3 o = random_direction(rng) * (0.8 * rng.uniform());
+        const Vec3 d = random_direction(rng);
+        const RayHit h = es.intersect(o, d);
+        if (!h.hit() || h.shape != 0 || !(dot(h.normal, d) > 0)) ++misses;
+        // ... and from inside the torus tube.
+        const double u = 2 * std::numbers::pi * rng.uniform();
+        const Vec3 c = Vec3{10 + 3 * std::cos(u), 3 * std::sin(u), 0} + random_direction(rng) * 0.5;
+        const RayHit t = es.intersect(c, d);
+        if (!t.hit() || t.shape != 1) ++misses;
+    }
+    EXPECT_EQ(misses, 0);
+}
+
+}  // namespace
+}  // namespace ssslab::volpath

@@ -1,0 +1,55 @@
+// Ray queries against a scene's triangle meshes through Embree 3 [Wald et al. 2014] (Debian's
+// libembree-dev). One Embree geometry per scene shape, so a hit names the shape (and with it the
+// material) and the triangle. Built only for scenes that have meshes (design.md: compute only
+// what a scene needs); the pencil and sphere engines never open it.
+//
+// Embree works in single precision: hits are exact to about 1e-7 of the scene's extent, and a
+// ray leaving a surface must start a little off it (`offset_origin`) or skip that surface.
+#pragma once
+
+#include "core/mesh.h"
+#include "core/vec3.h"
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <vector>
+
+namespace ssslab::volpath {
+
+struct RayHit {
+    double t = std::numeric_limits<double>::infinity();  ///< distance along the unit direction
+    std::uint32_t shape = kNone;                         ///< index of the mesh as added
+    std::uint32_t triangle = 0;
+    Vec3 normal;  ///< unit geometric normal, outward for the mesh's orientation
+    bool hit() const { return shape != kNone; }
+    static constexpr std::uint32_t kNone = 0xffffffffu;
+};
+
+class EmbreeScene {
+  public:
+    /// Builds the BVH over the meshes (in the given order: hit.shape indexes it). Throws
+    /// std::runtime_error with Embree's message if the device or the build fails.
+    explicit EmbreeScene(const std::vector<const TriangleMesh*>& meshes);
+    ~EmbreeScene();
+    EmbreeScene(const EmbreeScene&) = delete;
+    EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+    /// Nearest hit with t in (t_min, t_max); d must be a unit vector. Thread-safe.
+    RayHit intersect(const Vec3& o, const Vec3& d, double t_min = 0,
+                     double t_max = std::numeric_limits<double>::infinity()) const;
+    /// Whether anything lies on the segment t in (t_min, t_max). Thread-safe.
+    bool occluded(const Vec3& o, const Vec3& d, double t_min, double t_max) const;
+
+    std::size_t triangles() const { return triangles_; }
+    /// A distance that moves a point off a surface safely for this scene's extent.
+    double epsilon() const { return epsilon_; }
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+    std::size_t triangles_ = 0;
+    double epsilon_ = 1e-6;
+};
+
+}  // namespace ssslab::volpath
