@@ -1,0 +1,108 @@
+// `ssslab render`: a ground-truth image of a scene file by the volumetric path tracer
+// (volpath/render.h), written as a layered OpenEXR (radiance, subsurface, specular, their
+// standard errors, depth, normal) with an sRGB PNG preview of the radiance. Progressive: a
+// budget in samples per pixel, seconds or relative error of the image mean; checkpoints beside
+// the output; an interrupted run (SIGINT) resumes when the same command runs again.
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/film_image.h"
+#include "core/progress.h"
+#include "core/scene.h"
+#include "experiments/cli/commands.h"
+#include "experiments/cli/common.h"
+#include "volpath/render.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+namespace ssslab::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct RenderArgs {
+    std::string scene;
+    std::int64_t spp = 0;
+    int width = 0, height = 0;
+    double exposure = 0;
+    CommonOptions common;
+};
+
+int run_render(const RenderArgs& a) {
+    const Scene scene = read_scene(a.scene);
+    volpath::check_renderable(scene);
+    const fs::path out = a.common.out.empty()
+                             ? fs::path("results") / "render" / (scene.name + ".exr")
+                             : fs::path(a.common.out);
+    if (out.extension() != ".exr")
+        throw InputError({"<command line>", 0, 0}, "--out", "the output must be an .exr file");
+    volpath::RenderOptions o;
+    o.seed = a.common.seed.value_or(1);
+    o.threads = a.common.threads;
+    if (a.spp > 0) o.budget.samples = a.spp;
+    if (a.common.photons || a.common.batch)
+        throw InputError({"<command line>", 0, 0}, a.common.photons ? "--photons" : "--batch",
+                         "ssslab render counts samples per pixel: use --spp (one per batch)");
+    if (a.common.seconds) o.budget.seconds = *a.common.seconds;
+    if (a.common.rel_error) o.budget.rel_error = *a.common.rel_error;
+    if (!o.budget.any()) o.budget.samples = 64;
+    o.width = a.width;
+    o.height = a.height;
+    fs::create_directories(out.parent_path().empty() ? fs::path(".") : out.parent_path());
+    o.checkpoint_path = out.string() + ".ckpt";
+    o.cancel = install_interrupt_handler();
+    const double total = o.budget.samples ? static_cast<double>(*o.budget.samples) : 0.0;
+    std::unique_ptr<Progress> progress;
+    if (!a.common.quiet) progress = std::make_unique<Progress>(scene.name, total, "spp");
+    o.on_batch = [&](const BatchProgress& p) {
+        if (progress)
+            progress->update(static_cast<double>(p.samples),
+                             p.value > 0 ? "rel.err " + std::to_string(p.se / p.value) : "");
+    };
+    volpath::RenderResult r = volpath::render(scene, o);
+    progress.reset();
+    if (r.interrupted) {
+        std::fprintf(stderr,
+                     "ssslab render: interrupted after %llu spp; checkpoint %s; run the same "
+                     "command again to resume\n",
+                     static_cast<unsigned long long>(r.spp), o.checkpoint_path.c_str());
+        return kExitInterrupted;
+    }
+    fs::path png = out;
+    png.replace_extension(".png");
+    write_exr(r.image, out.string());
+    write_png_preview(r.image, "radiance", png.string(), a.exposure);
+    std::error_code ec;
+    fs::remove(o.checkpoint_path, ec);
+    if (!a.common.quiet)
+        std::printf("%s: %d x %d, %llu spp in %.1f s, %.3g rays/s -> %s (+ .png)\n",
+                    scene.name.c_str(), r.width, r.height, static_cast<unsigned long long>(r.spp),
+                    r.seconds, static_cast<double>(r.rays) / std::max(1e-9, r.seconds),
+                    out.string().c_str());
+    return 0;
+}
+
+}  // namespace
+
+void register_render(CLI::App& app, std::function<int()>& action) {
+    auto a = std::make_shared<RenderArgs>();
+    CLI::App* sub = app.add_subcommand(
+        "render",
+        "Path-trace a scene file (ground truth): layered EXR (radiance, subsurface, specular, "
+        "standard errors, depth, normal) and a PNG preview; resumable");
+    sub->add_option("scene", a->scene, "Scene file (TOML)")->required()->check(CLI::ExistingFile);
+    sub->add_option("--spp", a->spp, "Samples per pixel (default 64 when no other budget is given)")
+        ->check(CLI::PositiveNumber);
+    sub->add_option("--width", a->width, "Override the camera's width")
+        ->check(CLI::Range(1, 16384));
+    sub->add_option("--height", a->height, "Override the camera's height")
+        ->check(CLI::Range(1, 16384));
+    sub->add_option("--exposure", a->exposure, "Exposure of the PNG preview in stops (default 0)");
+    add_common_options(*sub, a->common, "Output EXR (default results/render/<scene>.exr)");
+    sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
+}
+
+}  // namespace ssslab::cli

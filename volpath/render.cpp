@@ -1,0 +1,585 @@
+#include "volpath/render.h"
+
+#include "core/error.h"
+#include "core/rng.h"
+#include "volpath/embree_scene.h"
+#include "volpath/microfacet.h"
+#include "volpath/sampling.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <memory>
+
+namespace ssslab::volpath {
+
+namespace {
+
+constexpr const char* kEngineVersion = "volpath-render-1";
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
+using RGB = std::array<double, 3>;
+
+struct Light {
+    LightType type;
+    RGB L{};  // radiance (sphere, environment, disc), irradiance (delta directional), intensity
+    Vec3 dir, pos;
+    double radius = 0;
+    double cos_max = 1;  // disc: cosine of the angular radius
+};
+
+struct MediumData {
+    RGB sigma_t{}, sigma_s{}, g{};  // per world unit
+    bool same_g = true;
+    double eta = 1, alpha = 0;
+};
+
+struct Frame {
+    Vec3 s, t, n;
+    explicit Frame(const Vec3& normal) : n(normal) { basis(n, s, t); }
+    Vec3 local(const Vec3& v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
+    Vec3 world(const Vec3& v) const { return s * v.x + t * v.y + n * v.z; }
+};
+
+Vec3 sample_cone(const Vec3& axis, double cos_max, double u1, double u2) {
+    const double c = 1 - u1 * (1 - cos_max), sn = std::sqrt(std::max(0.0, 1 - c * c));
+    const double phi = 2 * kPi * u2;
+    return Frame(axis).world({sn * std::cos(phi), sn * std::sin(phi), c});
+}
+
+// Nearest t > 0 where o + t d meets the sphere; inf if none.
+double hit_sphere(const Vec3& o, const Vec3& d, const Vec3& c, double r) {
+    const Vec3 oc = o - c;
+    const double b = dot(oc, d), cc = dot(oc, oc) - r * r;
+    const double disc = b * b - cc;
+    if (disc < 0) return kInf;
+    const double s = std::sqrt(disc);
+    const double t0 = -b - s, t1 = -b + s;
+    if (t0 > 0) return t0;
+    if (t1 > 0) return t1;
+    return kInf;
+}
+
+struct LightSample {
+    Vec3 wi;
+    double dist = kInf;
+    RGB value{};     // radiance, or for delta lights the irradiance at p (normal incidence)
+    double pdf = 0;  // solid angle (0: delta)
+    bool ok = false;
+};
+
+LightSample sample_light(const Light& l, const Vec3& p, double u1, double u2) {
+    LightSample s;
+    switch (l.type) {
+        case LightType::kSphere: {
+            const Vec3 pc = l.pos - p;
+            const double d2 = dot(pc, pc);
+            if (d2 <= l.radius * l.radius) return s;
+            const double cos_max = std::sqrt(std::max(0.0, 1 - l.radius * l.radius / d2));
+            s.wi = sample_cone(normalize(pc), cos_max, u1, u2);
+            s.dist = hit_sphere(p, s.wi, l.pos, l.radius);
+            if (!std::isfinite(s.dist)) s.dist = std::sqrt(d2);  // grazing: rounding
+            s.value = l.L;
+            s.pdf = 1 / (2 * kPi * (1 - cos_max));
+            s.ok = cos_max < 1;
+            return s;
+        }
+        case LightType::kEnvironment: {
+            const double z = 1 - 2 * u1, r = std::sqrt(std::max(0.0, 1 - z * z)),
+                         phi = 2 * kPi * u2;
+            s.wi = {r * std::cos(phi), r * std::sin(phi), z};
+            s.value = l.L;
+            s.pdf = 1 / (4 * kPi);
+            s.ok = true;
+            return s;
+        }
+        case LightType::kDirectional:
+            if (l.cos_max < 1) {
+                s.wi = sample_cone(l.dir, l.cos_max, u1, u2);
+                s.pdf = 1 / (2 * kPi * (1 - l.cos_max));
+            } else {
+                s.wi = l.dir;
+            }
+            s.value = l.L;
+            s.ok = true;
+            return s;
+        case LightType::kPoint: {
+            const Vec3 pp = l.pos - p;
+            s.dist = length(pp);
+            if (!(s.dist > 0)) return s;
+            s.wi = pp * (1 / s.dist);
+            for (int c = 0; c < 3; ++c)
+                s.value[static_cast<size_t>(c)] = l.L[static_cast<size_t>(c)] / (s.dist * s.dist);
+            s.ok = true;
+            return s;
+        }
+    }
+    return s;
+}
+
+// Solid-angle density with which sample_light picks direction wi from p (0 for delta lights
+// and directions it never picks).
+double light_pdf(const Light& l, const Vec3& p, const Vec3& wi) {
+    switch (l.type) {
+        case LightType::kSphere: {
+            const Vec3 pc = l.pos - p;
+            const double d2 = dot(pc, pc);
+            if (d2 <= l.radius * l.radius) return 0;
+            const double cos_max = std::sqrt(std::max(0.0, 1 - l.radius * l.radius / d2));
+            if (dot(wi, normalize(pc)) < cos_max) return 0;
+            return 1 / (2 * kPi * (1 - cos_max));
+        }
+        case LightType::kEnvironment:
+            return 1 / (4 * kPi);
+        case LightType::kDirectional:
+            if (l.cos_max < 1 && dot(wi, l.dir) >= l.cos_max)
+                return 1 / (2 * kPi * (1 - l.cos_max));
+            return 0;
+        case LightType::kPoint:
+            return 0;
+    }
+    return 0;
+}
+
+double power(double a, double b) {
+    return a * a / (a * a + b * b);
+}
+
+struct Renderer {
+    const Scene& scene;
+    const RenderOptions& opt;
+    int width, height;
+    std::unique_ptr<EmbreeScene> es;
+    std::vector<Light> lights;
+    std::vector<int> shape_medium;  // per shape: index into media, or -1 (diffuse)
+    std::vector<MediumData> media;
+    double eps = 1e-6;
+    Vec3 cam_pos, cam_f, cam_r, cam_u;
+    double tan_half = 0, aspect = 1;
+
+    Renderer(const Scene& s, const RenderOptions& o) : scene(s), opt(o) {
+        width = o.width > 0 ? o.width : s.camera.width;
+        height = o.height > 0 ? o.height : s.camera.height;
+        std::vector<const TriangleMesh*> meshes;
+        for (const SceneShape& sh : s.shapes) meshes.push_back(&sh.mesh);
+        es = std::make_unique<EmbreeScene>(meshes);
+        eps = es->epsilon();
+        for (const SceneLight& sl : s.lights) {
+            Light l;
+            l.type = sl.type;
+            l.L = sl.color;
+            l.dir = sl.direction;
+            l.pos = sl.position;
+            l.radius = sl.radius;
+            if (sl.type == LightType::kDirectional && sl.angular_radius_deg > 0) {
+                const double a = sl.angular_radius_deg * kPi / 180;
+                l.cos_max = std::cos(a);
+                // Irradiance E on a surface facing the disc: L pi sin^2(a).
+                for (double& x : l.L) x /= kPi * std::sin(a) * std::sin(a);
+            }
+            lights.push_back(l);
+        }
+        for (const SceneShape& sh : s.shapes) {
+            const SceneMaterial& m = s.materials[static_cast<size_t>(sh.material)];
+            if (m.kind != SceneMaterial::Kind::kMedium) {
+                shape_medium.push_back(-1);
+                continue;
+            }
+            MediumData md;
+            for (int c = 0; c < 3; ++c) {
+                const size_t i = static_cast<size_t>(c);
+                md.sigma_s[i] = s.per_world_unit(m.medium.sigma_s_per_cm[i]);
+                md.sigma_t[i] = md.sigma_s[i] + s.per_world_unit(m.medium.sigma_a_per_cm[i]);
+                md.g[i] = m.medium.g[i];
+            }
+            md.same_g = md.g[0] == md.g[1] && md.g[1] == md.g[2];
+            md.eta = m.medium.eta;
+            md.alpha = md.eta == 1.0 ? 0.0 : m.roughness;  // nothing to be rough about
+            shape_medium.push_back(static_cast<int>(media.size()));
+            media.push_back(md);
+        }
+        const SceneCamera& c = s.camera;
+        cam_pos = c.position;
+        cam_f = normalize(c.target - c.position);
+        cam_r = normalize(cross(cam_f, c.up));
+        cam_u = cross(cam_r, cam_f);
+        tan_half = std::tan(0.5 * c.fov_y_deg * kPi / 180);
+        aspect = static_cast<double>(width) / height;
+    }
+
+    // Next-event estimation from p: one light chosen uniformly; `f_of(wi)` gives the BSDF value
+    // times |cos| per channel and `pdf_of(wi)` the BSDF sampling density; `offset` is the
+    // normal of the side the shadow ray leaves from.
+    template <class F, class P>
+    void nee(const Vec3& p, const Vec3& offset, RngStream& rng, const double* beta, F f_of,
+             P pdf_of, RGB& out, std::uint64_t& rays) const {
+        if (lights.empty()) return;
+        const double sel = 1.0 / static_cast<double>(lights.size());
+        const std::size_t j =
+            std::min(lights.size() - 1,
+                     static_cast<std::size_t>(rng.uniform() * static_cast<double>(lights.size())));
+        const double u1 = rng.uniform(), u2 = rng.uniform();
+        const LightSample ls = sample_light(lights[j], p, u1, u2);
+        if (!ls.ok) return;
+        const double side = dot(ls.wi, offset);
+        if (!(side > 0)) return;
+        const RGB fc = f_of(ls.wi);
+        if (!(fc[0] > 0 || fc[1] > 0 || fc[2] > 0)) return;
+        ++rays;
+        const Vec3 o = p + offset * eps;
+        const double tmax = std::isfinite(ls.dist) ? ls.dist * (1 - 1e-7) - eps : kInf;
+        if (es->occluded(o, ls.wi, 0, tmax)) return;
+        double w = 1, pl = 1;
+        if (ls.pdf > 0) {
+            pl = sel * ls.pdf;
+            w = power(pl, pdf_of(ls.wi));
+        } else {
+            pl = sel;
+        }
+        for (int c = 0; c < 3; ++c)
+            out[static_cast<size_t>(c)] +=
+                beta[c] * fc[static_cast<size_t>(c)] * ls.value[static_cast<size_t>(c)] * w / pl;
+    }
+
+    // Emission seen by a ray that left `from` in direction d and escaped (no geometry, no sphere
+    // light): environment and disc lights, weighted against light sampling if NEE was done.
+    void add_escape(const Vec3& from, const Vec3& d, bool prev_nee, double prev_pdf,
+                    const double* beta, RGB& out) const {
+        const double sel = lights.empty() ? 0 : 1.0 / static_cast<double>(lights.size());
+        for (const Light& l : lights) {
+            if (l.type == LightType::kEnvironment ||
+                (l.type == LightType::kDirectional && l.cos_max < 1 &&
+                 dot(d, l.dir) >= l.cos_max)) {
+                const double w = prev_nee ? power(prev_pdf, sel * light_pdf(l, from, d)) : 1.0;
+                for (int c = 0; c < 3; ++c)
+                    out[static_cast<size_t>(c)] += beta[c] * l.L[static_cast<size_t>(c)] * w;
+            }
+        }
+    }
+
+    // One camera path through pixel (x, y); tally += its contributions.
+    std::uint64_t trace(int x, int y, int hero, RngStream& rng, double* T) const {
+        std::uint64_t rays = 0;
+        const double jx = rng.uniform(), jy = rng.uniform();
+        const double ndc_x = (2 * (x + jx) / width - 1) * tan_half * aspect;
+        const double ndc_y = (1 - 2 * (y + jy) / height) * tan_half;
+        Vec3 o = cam_pos, d = normalize(cam_f + cam_r * ndc_x + cam_u * ndc_y);
+        const std::size_t h = static_cast<std::size_t>(hero);
+        double beta[3] = {1, 1, 1}, q[3] = {1, 1, 1};
+        int medium = -1;  // index into media of the medium the path is in
+        int medium_shape = -1;
+        bool prev_nee = false, entered = false, specular_path = false, on_surface = false;
+        double prev_pdf = 0;
+        std::int64_t events = 0;
+        auto flush = [&](const RGB& contribution) {
+            for (int c = 0; c < 3; ++c) {
+                const double v = contribution[static_cast<size_t>(c)];
+                T[RenderLayout::kRadiance + c] += v;
+                if (entered)
+                    T[RenderLayout::kSubsurface + c] += v;
+                else if (specular_path)
+                    T[RenderLayout::kSpecular + c] += v;
+            }
+        };
+        auto rescale = [&] {
+            const double m = (q[0] + q[1] + q[2]) / 3;
+            for (int c = 0; c < 3; ++c) {
+                q[c] /= m;
+                beta[c] /= m;
+            }
+        };
+        for (int depth = 0; depth < 100000; ++depth) {
+            ++rays;
+            const RayHit hit = es->intersect(o, d, on_surface ? eps : 0.0);
+            if (depth == 0 && hit.hit()) {
+                T[RenderLayout::kDepth] += hit.t;
+                for (int c = 0; c < 3; ++c) T[RenderLayout::kNormal + c] += hit.normal[c];
+            }
+            if (medium >= 0) {
+                const MediumData& md = media[static_cast<size_t>(medium)];
+                if (!hit.hit() || static_cast<int>(hit.shape) != medium_shape)
+                    return rays;  // leak or overlap
+                const double st = md.sigma_t[h];
+                const double t = st > 0 ? -std::log(rng.uniform()) / st : kInf;
+                if (t < hit.t) {  // scattering or absorption inside
+                    o = o + d * t;
+                    on_surface = false;
+                    ++events;
+                    if (!(rng.uniform() < md.sigma_s[h] / st)) return rays;
+                    for (int c = 0; c < 3; ++c) {
+                        const size_t i = static_cast<size_t>(c);
+                        const double e = i == h ? 1.0 : std::exp(-(md.sigma_t[i] - st) * t);
+                        const double f = md.sigma_s[i] / md.sigma_s[h] * e;
+                        q[c] *= f;
+                        beta[c] *= f;
+                    }
+                    rescale();
+                    if (events > opt.long_path_events) {
+                        if (!(rng.uniform() < 0.1)) return rays;
+                        for (double& b : beta) b /= 0.1;
+                    }
+                    const double mu = sample_hg(md.g[h], rng.uniform());
+                    const double phi = 2 * kPi * rng.uniform();
+                    if (!md.same_g) {
+                        const double ph = hg_pdf(md.g[h], mu);
+                        for (int c = 0; c < 3; ++c) {
+                            const double f = hg_pdf(md.g[static_cast<size_t>(c)], mu) / ph;
+                            q[c] *= f;
+                            beta[c] *= f;
+                        }
+                        rescale();
+                    }
+                    d = rotate(d, mu, phi);
+                    prev_nee = false;
+                    --depth;  // medium events do not count as path vertices
+                    continue;
+                }
+                for (int c = 0; c < 3; ++c) {
+                    const size_t i = static_cast<size_t>(c);
+                    const double e = i == h ? 1.0 : std::exp(-(md.sigma_t[i] - st) * hit.t);
+                    q[c] *= e;
+                    beta[c] *= e;
+                }
+                rescale();
+            } else {
+                // Sphere lights are not in the BVH: the nearest of them, if before the geometry.
+                double tl = kInf;
+                const Light* hit_light = nullptr;
+                for (const Light& l : lights)
+                    if (l.type == LightType::kSphere) {
+                        const double t = hit_sphere(o, d, l.pos, l.radius);
+                        if (t < tl) tl = t, hit_light = &l;
+                    }
+                if (hit_light && tl < hit.t) {
+                    const double sel = 1.0 / static_cast<double>(lights.size());
+                    const double w =
+                        prev_nee ? power(prev_pdf, sel * light_pdf(*hit_light, o, d)) : 1.0;
+                    RGB c{};
+                    for (int k = 0; k < 3; ++k)
+                        c[static_cast<size_t>(k)] =
+                            beta[k] * hit_light->L[static_cast<size_t>(k)] * w;
+                    flush(c);
+                    return rays;
+                }
+                if (!hit.hit()) {
+                    RGB c{};
+                    add_escape(o, d, prev_nee, prev_pdf, beta, c);
+                    flush(c);
+                    return rays;
+                }
+            }
+            const Vec3 p = o + d * hit.t;
+            const int mi = shape_medium[hit.shape];
+            Vec3 n = hit.normal;
+            const Vec3 wo = -d;
+            if (mi < 0) {  // diffuse, two-sided
+                if (medium >= 0) return rays;
+                const SceneMaterial& m =
+                    scene.materials[static_cast<size_t>(scene.shapes[hit.shape].material)];
+                if (dot(n, wo) < 0) n = -n;
+                RGB c{};
+                nee(
+                    p, n, rng, beta,
+                    [&](const Vec3& wi) {
+                        const double cs = std::max(0.0, dot(wi, n)) / kPi;
+                        return RGB{m.albedo[0] * cs, m.albedo[1] * cs, m.albedo[2] * cs};
+                    },
+                    [&](const Vec3& wi) { return std::max(0.0, dot(wi, n)) / kPi; }, c, rays);
+                flush(c);
+                const double u1 = rng.uniform(), u2 = rng.uniform();
+                const double r = std::sqrt(u1), phi = 2 * kPi * u2;
+                const Vec3 wl{r * std::cos(phi), r * std::sin(phi),
+                              std::sqrt(std::max(0.0, 1 - u1))};
+                d = Frame(n).world(wl);
+                prev_pdf = wl.z / kPi;
+                prev_nee = true;
+                for (int k = 0; k < 3; ++k) beta[k] *= m.albedo[static_cast<size_t>(k)];
+                o = p + n * eps;
+                on_surface = false;
+            } else {  // a medium's dielectric boundary
+                const MediumData& md = media[static_cast<size_t>(mi)];
+                const bool outside = dot(wo, n) > 0;
+                if (outside != (medium < 0)) return rays;  // inconsistent side: leak
+                const Frame fr(n);
+                const Vec3 wo_l = fr.local(wo);
+                const double eta = md.eta;  // inside over outside (outside index 1)
+                bool transmitted = false, reflected = false;
+                if (md.alpha == 0) {
+                    const double eta_side = outside ? eta : 1 / eta;
+                    double cos_t = 0;
+                    const double F = fresnel_dielectric(std::abs(wo_l.z), eta_side, cos_t);
+                    if (rng.uniform() < F) {
+                        d = n * (2 * dot(wo, n)) - wo;
+                        reflected = true;
+                    } else {
+                        d = refract(-wo, outside ? n : -n, eta_side, cos_t);
+                        for (double& b : beta) b /= eta_side * eta_side;  // radiance mode
+                        transmitted = true;
+                    }
+                    prev_nee = false;
+                } else {
+                    RGB c{};
+                    nee(
+                        p, n, rng, beta,
+                        [&](const Vec3& wi) {
+                            const double f = rough_dielectric_f(wo_l, fr.local(wi), eta, md.alpha,
+                                                                TransportMode::kRadiance) *
+                                             std::abs(dot(wi, n));
+                            return RGB{f, f, f};
+                        },
+                        [&](const Vec3& wi) {
+                            return rough_dielectric_pdf(wo_l, fr.local(wi), eta, md.alpha);
+                        },
+                        c, rays);
+                    flush(c);
+                    const double uc = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+                    const auto s = sample_rough_dielectric(wo_l, eta, md.alpha, uc, u1, u2,
+                                                           TransportMode::kRadiance);
+                    if (!s) return rays;
+                    const double wgt = s->f * std::abs(s->wi.z) / s->pdf;
+                    for (double& b : beta) b *= wgt;
+                    d = fr.world(s->wi);
+                    prev_pdf = s->pdf;
+                    prev_nee = true;
+                    reflected = s->reflection;
+                    transmitted = !s->reflection;
+                }
+                if (depth == 0 && reflected) specular_path = true;
+                if (transmitted) {
+                    if (medium < 0) {
+                        medium = mi;
+                        medium_shape = static_cast<int>(hit.shape);
+                        entered = true;
+                    } else {
+                        medium = -1;
+                        medium_shape = -1;
+                    }
+                }
+                o = p;
+                on_surface = true;
+            }
+            // Russian roulette on the throughput.
+            if (depth + 1 >= opt.roulette_depth) {
+                const double m = std::max({beta[0], beta[1], beta[2]});
+                if (!(m > 0) || !std::isfinite(m)) return rays;
+                if (m < 1) {
+                    const double survive = std::max(0.05, m);
+                    if (!(rng.uniform() < survive)) return rays;
+                    for (double& b : beta) b /= survive;
+                }
+            }
+        }
+        return rays;
+    }
+};
+
+}  // namespace
+
+const char* render_engine_version() {
+    return kEngineVersion;
+}
+
+void check_renderable(const Scene& scene) {
+    if (!scene.delta_light_through_smooth_boundary()) return;
+    for (const SceneLight& l : scene.lights)
+        if (l.type == LightType::kPoint ||
+            (l.type == LightType::kDirectional && l.angular_radius_deg == 0))
+            throw InputError(l.where, "type",
+                             std::string("a ") + to_string(l.type) +
+                                 " light cannot reach a medium behind a smooth boundary in a path "
+                                 "tracer (it would render that medium black): give the medium a "
+                                 "roughness (e.g. 0.05), the light an angular_radius_deg, or use a "
+                                 "sphere light");
+}
+
+RenderResult render(const Scene& scene, const RenderOptions& o) {
+    check_renderable(scene);
+    const Renderer R(scene, o);
+    RenderResult out;
+    out.width = R.width;
+    out.height = R.height;
+    const std::size_t pixels =
+        static_cast<std::size_t>(R.width) * static_cast<std::size_t>(R.height);
+    BatchRunOptions bo;
+    bo.tally_size = pixels * RenderLayout::kPerPixel;
+    bo.batch_samples = 1;  // one sample per pixel per batch
+    bo.budget = o.budget;
+    if (!bo.budget.any()) bo.budget.samples = 64;
+    bo.threads = o.threads;
+    char fp[512];
+    std::snprintf(fp, sizeof fp, "%s\nscene=%s seed=%llu size=%dx%d roulette=%d long=%lld\n",
+                  kEngineVersion, scene.path.c_str(), static_cast<unsigned long long>(o.seed),
+                  R.width, R.height, o.roulette_depth, static_cast<long long>(o.long_path_events));
+    bo.fingerprint = fp;
+    bo.checkpoint_path = o.checkpoint_path;
+    bo.checkpoint_seconds = o.checkpoint_seconds;
+    bo.cancel = o.cancel;
+    bo.on_batch = o.on_batch;
+    bo.quantity = [pixels](const BatchAccumulator& acc, double& value, double& se) {
+        // The image mean of the radiance (all channels): what a relative-error budget targets.
+        double v = 0, s2 = 0;
+        for (std::size_t i = 0; i < pixels; ++i)
+            for (int c = 0; c < 3; ++c) {
+                v += acc.mean(i * RenderLayout::kPerPixel + static_cast<size_t>(c));
+                const double e =
+                    acc.standard_error(i * RenderLayout::kPerPixel + static_cast<size_t>(c));
+                s2 += e * e;
+            }
+        value = v / (3.0 * static_cast<double>(pixels));
+        se = std::sqrt(s2) / (3.0 * static_cast<double>(pixels));
+    };
+    const std::uint64_t seed = o.seed;
+    out.run = run_batches(bo, [&R, seed, pixels](std::uint64_t index, std::int64_t, double* tally) {
+        RngStream rng(seed, kRenderDomain, index);
+        std::uint64_t rays = 0;
+        for (std::size_t i = 0; i < pixels; ++i) {
+            const int x = static_cast<int>(i % static_cast<std::size_t>(R.width));
+            const int y = static_cast<int>(i / static_cast<std::size_t>(R.width));
+            const int hero = static_cast<int>((i + index) % 3);
+            rays += R.trace(x, y, hero, rng, tally + i * RenderLayout::kPerPixel);
+        }
+        return rays;
+    });
+    out.seconds = out.run.seconds;
+    out.spp = out.run.samples;
+    out.rays = out.run.work;
+    out.interrupted = out.run.reason == BatchStop::kInterrupted;
+    LayeredImage img(R.width, R.height);
+    const char* names[3] = {"radiance", "subsurface", "specular"};
+    for (int k = 0; k < 3; ++k) {
+        ImageLayer& v = img.add_layer(names[k], 3);
+        ImageLayer& e = img.add_layer(std::string(names[k]) + ".stderr", 3);
+        for (std::size_t i = 0; i < pixels; ++i)
+            for (int c = 0; c < 3; ++c) {
+                const std::size_t j = i * RenderLayout::kPerPixel + static_cast<size_t>(3 * k + c);
+                const int x = static_cast<int>(i % static_cast<std::size_t>(R.width)),
+                          y = static_cast<int>(i / static_cast<std::size_t>(R.width));
+                v.at(x, y, c) = static_cast<float>(out.run.mean[j]);
+                e.at(x, y, c) = static_cast<float>(out.run.se[j]);
+            }
+    }
+    ImageLayer& depth = img.add_layer("depth", 1);
+    ImageLayer& normal = img.add_layer("normal", {"X", "Y", "Z"});
+    for (std::size_t i = 0; i < pixels; ++i) {
+        const int x = static_cast<int>(i % static_cast<std::size_t>(R.width)),
+                  y = static_cast<int>(i / static_cast<std::size_t>(R.width));
+        depth.at(x, y) =
+            static_cast<float>(out.run.mean[i * RenderLayout::kPerPixel + RenderLayout::kDepth]);
+        for (int c = 0; c < 3; ++c)
+            normal.at(x, y, c) =
+                static_cast<float>(out.run.mean[i * RenderLayout::kPerPixel +
+                                                RenderLayout::kNormal + static_cast<size_t>(c)]);
+    }
+    img.metadata()["ssslab.engine"] = kEngineVersion;
+    img.metadata()["ssslab.scene"] = scene.name;
+    img.metadata()["ssslab.spp"] = std::to_string(out.spp);
+    img.metadata()["ssslab.seed"] = std::to_string(o.seed);
+    char secs[32];
+    std::snprintf(secs, sizeof secs, "%.3f", out.seconds);
+    img.metadata()["ssslab.seconds"] = secs;
+    out.image = std::move(img);
+    return out;
+}
+
+}  // namespace ssslab::volpath

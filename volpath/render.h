@@ -1,0 +1,80 @@
+// Ground-truth images of scene files (core/scene.h): a unidirectional volumetric path tracer
+// with next-event estimation, through Embree. Camera paths; diffuse surfaces (Lambert) and media
+// behind a smooth or rough (GGX, volpath/microfacet.h) dielectric boundary; homogeneous media
+// inside closed meshes, traced with the analog hero estimator of the pencil engine (one path
+// for RGB, spectral MIS with absorption by the hero's roulette); lights: spherical area lights,
+// a constant environment, directional lights (a disc of finite angular radius, or a delta) and
+// point lights.
+//
+// Next-event estimation at every diffuse vertex and at every rough boundary vertex (from
+// outside: the reflection lobe; from inside: the transmission lobe, which is what lets delta
+// lights reach a medium behind a rough boundary), combined with BSDF sampling by the power
+// heuristic. A smooth boundary cannot be connected (a delta BSDF): behind it only light that
+// BSDF sampling finds arrives, which is why the built-in scenes use rough boundaries or area
+// lights, and scene files whose delta lights shine on smooth media are refused
+// (Scene::delta_light_through_smooth_boundary).
+//
+// Film: per pixel the radiance, its subsurface part (light that entered a medium), its
+// surface-specular part (first-surface reflection off a medium's boundary), their standard
+// errors from the batch statistics, and the first hit's depth and normal. One batch is one
+// sample per pixel of the whole image, on stream (seed, kRender, batch): the image is
+// bit-identical for any thread count, and a run resumes from its checkpoint.
+#pragma once
+
+#include "core/batch_runner.h"
+#include "core/film_image.h"
+#include "core/scene.h"
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+namespace ssslab::volpath {
+
+const char* render_engine_version();
+
+struct RenderOptions {
+    std::uint64_t seed = 1;
+    int threads = 0;
+    /// Samples per pixel (one per batch), seconds, or relative error of the image mean.
+    SampleBudget budget;
+    /// Camera path vertices before Russian roulette may end a path (then survival
+    /// max(beta) clamped to [0.05, 1]).
+    int roulette_depth = 5;
+    /// Long-path roulette inside media [Bitterli13 §3.2], as in the pencil engine.
+    std::int64_t long_path_events = 100000;
+    std::string checkpoint_path;  ///< empty: none
+    double checkpoint_seconds = 30.0;
+    const std::atomic<bool>* cancel = nullptr;
+    std::function<void(const BatchProgress&)> on_batch;
+    /// Render at this size instead of the camera's (0: the camera's), e.g. for tests.
+    int width = 0, height = 0;
+};
+
+/// Per-pixel tally layout: radiance RGB, subsurface RGB, specular RGB, depth, normal xyz.
+struct RenderLayout {
+    static constexpr int kRadiance = 0, kSubsurface = 3, kSpecular = 6, kDepth = 9, kNormal = 10;
+    static constexpr int kPerPixel = 13;
+};
+
+struct RenderResult {
+    BatchRunResult run;
+    int width = 0, height = 0;
+    /// Layers "radiance", "subsurface", "specular" (RGB), "<layer>.stderr" (RGB), "depth" (Y,
+    /// world units; 0 where nothing was hit) and "normal" (X, Y, Z), with metadata
+    /// ssslab.engine, ssslab.scene, ssslab.spp, ssslab.seed, ssslab.seconds.
+    LayeredImage image{1, 1};
+    double seconds = 0;
+    std::uint64_t spp = 0;
+    std::uint64_t rays = 0;  ///< ray queries (intersections and shadow rays)
+    bool interrupted = false;
+};
+
+/// Checks what the renderer supports beyond Scene's own validation: throws InputError (located
+/// at the offending light or material) for a delta light with a smooth medium boundary.
+void check_renderable(const Scene& scene);
+
+RenderResult render(const Scene& scene, const RenderOptions& options);
+
+}  // namespace ssslab::volpath
