@@ -25,14 +25,16 @@ using testing::run_ssslab;
 
 TEST(Cli, HelpForEveryCommand) {
     testing::TempDir dir;
-    for (const char* cmd : {"run", "mcml", "profile", "sphere", "materials", "bench"}) {
+    for (const char* cmd :
+         {"run", "check", "mcml", "profile", "sphere", "materials", "scene", "render", "bench"}) {
         const auto r = run_ssslab({cmd, "--help"}, dir.path());
         EXPECT_EQ(r.exit_code, 0) << cmd << ": " << r.err;
         EXPECT_NE(r.out.find("--help"), std::string::npos) << cmd;
     }
     const auto top = run_ssslab({"--help"}, dir.path());
     EXPECT_EQ(top.exit_code, 0);
-    for (const char* cmd : {"run", "mcml", "profile", "sphere", "materials", "bench"})
+    for (const char* cmd :
+         {"run", "check", "mcml", "profile", "sphere", "materials", "scene", "render", "bench"})
         EXPECT_NE(top.out.find(cmd), std::string::npos) << cmd;
     const auto version = run_ssslab({"--version"}, dir.path());
     EXPECT_EQ(version.exit_code, 0);

@@ -4,6 +4,7 @@
 // medium behind a smooth or index-matched boundary, constant environment) returns L in every
 // pixel; determinism for any thread count; resume from a checkpoint; refusals.
 #include "core/error.h"
+#include "core/film_image.h"
 #include "core/scene.h"
 #include "testing.h"
 #include "volpath/render.h"
@@ -193,6 +194,38 @@ TEST(Render, DeltaLightOnASmoothMediumIsRefusedAtTheLight) {
         EXPECT_NE(std::string(e.what()).find("t.toml:11"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("roughness"), std::string::npos) << e.what();
     }
+}
+
+TEST(Render, CommandWritesTheLayeredExrAndPreviewOrNothing) {
+    testing::TempDir dir;
+    dir.write(
+        "s.toml",
+        scene_text("[[materials]]\nname = \"m\"\npreset = \"Skin1\"\nroughness = 0.2\n", kEnv));
+    const auto r = testing::run_ssslab(
+        {"render", "s.toml", "--spp", "2", "--width", "8", "--height", "6", "--out", "o.exr", "-q"},
+        dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(dir.files(), (std::vector<std::string>{"o.exr", "o.png", "s.toml"}));
+    const LayeredImage img = read_exr((dir / "o.exr").string());
+    EXPECT_EQ(img.width(), 8);
+    EXPECT_EQ(img.height(), 6);
+    for (const char* l : {"radiance", "radiance.stderr", "subsurface", "subsurface.stderr",
+                          "specular", "specular.stderr", "depth", "normal"})
+        EXPECT_TRUE(img.has_layer(l)) << l;
+    EXPECT_EQ(img.metadata().at("ssslab.spp"), "2");
+    // Bad arguments: exit 2, nothing written.
+    testing::TempDir bad;
+    bad.write("s.toml",
+              scene_text("[[materials]]\nname = \"m\"\npreset = \"Skin1\"\n",
+                         "[[lights]]\ntype = \"point\"\nposition = [5, 5, 5]\nintensity = 1\n"));
+    const auto e =
+        testing::run_ssslab({"render", "s.toml", "--spp", "2", "--out", "o.exr"}, bad.path());
+    EXPECT_EQ(e.exit_code, 2) << e.out << e.err;
+    EXPECT_NE(e.err.find("s.toml:11"), std::string::npos) << e.err;
+    const auto p = testing::run_ssslab({"render", "s.toml", "--photons", "5"}, bad.path());
+    EXPECT_EQ(p.exit_code, 2);
+    EXPECT_NE(p.err.find("--spp"), std::string::npos) << p.err;
+    EXPECT_EQ(bad.files(), std::vector<std::string>{"s.toml"});
 }
 
 }  // namespace

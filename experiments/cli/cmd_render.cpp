@@ -32,6 +32,9 @@ struct RenderArgs {
 };
 
 int run_render(const RenderArgs& a) {
+    if (a.common.photons || a.common.batch)
+        throw InputError({"<command line>", 0, 0}, a.common.photons ? "--photons" : "--batch",
+                         "ssslab render counts samples per pixel: use --spp (one per batch)");
     const Scene scene = read_scene(a.scene);
     volpath::check_renderable(scene);
     const fs::path out = a.common.out.empty()
@@ -43,9 +46,6 @@ int run_render(const RenderArgs& a) {
     o.seed = a.common.seed.value_or(1);
     o.threads = a.common.threads;
     if (a.spp > 0) o.budget.samples = a.spp;
-    if (a.common.photons || a.common.batch)
-        throw InputError({"<command line>", 0, 0}, a.common.photons ? "--photons" : "--batch",
-                         "ssslab render counts samples per pixel: use --spp (one per batch)");
     if (a.common.seconds) o.budget.seconds = *a.common.seconds;
     if (a.common.rel_error) o.budget.rel_error = *a.common.rel_error;
     if (!o.budget.any()) o.budget.samples = 64;
