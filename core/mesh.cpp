@@ -268,6 +268,67 @@ MeshCheck check_mesh(const TriangleMesh& m) {
     return c;
 }
 
+bool segment_hits_triangle(const TriangleMesh& m, std::size_t t, const Vec3& a, const Vec3& b) {
+    const auto& tr = m.triangles[t];
+    const Vec3 p0 = m.positions[tr[0]], e1 = m.positions[tr[1]] - p0, e2 = m.positions[tr[2]] - p0;
+    const Vec3 d = b - a;
+    const Vec3 pv = cross(d, e2);
+    const double det = dot(e1, pv);
+    if (std::fabs(det) < 1e-300) return false;
+    const double inv = 1.0 / det;
+    const Vec3 tv = a - p0;
+    const double u = dot(tv, pv) * inv;
+    if (u < 0 || u > 1) return false;
+    const Vec3 qv = cross(tv, e1);
+    const double v = dot(d, qv) * inv;
+    if (v < 0 || u + v > 1) return false;
+    const double s = dot(e2, qv) * inv;
+    return s >= 0 && s <= 1;
+}
+
+bool inside_mesh(const TriangleMesh& m, const Vec3& p) {
+    // A direction unlikely to graze edges of axis-aligned or symmetric meshes.
+    const Vec3 d = normalize(Vec3{0.5773502691896258, 0.5360562674188974, 0.6159384228628216});
+    const auto b = m.bounds();
+    const double reach = 2 * (length(b[1] - b[0]) + length(p - b[0])) + 1;
+    const Vec3 far = p + d * reach;
+    int n = 0;
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) n += segment_hits_triangle(m, t, p, far);
+    return n % 2 == 1;
+}
+
+bool meshes_overlap(const TriangleMesh& a, bool a_closed, const TriangleMesh& b, bool b_closed,
+                    std::size_t samples) {
+    const auto ba = a.bounds(), bb = b.bounds();
+    for (int k = 0; k < 3; ++k)
+        if (ba[1][k] < bb[0][k] || bb[1][k] < ba[0][k]) return false;
+    auto edges_cross = [&](const TriangleMesh& x, const TriangleMesh& y) {
+        if (x.triangles.empty()) return false;
+        const std::size_t n = std::min(samples, x.triangles.size());
+        for (std::size_t i = 0; i < n; ++i) {
+            const auto& tr = x.triangles[i * x.triangles.size() / n];
+            for (int e = 0; e < 3; ++e) {
+                const Vec3 p = x.positions[tr[static_cast<size_t>(e)]];
+                const Vec3 q = x.positions[tr[static_cast<size_t>((e + 1) % 3)]];
+                for (std::size_t t = 0; t < y.triangles.size(); ++t)
+                    if (segment_hits_triangle(y, t, p, q)) return true;
+            }
+        }
+        return false;
+    };
+    auto vertex_inside = [&](const TriangleMesh& x, const TriangleMesh& y) {
+        if (x.positions.empty()) return false;
+        const std::size_t n = std::min<std::size_t>(8, x.positions.size());
+        for (std::size_t i = 0; i < n; ++i)
+            if (inside_mesh(y, x.positions[i * x.positions.size() / n])) return true;
+        return false;
+    };
+    if (edges_cross(a, b) || edges_cross(b, a)) return true;
+    if (b_closed && vertex_inside(a, b)) return true;
+    if (a_closed && vertex_inside(b, a)) return true;
+    return false;
+}
+
 TriangleMesh load_obj(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError({path, 0, 0}, "", "cannot open the mesh file");

@@ -73,6 +73,17 @@ struct MeshCheck {
 };
 MeshCheck check_mesh(const TriangleMesh& m);
 
+/// Whether the segment a-b crosses triangle t of m (Moller-Trumbore, endpoints included).
+bool segment_hits_triangle(const TriangleMesh& m, std::size_t t, const Vec3& a, const Vec3& b);
+/// Whether p lies inside the closed mesh m (parity of the crossings of a ray in a fixed
+/// direction; O(triangles)).
+bool inside_mesh(const TriangleMesh& m, const Vec3& p);
+/// Whether two meshes intersect or one lies inside the other (closed ones), judged from up to
+/// `samples` evenly spread edges and vertices of each: a check that catches shapes placed into
+/// each other, not a proof that they are apart.
+bool meshes_overlap(const TriangleMesh& a, bool a_closed, const TriangleMesh& b, bool b_closed,
+                    std::size_t samples = 256);
+
 /// Read a Wavefront OBJ file (all objects and groups merged; polygons triangulated by
 /// tinyobjloader). Throws InputError naming the file and line for a file that cannot be read or
 /// parsed, a vertex with a non-finite coordinate, a face index out of range, and a file without

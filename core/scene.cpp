@@ -209,6 +209,26 @@ Scene parse(std::shared_ptr<ConfigDocument> doc, const std::string& path,
     for (ConfigTable& t : root.table_array("shapes"))
         s.shapes.push_back(read_shape(t, base_dir, names, s.materials, i++));
     if (s.shapes.empty()) root.fail("shapes", "a scene needs at least one [[shapes]] table");
+    // Media must not overlap other shapes (a path inside a medium that meets another surface
+    // has no defined continuation), and the camera must not sit inside a medium.
+    for (std::size_t a = 0; a < s.shapes.size(); ++a) {
+        const SceneShape& A = s.shapes[a];
+        if (s.materials[static_cast<size_t>(A.material)].kind != SceneMaterial::Kind::kMedium)
+            continue;
+        if (inside_mesh(A.mesh, s.camera.position))
+            cam.fail("position", "the camera is inside " + A.name + ", which holds a medium");
+        for (std::size_t b = 0; b < s.shapes.size(); ++b) {
+            if (b == a) continue;
+            const SceneShape& B = s.shapes[b];
+            const bool b_medium =
+                s.materials[static_cast<size_t>(B.material)].kind == SceneMaterial::Kind::kMedium;
+            if (b_medium && b < a) continue;  // that pair was tested from b's side
+            if (meshes_overlap(A.mesh, true, B.mesh, b_medium || check_mesh(B.mesh).closed()))
+                throw InputError(b > a ? B.where : A.where, b > a ? B.name : A.name,
+                                 A.name + " (which holds a medium) and " + B.name +
+                                     " intersect or one lies inside the other; move them apart");
+        }
+    }
     root.finish();
     return s;
 }

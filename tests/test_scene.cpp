@@ -104,6 +104,27 @@ TEST(Mesh, TopologyCheckFindsHolesFlipsAndNonFiniteVertices) {
     EXPECT_GT(check_mesh(m).nonmanifold_edges, 0u);
 }
 
+TEST(Mesh, InsideAndOverlapTests) {
+    const TriangleMesh s = make_sphere(1.0, 3);
+    EXPECT_TRUE(inside_mesh(s, {0, 0, 0}));
+    EXPECT_TRUE(inside_mesh(s, {0.9, 0.1, -0.2}));
+    EXPECT_FALSE(inside_mesh(s, {1.1, 0, 0}));
+    EXPECT_FALSE(inside_mesh(s, {0, 5, 0}));
+    const TriangleMesh box = make_box({1, 1, 1});
+    EXPECT_TRUE(inside_mesh(box, {0.49, -0.49, 0.2}));
+    EXPECT_FALSE(inside_mesh(box, {0.51, 0, 0}));
+    auto moved = [](const TriangleMesh& m, Vec3 t) {
+        return transformed(m, {{1, 1, 1}, {0, 0, 0}, t});
+    };
+    EXPECT_TRUE(meshes_overlap(s, true, moved(s, {1.5, 0, 0}), true));    // crossing surfaces
+    EXPECT_FALSE(meshes_overlap(s, true, moved(s, {2.05, 0, 0}), true));  // apart
+    EXPECT_TRUE(meshes_overlap(transformed(s, {{0.2, 0.2, 0.2}, {0, 0, 0}, {0, 0, 0}}), true, s,
+                               true));  // nested
+    const TriangleMesh floor = make_quad(10, 10);
+    EXPECT_TRUE(meshes_overlap(s, true, floor, false));                        // through the floor
+    EXPECT_FALSE(meshes_overlap(moved(s, {0, 1.01, 0}), true, floor, false));  // resting above it
+}
+
 TEST(Mesh, ObjRoundTripAndBadFiles) {
     testing::TempDir dir;
     const TriangleMesh sphere = make_sphere(1.5, 2);
@@ -184,7 +205,7 @@ albedo = [0.5, 0.5, 0.5]
 [[shapes]]
 type = "sphere"
 radius = 5
-translate = [0, 5, 0]
+translate = [0, 5.1, 0]
 material = "skin"
 
 [[shapes]]
@@ -220,7 +241,7 @@ TEST(Scene, ReadsCameraLightsMaterialsAndShapes) {
     EXPECT_EQ(s.materials[2].kind, SceneMaterial::Kind::kDiffuse);
     ASSERT_EQ(s.shapes.size(), 3u);
     EXPECT_TRUE(s.shapes[0].exact_sphere);
-    EXPECT_EQ(s.shapes[0].center, (Vec3{0, 5, 0}));
+    EXPECT_EQ(s.shapes[0].center, (Vec3{0, 5.1, 0}));
     EXPECT_EQ(s.shapes[0].radius, 5);
     EXPECT_EQ(s.shapes[1].mesh.triangles.size(), 48u * 24u * 2u);
     const auto b = s.shapes[1].mesh.bounds();  // rotated from the x-y into the x-z plane
@@ -242,13 +263,13 @@ TEST(Scene, MeshShapesReadObjRelativeToTheSceneFile) {
     fs::create_directories(dir / "meshes");
     dir.write("meshes/blob.obj", to_obj(make_sphere(2.0, 2)));
     std::string t = kScene;
-    t += "\n[[shapes]]\ntype = \"mesh\"\nfile = \"meshes/blob.obj\"\nscale = 2\nmaterial = "
-         "\"milk\"\n";
+    t += "\n[[shapes]]\ntype = \"mesh\"\nfile = \"meshes/blob.obj\"\nscale = 2\n"
+         "translate = [-20, 5, 0]\nmaterial = \"milk\"\n";
     dir.write("scene.toml", t);
     const Scene s = read_scene((dir / "scene.toml").string());
     ASSERT_EQ(s.shapes.size(), 4u);
     EXPECT_EQ(s.shapes[3].mesh.triangles.size(), 320u);
-    EXPECT_NEAR(s.shapes[3].mesh.bounds()[1].x, 4.0, 1e-6);
+    EXPECT_NEAR(s.shapes[3].mesh.bounds()[1].x, -16.0, 1e-6);
 }
 
 TEST(Scene, BadScenesAreRefusedWithFileLineAndKey) {
@@ -312,6 +333,15 @@ TEST(Scene, BadScenesAreRefusedWithFileLineAndKey) {
          {"materials[2].albedo"}},
         {"torus tube too fat", with("minor_radius = 1", "minor_radius = 4"), {"minor_radius"}},
         {"duplicate material", with("name = \"milk\"", "name = \"skin\""), {"defined twice"}},
+        {"media overlapping",
+         with("translate = [12, 2, 0]", "translate = [4, 4, 0]"),
+         {"s.toml:", "shapes[1]", "intersect"}},
+        {"medium sunk into the floor",
+         with("translate = [0, 5.1, 0]", "translate = [0, 4, 0]"),
+         {"shapes[2]", "intersect"}},
+        {"camera inside a medium",
+         with("position = [0, 5, 40]", "position = [0, 5, 1]"),
+         {"camera.position", "inside"}},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.what);
