@@ -72,12 +72,24 @@ WalkResult walk_mesh_medium(const MeshMedium& m, Vec3 p, Vec3 w, RngStream& rng,
             travelled += hit.t;
             on_boundary = true;
             const double cos_i = dot(w, hit.normal);  // leaving: along the outward normal
-            if (!(cos_i > 0)) return finish(WalkResult::Fate::kLost);
+            if (!(cos_i > 0)) {
+                // Met from outside within a few epsilons: the restart point slipped across a
+                // concave crease; the path is inside, so it crosses back and goes on.
+                if (hit.t < 4 * eps && !(cos_i != cos_i)) {
+                    t -= hit.t;
+                    continue;
+                }
+                return finish(WalkResult::Fate::kLost);
+            }
             double cos_t = 0;
             const double F = fresnel_dielectric(cos_i, eta, cos_t);
             if (rng.uniform() < F) {  // internal reflection; the free path goes on
                 w = reflect(w, hit.normal);
                 t -= hit.t;
+                // Restart just inside the face: from the surface itself a ray can slip through
+                // a concave crease (single-precision hits) and meet the next face from outside.
+                p += hit.normal * -eps;
+                on_boundary = false;
                 continue;
             }
             flight(travelled, false);

@@ -400,7 +400,17 @@ struct Renderer {
             } else {  // a medium's dielectric boundary
                 const MediumData& md = media[static_cast<size_t>(mi)];
                 const bool outside = dot(wo, n) > 0;
-                if (outside != (medium < 0)) return rays;  // inconsistent side: leak
+                if (outside != (medium < 0)) {
+                    // Within a few epsilons: the restart point slipped across a concave crease
+                    // of this mesh; cross back and go on. Farther: a leak; the path ends.
+                    if (hit.t < 4 * eps) {
+                        o = p;
+                        on_surface = true;
+                        --depth;
+                        continue;
+                    }
+                    return rays;
+                }
                 const Frame fr(n);
                 const Vec3 wo_l = fr.local(wo);
                 const double eta = md.eta;  // inside over outside (outside index 1)
@@ -456,8 +466,10 @@ struct Renderer {
                         medium_shape = -1;
                     }
                 }
-                o = p;
-                on_surface = true;
+                // Continue from just off the surface on the side the path goes to (a ray from
+                // the surface itself can slip through a concave crease).
+                o = p + n * (dot(d, n) > 0 ? eps : -eps);
+                on_surface = false;
             }
             // Russian roulette on the throughput.
             if (depth + 1 >= opt.roulette_depth) {
