@@ -228,5 +228,19 @@ TEST(Render, CommandWritesTheLayeredExrAndPreviewOrNothing) {
     EXPECT_EQ(bad.files(), std::vector<std::string>{"s.toml"});
 }
 
+TEST(Render, BenchmarkReportsRaysPerSecondAndTimeToOnePercent) {
+    testing::TempDir dir;
+    const auto r = testing::run_ssslab({"bench", "--render", "--quick", "--case", "ketchup",
+                                        "--scenes", testing::source_path("experiments/scenes")},
+                                       dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("ketchup"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("t_1%_pixel_s"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("apple"), std::string::npos) << r.out;
+    const auto bad = testing::run_ssslab({"bench", "--render", "--scenes", "nowhere"}, dir.path());
+    EXPECT_EQ(bad.exit_code, 2) << bad.err;
+    EXPECT_TRUE(dir.files().empty());
+}
+
 }  // namespace
 }  // namespace ssslab::volpath

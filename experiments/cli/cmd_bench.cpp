@@ -78,6 +78,9 @@ struct BenchArgs {
     // --kernels
     bool kernels = false;
     bool volpath = false;
+    bool render = false;
+    std::string scenes = "experiments/scenes";
+    int size = 256, spp = 16;
     std::int64_t photons = 100'000;  ///< per channel, for the ground-truth profiles
     std::string csv;
 };
@@ -435,7 +438,21 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
         "Instead: the volumetric path tracer against MCML on the same slabs (per-channel and "
         "hero modes), paths/ms and extrapolated time to 1 % relative error");
     volpath->excludes(kernels);
-    sub->add_option("--case", a->only, "Only the cases whose name contains this text")
+    CLI::Option* render = sub->add_flag(
+        "--render", a->render,
+        "Instead: the scene renderer on the built-in scenes (rays/s, extrapolated time to 1 % "
+        "per pixel); with --scenes, --size, --spp, --case");
+    render->excludes(kernels)->excludes(volpath);
+    sub->add_option("--scenes", a->scenes,
+                    "With --render: the scene folder (default experiments/scenes)")
+        ->needs(render);
+    sub->add_option("--size", a->size, "With --render: image width and height (default 256)")
+        ->check(CLI::Range(1, 8192))
+        ->needs(render);
+    sub->add_option("--spp", a->spp, "With --render: samples per pixel (default 16)")
+        ->check(CLI::Range(1, 1'000'000))
+        ->needs(render);
+    sub->add_option("--case", a->only, "Only the cases (or scenes) whose name contains this text")
         ->excludes(kernels)
         ->excludes(volpath);
     sub->add_option("--write-mci", a->write_mci,
@@ -454,6 +471,10 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
     sub->callback([a, repeat, &action] {
         action = [a, explicit_repeat = repeat->count() > 0] {
             if (a->kernels) return run_kernel_bench(*a, explicit_repeat ? a->repeat : 1);
+            if (a->render)
+                return run_render_bench(
+                    a->threads > 0 ? a->threads : tbb::info::default_concurrency(), a->quick,
+                    a->scenes, a->size, a->spp, a->only);
             if (a->volpath)
                 return run_volpath_bench(
                     a->threads > 0 ? a->threads : tbb::info::default_concurrency(), a->quick,

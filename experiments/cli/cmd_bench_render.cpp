@@ -1,0 +1,73 @@
+// `ssslab bench --render`: the scene renderer on the built-in scenes: ray queries per second,
+// and the time to 1 % relative standard error per pixel (median over the pixels that see
+// anything), extrapolated from the measured variance (error ~ 1 / sqrt(time)).
+#include "core/error.h"
+#include "core/scene.h"
+#include "experiments/cli/bench_volpath.h"
+#include "volpath/render.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <vector>
+
+namespace ssslab::cli {
+
+namespace fs = std::filesystem;
+
+int run_render_bench(int threads, bool quick, const std::string& scenes_dir, int size, int spp,
+                     const std::string& only) {
+    if (!fs::is_directory(scenes_dir))
+        throw InputError(
+            {"<command line>", 0, 0}, "--scenes",
+            "no scene folder " + scenes_dir + " (run from the source tree or give --scenes)");
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(scenes_dir))
+        if (e.path().extension() == ".toml" &&
+            (only.empty() || e.path().stem().string().find(only) != std::string::npos))
+            files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    if (quick) {
+        size = std::min(size, 64);  // at least 16 batches: standard errors need them
+        spp = std::max(16, std::min(spp, 16));
+    }
+    std::printf("volpath renderer (%s), %d thread%s, %d x %d, %d spp per scene\n",
+                volpath::render_engine_version(), threads, threads == 1 ? "" : "s", size, size,
+                spp);
+    std::printf("%-10s %9s %12s %12s %10s %12s %14s\n", "scene", "wall_s", "Mrays/s", "paths/s",
+                "med_relSE", "t_1%_pixel_s", "image mean relSE");
+    for (const fs::path& f : files) {
+        const Scene s = read_scene(f.string());
+        volpath::RenderOptions o;
+        o.threads = threads;
+        o.width = o.height = size;
+        o.budget.samples = spp;
+        const volpath::RenderResult r = volpath::render(s, o);
+        const ImageLayer& L = r.image.layer("radiance");
+        const ImageLayer& E = r.image.layer("radiance.stderr");
+        std::vector<double> rel;
+        double sum = 0, var = 0;
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    sum += L.at(x, y, c);
+                    var += static_cast<double>(E.at(x, y, c)) * E.at(x, y, c);
+                    if (L.at(x, y, c) > 0 && E.at(x, y, c) > 0)
+                        rel.push_back(E.at(x, y, c) / L.at(x, y, c));
+                }
+        std::sort(rel.begin(), rel.end());
+        const double med = rel.empty() ? 0 : rel[rel.size() / 2];
+        const double t1 = r.seconds * (med / 0.01) * (med / 0.01);
+        const double paths = static_cast<double>(size) * size * static_cast<double>(r.spp);
+        std::printf("%-10s %9.2f %12.2f %12.3g %10.3f %12.3g %14.2e\n", s.name.c_str(), r.seconds,
+                    static_cast<double>(r.rays) / r.seconds * 1e-6, paths / r.seconds, med, t1,
+                    sum > 0 ? std::sqrt(var) / sum : 0.0);
+    }
+    std::printf(
+        "t_1%%_pixel: the extrapolated time until the median pixel's relative standard error of "
+        "the radiance is 1 %% at this size.\n");
+    return 0;
+}
+
+}  // namespace ssslab::cli
