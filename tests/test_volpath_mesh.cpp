@@ -158,8 +158,10 @@ TEST(VolpathMesh, TessellatedSphereEqualsTheLitSphereEngine) {
     // A sphere of radius 5 mm (about 4 reduced mean free paths of Skin1 red) as an icosphere of
     // 81,920 triangles, lit by a directional light and traced from the light as the sphere
     // engine does: entry points uniform over the disc the sphere presents, Fresnel at the facet,
-    // the walk, exitance per zone of beta = angle from the subsolar point, M / E0 = weight /
-    // (2 (cos b0 - cos b1)) per photon. Against volpath/sphere.h on the exact sphere.
+    // the walk, then (1) exitance per zone of beta = angle from the subsolar point, M / E0 =
+    // weight / (2 (cos b0 - cos b1)) per photon, and (2) the exitance image seen along the light
+    // (16 x 16 pixels, the engine's orthographic frame): per pixel sum w (n . v) R^2 / A_pix.
+    // Both against volpath/sphere.h on the exact sphere, zone by zone and pixel by pixel.
     const Medium skin = *find_material("Skin1");
     Medium m1 = skin;  // the red channel in all three (the sphere engine's hero is then exact)
     for (int c = 0; c < 3; ++c) {
@@ -167,57 +169,84 @@ TEST(VolpathMesh, TessellatedSphereEqualsTheLitSphereEngine) {
         m1.sigma_s_per_cm[c] = skin.sigma_s_per_cm[0];
     }
     const double R = 0.5;
-    const int nb = 18;
-    const TriangleMesh sphere = make_sphere(R, 6);
-    const EmbreeScene es({&sphere});
-    const MeshMedium m = grey(es, m1.sigma_a_per_cm[0], m1.sigma_s_per_cm[0], 0.0, m1.eta);
-    const BatchRunResult r =
-        batches(static_cast<std::size_t>(nb), scaled(2e5), 53, [&](RngStream& rng, double* t) {
-            const double rr = R * std::sqrt(rng.uniform()), phi = 2 * kPi * rng.uniform();
-            const Vec3 d{0, 0, -1};
-            const RayHit hit = es.intersect({rr * std::cos(phi), rr * std::sin(phi), 10}, d);
-            if (!hit.hit()) return std::uint64_t{0};
-            const double cos_i = -dot(d, hit.normal);
-            double cos_t = 0;
-            const double F = fresnel_dielectric(cos_i, m1.eta, cos_t);
-            if (rng.uniform() < F) return std::uint64_t{0};  // first-surface reflection
-            const Vec3 p = Vec3{rr * std::cos(phi), rr * std::sin(phi), 10} + d * hit.t;
-            const WalkResult w =
-                walk_mesh_medium<1>(m, p, refract(d, hit.normal, m1.eta, cos_t), rng);
-            if (w.fate == WalkResult::Fate::kExited) {
-                const double beta = std::acos(std::clamp(normalize(w.p).z, -1.0, 1.0));
-                t[std::min(nb - 1, static_cast<int>(beta / kPi * nb))] += w.weight[0];
-            }
-            return static_cast<std::uint64_t>(w.events);
-        });
+    const int nb = 18, W = 16;
     SphereScene sc;
     sc.medium = m1;
     sc.radius_cm = R;
     sc.beta_bins = nb;
+    sc.width = sc.height = W;
+    const SphereCamera cam = sphere_camera(sc);
+    const TriangleMesh sphere = make_sphere(R, 6);
+    const EmbreeScene es({&sphere});
+    const MeshMedium m = grey(es, m1.sigma_a_per_cm[0], m1.sigma_s_per_cm[0], 0.0, m1.eta);
+    const std::size_t size = static_cast<std::size_t>(nb + W * W);
+    const BatchRunResult r = batches(size, scaled(2e5), 53, [&](RngStream& rng, double* t) {
+        const double rr = R * std::sqrt(rng.uniform()), phi = 2 * kPi * rng.uniform();
+        const Vec3 d{0, 0, -1};
+        const RayHit hit = es.intersect({rr * std::cos(phi), rr * std::sin(phi), 10}, d);
+        if (!hit.hit()) return std::uint64_t{0};
+        const double cos_i = -dot(d, hit.normal);
+        double cos_t = 0;
+        const double F = fresnel_dielectric(cos_i, m1.eta, cos_t);
+        if (rng.uniform() < F) return std::uint64_t{0};  // first-surface reflection
+        const Vec3 p = Vec3{rr * std::cos(phi), rr * std::sin(phi), 10} + d * hit.t;
+        const WalkResult w = walk_mesh_medium<1>(m, p, refract(d, hit.normal, m1.eta, cos_t), rng);
+        if (w.fate == WalkResult::Fate::kExited) {
+            const double beta = std::acos(std::clamp(normalize(w.p).z, -1.0, 1.0));
+            t[std::min(nb - 1, static_cast<int>(beta / kPi * nb))] += w.weight[0];
+            const double nv = dot(w.n, cam.v);
+            const double x = (dot(w.p, cam.right) + cam.half_x) / cam.pixel_cm;
+            const double y = (cam.half_y - dot(w.p, cam.up)) / cam.pixel_cm;
+            if (nv > 0 && x >= 0 && y >= 0 && x < W && y < W)
+                t[static_cast<size_t>(nb) + static_cast<size_t>(y) * W + static_cast<size_t>(x)] +=
+                    w.weight[0] * nv;
+        }
+        return static_cast<std::uint64_t>(w.events);
+    });
     SphereOptions so;
     so.budget.samples = scaled(2e5);
     so.mode = ChromaticMode::kHero;
-    so.image = false;
+    so.image = true;
     const SphereRun ref = simulate_sphere(sc, so);
+    auto add = [](double v, double s, double rv, double rs, double& chi2, double& max_z, int& n) {
+        if (!(s > 0 && rs > 0) || s > 0.3 * v || rs > 0.3 * rv) return;
+        const double z = (v - rv) / std::hypot(s, rs);
+        chi2 += z * z;
+        max_z = std::max(max_z, std::fabs(z));
+        ++n;
+    };
     double chi2 = 0, max_z = 0;
     int bins = 0;
     for (int j = 0; j < nb; ++j) {
         const double b0 = kPi * j / nb, b1 = kPi * (j + 1) / nb;
         const double zone = 2 * (std::cos(b0) - std::cos(b1));
-        const double v = r.mean[static_cast<size_t>(j)] / zone,
-                     s = r.se[static_cast<size_t>(j)] / zone;
-        const double rv = ref.exitance[0][static_cast<size_t>(j)];
-        const double rs = ref.exitance_se[0][static_cast<size_t>(j)];
-        if (!(s > 0 && rs > 0) || s > 0.3 * v || rs > 0.3 * rv) continue;
-        const double z = (v - rv) / std::hypot(s, rs);
-        chi2 += z * z;
-        max_z = std::max(max_z, std::fabs(z));
-        ++bins;
+        add(r.mean[static_cast<size_t>(j)] / zone, r.se[static_cast<size_t>(j)] / zone,
+            ref.exitance[0][static_cast<size_t>(j)], ref.exitance_se[0][static_cast<size_t>(j)],
+            chi2, max_z, bins);
     }
-    std::printf("  [measured] tessellated vs exact sphere: chi2 %.1f over %d bins, max |z| %.2f\n",
+    std::printf("  [measured] tessellated vs exact sphere: chi2 %.1f over %d zones, max |z| %.2f\n",
                 chi2, bins, max_z);
     EXPECT_GE(bins, 15);
-    EXPECT_LT(chi2, testing::chi2_critical(bins, 0.001));
+    EXPECT_LT(chi2, testing::chi2_critical(bins, testing::sidak(0.001, 2)));
+    // The image: the engine's layer is M / pi per pixel [per unit E0]; ours the same estimator.
+    const ImageLayer& E = ref.image->layer("exitance");
+    const ImageLayer& Es = ref.image->layer("exitance.stderr");
+    const double to_exitance = R * R / (cam.pixel_cm * cam.pixel_cm);
+    double ichi2 = 0, imax = 0;
+    int pixels = 0;
+    for (int y = 0; y < W; ++y)
+        for (int x = 0; x < W; ++x) {
+            const size_t i = static_cast<size_t>(nb + y * W + x);
+            add(r.mean[i] * to_exitance, r.se[i] * to_exitance, E.at(x, y, 0), Es.at(x, y, 0),
+                ichi2, imax, pixels);
+        }
+    std::printf(
+        "  [measured] exitance image, tessellated vs exact sphere: chi2 %.1f over %d pixels, "
+        "max |z| %.2f\n",
+        ichi2, pixels, imax);
+    EXPECT_GT(pixels, 150);
+    EXPECT_LT(ichi2, testing::chi2_critical(pixels, testing::sidak(0.001, 2)));
+    EXPECT_LT(imax, testing::normal_quantile(1 - 0.0005 / pixels));
 }
 
 }  // namespace
