@@ -29,8 +29,16 @@ endif()
 # do; the modules that use them say so when a scene or experiment needs a missing part.
 set(SSSLAB_HAVE_OPENVDB OFF)
 if(SSSLAB_WITH_OPENVDB)
-  if(EXISTS /usr/lib/x86_64-linux-gnu/cmake/OpenVDB/FindOpenVDB.cmake OR
-     EXISTS /usr/lib/cmake/OpenVDB/FindOpenVDB.cmake)
+  # Debian ships only a find module, in a folder whose FindTBB/FindOpenEXR would shadow the
+  # config packages found above (debian-notes.md): append it last, and only here.
+  find_path(SSSLAB_OPENVDB_MODULE_DIR FindOpenVDB.cmake
+            PATHS /usr/lib/x86_64-linux-gnu/cmake/OpenVDB /usr/lib/cmake/OpenVDB NO_DEFAULT_PATH)
+  find_package(Boost QUIET COMPONENTS iostreams)
+  if(SSSLAB_OPENVDB_MODULE_DIR AND Boost_FOUND)
+    list(APPEND CMAKE_MODULE_PATH ${SSSLAB_OPENVDB_MODULE_DIR})
+    find_package(OpenVDB QUIET COMPONENTS openvdb)
+  endif()
+  if(TARGET OpenVDB::openvdb)
     set(SSSLAB_HAVE_OPENVDB ON)
   else()
     message(STATUS "OpenVDB not found: heterogeneous media disabled (apt-get install libopenvdb-dev libboost-iostreams-dev)")

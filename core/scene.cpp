@@ -65,7 +65,7 @@ SceneLight read_light(ConfigTable& t) {
     return l;
 }
 
-SceneMaterial read_material(ConfigTable& t) {
+SceneMaterial read_material(ConfigTable& t, const std::string& base_dir) {
     SceneMaterial m;
     m.where = t.location("name");
     m.name = t.string("name");
@@ -80,6 +80,15 @@ SceneMaterial read_material(ConfigTable& t) {
             if (m.medium.g[c] <= -1 || m.medium.g[c] >= 1)
                 t.fail("g", "g must lie in (-1, 1) for the path tracer");
         m.roughness = t.number("roughness", 0.0, Range::closed(0, 1));
+        if (auto f = t.optional_string("density_vdb")) {
+            fs::path p = *f;
+            if (p.is_relative()) p = fs::path(base_dir) / p;
+            m.density_file = p.lexically_normal().string();
+            std::error_code ec;
+            if (!fs::is_regular_file(m.density_file, ec))
+                t.fail("density_vdb", "OpenVDB file not found: " + m.density_file);
+            m.density_grid = t.string("density_grid", "density");
+        }
         if (m.roughness > 0 && m.roughness < 1e-3)
             t.fail("roughness",
                    "a GGX alpha below 1e-3 is numerically a smooth boundary: use 0 (smooth) or "
@@ -198,7 +207,7 @@ Scene parse(std::shared_ptr<ConfigDocument> doc, const std::string& path,
     if (s.lights.empty()) root.fail("lights", "a scene needs at least one [[lights]] table");
     std::map<std::string, int> names;
     for (ConfigTable& t : root.table_array("materials")) {
-        s.materials.push_back(read_material(t));
+        s.materials.push_back(read_material(t, base_dir));
         if (!names.emplace(s.materials.back().name, static_cast<int>(s.materials.size() - 1))
                  .second)
             t.fail("name", "material \"" + s.materials.back().name + "\" is defined twice");

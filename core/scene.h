@@ -14,7 +14,8 @@
 //                relative linear RGB units (irradiance per unit area, intensity per steradian)
 //   [[materials]] name; type = "medium" (a Freude14 preset or sigma_a/sigma_s per mm or per cm,
 //                g, eta: the keys of a [material] table; roughness = GGX alpha of the boundary,
-//                0 for a smooth one) or "diffuse" (albedo [RGB] in [0, 1))
+//                0 for a smooth one; density_vdb and density_grid for a heterogeneous medium
+//                from an OpenVDB float grid scaling the coefficients) or "diffuse" (albedo [RGB])
 //   [[shapes]]   type = "sphere" (radius, subdivisions), "box" (size), "torus" (major_radius,
 //                minor_radius, segments_major, segments_minor), "plane" (size_x, size_z, facing
 //                +y), "bumpy_sphere" (radius, amplitude, frequency, seed, subdivisions) or "mesh"
@@ -61,7 +62,10 @@ struct SceneMaterial {
     Kind kind = Kind::kMedium;
     /// kMedium: coefficients per cm, as everywhere in ssslab (Scene::per_world_unit converts).
     Medium medium;
-    double roughness = 0;            ///< kMedium: GGX alpha of the boundary (0: smooth)
+    double roughness = 0;  ///< kMedium: GGX alpha of the boundary (0: smooth)
+    /// kMedium, heterogeneous: an OpenVDB file (resolved path; empty: homogeneous) and the float
+    /// grid in it whose density scales sigma_a and sigma_s (positions in world units).
+    std::string density_file, density_grid = "density";
     std::array<double, 3> albedo{};  ///< kDiffuse
     SourceLocation where;
 };

@@ -23,6 +23,7 @@ packages=(
   libopenexr-dev        # OpenEXR 3.1: layered float images (directly, not through OpenImageIO)
   libtinyobjloader-dev  # tinyobjloader: Wavefront OBJ meshes of scene files
   libembree-dev         # Embree 3: ray queries against the meshes of scenes (path tracer)
+  libopenvdb-dev libboost-iostreams-dev  # OpenVDB: heterogeneous media (optional part; FindOpenVDB needs Boost iostreams)
   python3-matplotlib    # plots of the experiment reports (run by Debian's /usr/bin/python3)
   chromium              # headless check that the HTML reports open and show their plots
 )

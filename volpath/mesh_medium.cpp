@@ -27,8 +27,11 @@ WalkResult walk_mesh_medium(const MeshMedium& m, Vec3 p, Vec3 w, RngStream& rng,
         for (int c = 0; c < NC; ++c) r.weight[static_cast<std::size_t>(c)] = beta[c];
         return r;
     };
-    const double st = m.sigma_t[h];
-    const double albedo = st > 0 ? m.sigma_s[h] / st : 0.0;
+    // Flights are sampled at the majorant rate sigma_t max(d) (= sigma_t when homogeneous);
+    // a tentative collision is real with probability d(x) / max(d), the same for every channel.
+    const double dmax = m.density ? m.density->max_density() : 1.0;
+    const double st = m.sigma_t[h] * dmax;
+    const double albedo = m.sigma_t[h] > 0 ? m.sigma_s[h] / m.sigma_t[h] : 0.0;
     const double eps = m.scene->epsilon();
     const double eta = m.eta_outside / m.eta_inside;
     auto rescale = [&] {
@@ -45,7 +48,7 @@ WalkResult walk_mesh_medium(const MeshMedium& m, Vec3 p, Vec3 w, RngStream& rng,
         if constexpr (kHero) {
             for (int c = 0; c < 3; ++c) {
                 const std::size_t i = static_cast<std::size_t>(c);
-                const double e = i == h ? 1.0 : std::exp(-(m.sigma_t[i] - st) * d);
+                const double e = i == h ? 1.0 : std::exp(-(m.sigma_t[i] * dmax - st) * d);
                 const double f = scatter ? m.sigma_s[i] / m.sigma_s[h] * e : e;
                 q[c] *= f;
                 beta[c] *= f;
@@ -66,6 +69,25 @@ WalkResult walk_mesh_medium(const MeshMedium& m, Vec3 p, Vec3 w, RngStream& rng,
                 p += w * t;
                 travelled += t;
                 on_boundary = false;
+                if (m.density && !(rng.uniform() * dmax < m.density->density(p))) {
+                    // A null collision: the path goes on in the same direction. Hero mode: the
+                    // channels' densities of this tentative collision differ by their
+                    // majorants (the null probability is the same for all).
+                    if constexpr (kHero) {
+                        for (int c = 0; c < 3; ++c) {
+                            const std::size_t i = static_cast<std::size_t>(c);
+                            const double sm = m.sigma_t[i] * dmax;
+                            const double f =
+                                i == h ? 1.0 : sm / st * std::exp(-(sm - st) * travelled);
+                            q[c] *= f;
+                            beta[c] *= f;
+                        }
+                        rescale();
+                    }
+                    travelled = 0;
+                    t = -std::log(rng.uniform()) / st;
+                    continue;
+                }
                 break;
             }
             p += w * hit.t;

@@ -12,6 +12,7 @@
 
 #include "core/rng.h"
 #include "core/vec3.h"
+#include "volpath/density_grid.h"
 #include "volpath/embree_scene.h"
 
 #include <array>
@@ -26,6 +27,9 @@ struct MeshMedium {
     /// Per tally channel (index 0 only for a per-channel walk) [1 / world unit].
     std::array<double, 3> sigma_t{}, sigma_s{}, g{};
     double eta_inside = 1, eta_outside = 1;
+    /// Heterogeneous medium: sigma_t and sigma_s above are scaled by this density (null: 1);
+    /// tracked by delta tracking against sigma_t max(d).
+    const DensityGrid* density = nullptr;
     /// Long-path roulette: after this many events survive each further one with this
     /// probability (weight divided by it).
     std::int64_t long_events = 1'000'000;

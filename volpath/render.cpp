@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/rng.h"
+#include "volpath/density_grid.h"
 #include "volpath/embree_scene.h"
 #include "volpath/microfacet.h"
 #include "volpath/sampling.h"
@@ -30,9 +31,10 @@ struct Light {
 };
 
 struct MediumData {
-    RGB sigma_t{}, sigma_s{}, g{};  // per world unit
+    RGB sigma_t{}, sigma_s{}, g{};  // per world unit (scaled by the density, if any)
     bool same_g = true;
     double eta = 1, alpha = 0;
+    std::shared_ptr<const DensityGrid> density;  // heterogeneous media (OpenVDB)
 };
 
 struct Frame {
@@ -195,6 +197,13 @@ struct Renderer {
             }
             md.same_g = md.g[0] == md.g[1] && md.g[1] == md.g[2];
             md.eta = m.medium.eta;
+            if (!m.density_file.empty()) {
+                try {
+                    md.density = DensityGrid::load(m.density_file, m.density_grid);
+                } catch (const InputError& e) {
+                    throw InputError(m.where, "density_vdb", e.what());
+                }
+            }
             md.alpha = md.eta == 1.0 ? 0.0 : m.roughness;  // nothing to be rough about
             shape_medium.push_back(static_cast<int>(media.size()));
             media.push_back(md);
@@ -300,16 +309,34 @@ struct Renderer {
                 const MediumData& md = media[static_cast<size_t>(medium)];
                 if (!hit.hit() || static_cast<int>(hit.shape) != medium_shape)
                     return rays;  // leak or overlap
-                const double st = md.sigma_t[h];
+                // Majorant sigma_t max(d) (sigma_t for a homogeneous medium): delta tracking.
+                const double dmax = md.density ? md.density->max_density() : 1.0;
+                const double st = md.sigma_t[h] * dmax;
                 const double t = st > 0 ? -std::log(rng.uniform()) / st : kInf;
+                if (t < hit.t && md.density &&
+                    !(rng.uniform() * dmax < md.density->density(o + d * t))) {
+                    // Null collision: on in the same direction (see volpath/mesh_medium.cpp).
+                    for (int c = 0; c < 3; ++c) {
+                        const size_t i = static_cast<size_t>(c);
+                        const double sm = md.sigma_t[i] * dmax;
+                        const double f = i == h ? 1.0 : sm / st * std::exp(-(sm - st) * t);
+                        q[c] *= f;
+                        beta[c] *= f;
+                    }
+                    rescale();
+                    o = o + d * t;
+                    on_surface = false;
+                    --depth;
+                    continue;
+                }
                 if (t < hit.t) {  // scattering or absorption inside
                     o = o + d * t;
                     on_surface = false;
                     ++events;
-                    if (!(rng.uniform() < md.sigma_s[h] / st)) return rays;
+                    if (!(rng.uniform() < md.sigma_s[h] / md.sigma_t[h])) return rays;
                     for (int c = 0; c < 3; ++c) {
                         const size_t i = static_cast<size_t>(c);
-                        const double e = i == h ? 1.0 : std::exp(-(md.sigma_t[i] - st) * t);
+                        const double e = i == h ? 1.0 : std::exp(-(md.sigma_t[i] * dmax - st) * t);
                         const double f = md.sigma_s[i] / md.sigma_s[h] * e;
                         q[c] *= f;
                         beta[c] *= f;
@@ -337,7 +364,7 @@ struct Renderer {
                 }
                 for (int c = 0; c < 3; ++c) {
                     const size_t i = static_cast<size_t>(c);
-                    const double e = i == h ? 1.0 : std::exp(-(md.sigma_t[i] - st) * hit.t);
+                    const double e = i == h ? 1.0 : std::exp(-(md.sigma_t[i] * dmax - st) * hit.t);
                     q[c] *= e;
                     beta[c] *= e;
                 }
