@@ -90,45 +90,58 @@ struct BsdfSample {
     bool reflection = false;
 };
 
+/// The pair (wo, wi) seen by the microfacet that connects them: the generalized half vector
+/// wm (on the +z side) of Walter et al. (eq. 16), etap = 1 for reflection, else the relative
+/// index from wo's side. Empty when a direction is tangent, the pair is degenerate, or the
+/// microfacet would face away from either direction.
+struct MicrofacetPair {
+    Vec3 wm;
+    double etap = 1;
+    bool reflect = false;
+};
+inline std::optional<MicrofacetPair> microfacet_pair(const Vec3& wo, const Vec3& wi, double eta) {
+    const double co = wo.z, ci = wi.z;
+    if (co == 0 || ci == 0) return std::nullopt;
+    MicrofacetPair p;
+    p.reflect = co * ci > 0;
+    p.etap = p.reflect ? 1.0 : (co > 0 ? eta : 1.0 / eta);
+    Vec3 wm = wi * p.etap + wo;
+    if (!(dot(wm, wm) > 0)) return std::nullopt;
+    wm = normalize(wm);
+    if (wm.z < 0) wm = -wm;
+    if (dot(wm, wi) * ci < 0 || dot(wm, wo) * co < 0) return std::nullopt;  // back-facing
+    p.wm = wm;
+    return p;
+}
+
 /// f(wo, wi) of the rough dielectric (alpha > 0).
 inline double rough_dielectric_f(const Vec3& wo, const Vec3& wi, double eta, double alpha,
                                  TransportMode mode) {
-    const double co = wo.z, ci = wi.z;
-    if (co == 0 || ci == 0) return 0;
-    const bool reflect = co * ci > 0;
-    const double etap = reflect ? 1.0 : (co > 0 ? eta : 1.0 / eta);
-    Vec3 wm = wi * etap + wo;
-    if (!(dot(wm, wm) > 0)) return 0;
-    wm = normalize(wm);
-    if (wm.z < 0) wm = -wm;
-    if (dot(wm, wi) * ci < 0 || dot(wm, wo) * co < 0) return 0;  // back-facing microfacet
+    const auto mp = microfacet_pair(wo, wi, eta);
+    if (!mp) return 0;
+    const Vec3& wm = mp->wm;
     const double F = fresnel_signed(dot(wo, wm), eta);
-    if (reflect) return ggx::D(wm, alpha) * ggx::G(wo, wi, alpha) * F / std::abs(4 * ci * co);
-    const double d = dot(wi, wm) + dot(wo, wm) / etap;
-    const double denom = d * d * ci * co;
+    if (mp->reflect)
+        return ggx::D(wm, alpha) * ggx::G(wo, wi, alpha) * F / std::abs(4 * wi.z * wo.z);
+    const double d = dot(wi, wm) + dot(wo, wm) / mp->etap;
+    const double denom = d * d * wi.z * wo.z;
     double ft = ggx::D(wm, alpha) * (1 - F) * ggx::G(wo, wi, alpha) *
                 std::abs(dot(wi, wm) * dot(wo, wm) / denom);
-    if (mode == TransportMode::kRadiance) ft /= etap * etap;
+    if (mode == TransportMode::kRadiance) ft /= mp->etap * mp->etap;
     return ft;
 }
 
 /// The density sample_rough_dielectric draws wi with, for wo.
 inline double rough_dielectric_pdf(const Vec3& wo, const Vec3& wi, double eta, double alpha) {
-    const double co = wo.z, ci = wi.z;
-    if (co == 0 || ci == 0) return 0;
-    const bool reflect = co * ci > 0;
-    const double etap = reflect ? 1.0 : (co > 0 ? eta : 1.0 / eta);
-    Vec3 wm = wi * etap + wo;
-    if (!(dot(wm, wm) > 0)) return 0;
-    wm = normalize(wm);
-    if (wm.z < 0) wm = -wm;
-    if (dot(wm, wi) * ci < 0 || dot(wm, wo) * co < 0) return 0;
+    const auto mp = microfacet_pair(wo, wi, eta);
+    if (!mp) return 0;
+    const Vec3& wm = mp->wm;
     const double R = fresnel_signed(dot(wo, wm), eta), T = 1 - R;
     // Visible normals are sampled for the side wo is on.
-    const Vec3 wo_up = co > 0 ? wo : -wo;
+    const Vec3 wo_up = wo.z > 0 ? wo : -wo;
     const double dv = ggx::D_visible(wo_up, wm, alpha);
-    if (reflect) return dv / (4 * std::abs(dot(wo, wm))) * R;
-    const double d = dot(wi, wm) + dot(wo, wm) / etap;
+    if (mp->reflect) return dv / (4 * std::abs(dot(wo, wm))) * R;
+    const double d = dot(wi, wm) + dot(wo, wm) / mp->etap;
     return dv * std::abs(dot(wi, wm)) / (d * d) * T;
 }
 
