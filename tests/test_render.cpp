@@ -11,10 +11,14 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace ssslab::volpath {
 namespace {
@@ -240,6 +244,52 @@ TEST(Render, BenchmarkReportsRaysPerSecondAndTimeToOnePercent) {
     const auto bad = testing::run_ssslab({"bench", "--render", "--scenes", "nowhere"}, dir.path());
     EXPECT_EQ(bad.exit_code, 2) << bad.err;
     EXPECT_TRUE(dir.files().empty());
+}
+
+TEST(Render, ErrorAgainstTimeMatchesTheStandardErrors) {
+    // The white furnace has an exact reference (1 in every pixel): the relative RMS error after
+    // 4, 8, ... spp falls as 1 / sqrt(spp), and at the end equals the run's own estimate from
+    // its standard errors.
+    testing::TempDir dir;
+    dir.write("s.toml",
+              scene_text("[[materials]]\nname = \"m\"\nsigma_a_per_mm = 0\nsigma_s_per_mm = 2\n"
+                         "eta = 1.4\n",
+                         "[[lights]]\ntype = \"environment\"\nradiance = 1\n"));
+    LayeredImage ref(24, 24);
+    ref.add_layer("radiance", 3, std::vector<float>(24 * 24 * 3, 1.0f));
+    write_exr(ref, (dir / "ref.exr").string());
+    const auto r = testing::run_ssslab(
+        {"render", "s.toml", "--spp", "64", "--reference", "ref.exr", "--out", "o.exr", "-q"},
+        dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string csv = testing::read_text(dir / "o_convergence.csv");
+    std::vector<std::array<double, 4>> rows;
+    std::istringstream in(csv);
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+        std::array<double, 4> v{};
+        ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3]), 4)
+            << line;
+        rows.push_back(v);
+    }
+    ASSERT_EQ(rows.size(), 5u);  // 4, 8, 16, 32, 64 spp
+    EXPECT_EQ(rows.front()[0], 4);
+    EXPECT_EQ(rows.back()[0], 64);
+    // 16x the samples: 4x less error, within the scatter of an error estimate.
+    const double ratio = rows.front()[2] / rows.back()[2];
+    EXPECT_GT(ratio, 2.5);
+    EXPECT_LT(ratio, 6.5);
+    EXPECT_NEAR(rows.back()[2] / rows.back()[3], 1.0, 0.25);
+    // A reference of another size is refused.
+    LayeredImage small(8, 8);
+    small.add_layer("radiance", 3);
+    write_exr(small, (dir / "small.exr").string());
+    const auto bad = testing::run_ssslab(
+        {"render", "s.toml", "--spp", "4", "--reference", "small.exr", "--out", "b.exr", "-q"},
+        dir.path());
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_FALSE(std::filesystem::exists(dir / "b.exr"));
 }
 
 }  // namespace

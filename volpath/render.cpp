@@ -555,6 +555,7 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
     bo.checkpoint_seconds = o.checkpoint_seconds;
     bo.cancel = o.cancel;
     bo.on_batch = o.on_batch;
+    bo.snapshots = o.snapshots;
     bo.quantity = [pixels](const BatchAccumulator& acc, double& value, double& se) {
         // The image mean of the radiance (all channels): what a relative-error budget targets.
         double v = 0, s2 = 0;
@@ -618,6 +619,46 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
     std::snprintf(secs, sizeof secs, "%.3f", out.seconds);
     img.metadata()["ssslab.seconds"] = secs;
     out.image = std::move(img);
+    return out;
+}
+
+std::vector<ConvergencePoint> convergence(const RenderResult& r, const LayeredImage& reference) {
+    if (reference.width() != r.width || reference.height() != r.height)
+        throw std::invalid_argument("the reference image is " + std::to_string(reference.width()) +
+                                    " x " + std::to_string(reference.height()) + ", the render " +
+                                    std::to_string(r.width) + " x " + std::to_string(r.height));
+    const ImageLayer& ref = reference.layer("radiance");
+    const std::size_t pixels =
+        static_cast<std::size_t>(r.width) * static_cast<std::size_t>(r.height);
+    double norm = 0;
+    for (std::size_t i = 0; i < pixels; ++i)
+        for (int c = 0; c < 3; ++c) {
+            const double v = ref.at(static_cast<int>(i % static_cast<std::size_t>(r.width)),
+                                    static_cast<int>(i / static_cast<std::size_t>(r.width)), c);
+            norm += v * v;
+        }
+    if (!(norm > 0)) throw std::invalid_argument("the reference image is black");
+    auto error = [&](const std::vector<double>& mean) {
+        double e = 0;
+        for (std::size_t i = 0; i < pixels; ++i)
+            for (int c = 0; c < 3; ++c) {
+                const double v = ref.at(static_cast<int>(i % static_cast<std::size_t>(r.width)),
+                                        static_cast<int>(i / static_cast<std::size_t>(r.width)), c);
+                const double d = mean[i * RenderLayout::kPerPixel + static_cast<size_t>(c)] - v;
+                e += d * d;
+            }
+        return std::sqrt(e / norm);
+    };
+    std::vector<ConvergencePoint> out;
+    for (const BatchSnapshot& s : r.run.snapshots)
+        if (s.samples < r.run.samples) out.push_back({s.samples, s.seconds, error(s.mean), 0});
+    double se2 = 0;
+    for (std::size_t i = 0; i < pixels; ++i)
+        for (int c = 0; c < 3; ++c) {
+            const double e = r.run.se[i * RenderLayout::kPerPixel + static_cast<size_t>(c)];
+            se2 += e * e;
+        }
+    out.push_back({r.run.samples, r.run.seconds, error(r.run.mean), std::sqrt(se2 / norm)});
     return out;
 }
 

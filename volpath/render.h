@@ -50,6 +50,9 @@ struct RenderOptions {
     std::function<void(const BatchProgress&)> on_batch;
     /// Render at this size instead of the camera's (0: the camera's), e.g. for tests.
     int width = 0, height = 0;
+    /// Keep the image after 4, 8, 16, ... samples per pixel (RenderResult::run.snapshots), for
+    /// error against time. Each snapshot holds the whole tally (13 doubles per pixel).
+    bool snapshots = false;
 };
 
 /// Per-pixel tally layout: radiance RGB, subsurface RGB, specular RGB, depth, normal xyz.
@@ -76,5 +79,17 @@ struct RenderResult {
 void check_renderable(const Scene& scene);
 
 RenderResult render(const Scene& scene, const RenderOptions& options);
+
+/// One point of error against time: the radiance after `spp` samples per pixel (a snapshot or
+/// the final image) against a reference image.
+struct ConvergencePoint {
+    std::uint64_t spp = 0;
+    double seconds = 0;
+    double rel_rmse = 0;     ///< sqrt(sum (L - L_ref)^2 / sum L_ref^2) over pixels and channels
+    double mean_rel_se = 0;  ///< the run's own estimate: sqrt(sum SE^2 / sum L_ref^2) (final only)
+};
+/// Error of every snapshot and of the final image against `reference` (its "radiance" layer,
+/// of the same size; std::invalid_argument otherwise).
+std::vector<ConvergencePoint> convergence(const RenderResult& r, const LayeredImage& reference);
 
 }  // namespace ssslab::volpath

@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 namespace ssslab::cli {
 
@@ -28,6 +29,7 @@ struct RenderArgs {
     std::int64_t spp = 0;
     int width = 0, height = 0;
     double exposure = 0;
+    std::string reference;
     CommonOptions common;
 };
 
@@ -51,6 +53,19 @@ int run_render(const RenderArgs& a) {
     if (!o.budget.any()) o.budget.samples = 64;
     o.width = a.width;
     o.height = a.height;
+    std::optional<LayeredImage> reference;
+    if (!a.reference.empty()) {
+        reference = read_exr(a.reference);
+        const int w = a.width > 0 ? a.width : scene.camera.width;
+        const int h = a.height > 0 ? a.height : scene.camera.height;
+        if (reference->width() != w || reference->height() != h ||
+            !reference->has_layer("radiance"))
+            throw InputError(
+                {a.reference, 0, 0}, "--reference",
+                "the reference must be an EXR with a \"radiance\" layer of the render's size (" +
+                    std::to_string(w) + " x " + std::to_string(h) + ")");
+        o.snapshots = true;
+    }
     fs::create_directories(out.parent_path().empty() ? fs::path(".") : out.parent_path());
     o.checkpoint_path = out.string() + ".ckpt";
     o.cancel = install_interrupt_handler();
@@ -73,8 +88,25 @@ int run_render(const RenderArgs& a) {
     }
     fs::path png = out;
     png.replace_extension(".png");
+    std::string csv;
+    if (reference) {
+        csv = "spp,seconds,rel_rmse,run_rel_se\n";
+        char line[128];
+        for (const volpath::ConvergencePoint& p : volpath::convergence(r, *reference)) {
+            std::snprintf(line, sizeof line, "%llu,%.6g,%.6g,%.6g\n",
+                          static_cast<unsigned long long>(p.spp), p.seconds, p.rel_rmse,
+                          p.mean_rel_se);
+            csv += line;
+        }
+    }
     write_exr(r.image, out.string());
     write_png_preview(r.image, "radiance", png.string(), a.exposure);
+    if (reference) {
+        fs::path conv = out;
+        conv.replace_extension("");
+        write_file_atomic(conv.string() + "_convergence.csv", csv);
+        if (!a.common.quiet) std::printf("%s", csv.c_str());
+    }
     std::error_code ec;
     fs::remove(o.checkpoint_path, ec);
     if (!a.common.quiet)
@@ -101,6 +133,11 @@ void register_render(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--height", a->height, "Override the camera's height")
         ->check(CLI::Range(1, 16384));
     sub->add_option("--exposure", a->exposure, "Exposure of the PNG preview in stops (default 0)");
+    sub->add_option("--reference", a->reference,
+                    "A reference EXR (its \"radiance\" layer, same size): write "
+                    "<out>_convergence.csv, the relative RMS error after 4, 8, 16, ... spp and at "
+                    "the end, with the seconds it took")
+        ->check(CLI::ExistingFile);
     add_common_options(*sub, a->common, "Output EXR (default results/render/<scene>.exr)");
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
