@@ -6,6 +6,7 @@
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
@@ -14,7 +15,6 @@
 #include <limits>
 #include <map>
 #include <numbers>
-#include <regex>
 #include <sstream>
 #include <unordered_map>
 
@@ -84,9 +84,13 @@ Vec3 rotate_xyz(const Vec3& p, const Vec3& deg) {
 
 // "line 12" or "line: 12" in a tinyobjloader message; 0 if none.
 int line_in(const std::string& msg) {
-    static const std::regex re("line:? ([0-9]+)");
-    std::smatch m;
-    if (std::regex_search(msg, m, re)) return std::atoi(m[1].str().c_str());
+    for (std::size_t i = msg.find("line"); i != std::string::npos; i = msg.find("line", i + 4)) {
+        std::size_t j = i + 4;
+        if (j < msg.size() && msg[j] == ':') ++j;
+        if (j < msg.size() && msg[j] == ' ') ++j;
+        if (j < msg.size() && std::isdigit(static_cast<unsigned char>(msg[j])))
+            return std::atoi(msg.c_str() + j);
+    }
     return 0;
 }
 

@@ -22,11 +22,13 @@ class VdbDensity final : public DensityGrid {
     explicit VdbDensity(openvdb::FloatGrid::ConstPtr g, double max)
         : grid_(std::move(g)), max_(max) {}
     double density(const Vec3& p) const override {
-        // A sampler per call: value accessors are not thread-safe; the tree read is.
-        const openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor,
-                                          openvdb::tools::BoxSampler>
-            sampler(grid_->getConstAccessor(), grid_->transform());
-        return sampler.wsSample(openvdb::Vec3d(p.x, p.y, p.z));
+        // An accessor per call (accessors are not thread-safe; reading the tree is). It must
+        // outlive the sampler, which keeps a reference to it.
+        const openvdb::FloatGrid::ConstAccessor acc = grid_->getConstAccessor();
+        float v = 0;
+        openvdb::tools::BoxSampler::sample(
+            acc, grid_->transform().worldToIndex(openvdb::Vec3d(p.x, p.y, p.z)), v);
+        return v;
     }
     double max_density() const override { return max_; }
 
