@@ -10,11 +10,49 @@
 // independent of which thread computed which batch.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
 
 namespace ssslab {
+
+// Regularised upper incomplete gamma Q(a, x) (series below a + 1, Lentz's continued fraction
+// above; Numerical Recipes §6.2), for chi-square p-values: p = Q(dof / 2, chi2 / 2).
+inline double gamma_q(double a, double x) {
+    if (x <= 0) return 1.0;
+    const double lg = std::lgamma(a);
+    if (x < a + 1) {
+        double sum = 1.0 / a, del = sum, ap = a;
+        for (int n = 0; n < 100000; ++n) {
+            ap += 1;
+            del *= x / ap;
+            sum += del;
+            if (std::fabs(del) < std::fabs(sum) * 1e-15) break;
+        }
+        return std::max(0.0, 1.0 - sum * std::exp(-x + a * std::log(x) - lg));
+    }
+    const double tiny = 1e-300;
+    double b = x + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
+    for (int i = 1; i < 100000; ++i) {
+        const double an = -i * (i - a);
+        b += 2;
+        d = an * d + b;
+        if (std::fabs(d) < tiny) d = tiny;
+        c = b + an / c;
+        if (std::fabs(c) < tiny) c = tiny;
+        d = 1 / d;
+        const double del = d * c;
+        h *= del;
+        if (std::fabs(del - 1) < 1e-15) break;
+    }
+    return std::exp(-x + a * std::log(x) - lg) * h;
+}
+
+/// P(chi-square with `dof` degrees of freedom >= chi2): the p-value of a chi-square test.
+inline double chi_square_p(double chi2, double dof) {
+    return dof > 0 ? gamma_q(0.5 * dof, 0.5 * chi2) : 1.0;
+}
 
 class BatchAccumulator {
   public:

@@ -1,5 +1,6 @@
 // The experiment runner: content keys, cache reuse, interruption and resumption, config errors,
 // regression checks, and the report in a headless browser.
+#include "core/film_image.h"
 #include "experiments/runner/experiment.h"
 #include "experiments/runner/runner.h"
 #include "testing.h"
@@ -578,6 +579,130 @@ TEST(Report, OpensInHeadlessChromiumWithItsPlots) {
               0);
     ASSERT_TRUE(fs::exists(shot));
     EXPECT_GT(fs::file_size(shot), 50000u) << "a blank page compresses to a few kB";
+}
+
+// [outputs.render]: scenes rendered through the artifact graph (cached EXRs, reuse, rays/s and
+// time to 1 % in the summary, metrics for `ssslab check`), and its config errors.
+const char* kRenderScene = R"(
+[scene]
+name = "tiny"
+[camera]
+position = [0, 0, 40]
+target = [0, 0, 0]
+fov_y_deg = 30
+width = 256
+height = 256
+[[lights]]
+type = "environment"
+radiance = [1, 1, 1]
+[[materials]]
+name = "m"
+preset = "Skin1"
+roughness = 0.3
+[[shapes]]
+type = "sphere"
+radius = 8
+subdivisions = 3
+material = "m"
+)";
+
+const char* kRenderExp = R"(
+[experiment]
+name = "renders"
+seed = 3
+[outputs.render]
+scenes = ["scenes/tiny.toml"]
+spp = 16
+width = 24
+height = 16
+reference_factor = 2
+)";
+
+TEST(RunnerRender, ScenesAreRenderedCachedAndReportedWithTheirSpeed) {
+    testing::TempDir dir;
+    dir.write("scenes/tiny.toml", kRenderScene);
+    dir.write("r.toml", kRenderExp);
+    const auto first = run_ssslab({"run", "r.toml"}, dir.path());
+    ASSERT_EQ(first.exit_code, 0) << first.err << first.out;
+    EXPECT_NE(first.out.find("2 computed, 0 reused"), std::string::npos) << first.out;
+    const fs::path out = dir / "results" / "renders" / "render";
+    for (const char* f : {"tiny.exr", "tiny.png", "summary.csv", "tiny_convergence.csv"})
+        EXPECT_TRUE(fs::exists(out / f)) << f;
+    const LayeredImage im = read_exr((out / "tiny.exr").string());
+    EXPECT_EQ(im.width(), 24);
+    EXPECT_EQ(im.height(), 16);
+    EXPECT_TRUE(im.has_layer("radiance.stderr"));
+    EXPECT_FALSE(im.has_layer("snapshot_4")) << "snapshots stay in the cache";
+    const std::string summary = testing::read_text(out / "summary.csv");
+    std::istringstream is(summary);
+    std::string header, row;
+    std::getline(is, header);
+    std::getline(is, row);
+    EXPECT_EQ(header.rfind("scene,width,height,spp,seconds,threads,rays,mrays_per_s", 0), 0u);
+    EXPECT_EQ(row.rfind("tiny,24,16,16,", 0), 0u) << row;
+    // The convergence table: 4 and 8 spp snapshots and the final 16, errors falling overall.
+    const std::string conv = testing::read_text(out / "tiny_convergence.csv");
+    EXPECT_NE(conv.find("\n4,"), std::string::npos) << conv;
+    EXPECT_NE(conv.find("\n16,"), std::string::npos) << conv;
+    const std::string metrics = testing::read_text(dir / "results" / "renders" / "metrics.csv");
+    EXPECT_NE(metrics.find("tiny.G.radiance_mean"), std::string::npos) << metrics;
+    EXPECT_NE(metrics.find("tiny.B.subsurface_mean"), std::string::npos) << metrics;
+    EXPECT_NE(
+        testing::read_text(dir / "results" / "renders" / "report.html").find("render/tiny.png"),
+        std::string::npos);
+
+    // Again: nothing rendered, the same image.
+    const auto second = run_ssslab({"run", "r.toml"}, dir.path());
+    ASSERT_EQ(second.exit_code, 0) << second.err;
+    EXPECT_NE(second.out.find("0 computed, 2 reused"), std::string::npos) << second.out;
+    const LayeredImage again = read_exr((out / "tiny.exr").string());
+    const auto a = im.layer("radiance").pixels(), b = again.layer("radiance").pixels();
+    EXPECT_TRUE(std::equal(a.begin(), a.end(), b.begin(), b.end()));
+    // The baseline check of an unchanged rerun passes.
+    const auto upd = run_ssslab({"check", "r.toml", "--update"}, dir.path());
+    ASSERT_EQ(upd.exit_code, 0) << upd.err << upd.out;
+    const auto chk = run_ssslab({"check", "r.toml"}, dir.path());
+    EXPECT_EQ(chk.exit_code, 0) << chk.err << chk.out;
+
+    // A change to the scene file renders both again; a change of the reference factor only the
+    // reference.
+    dir.write("scenes/tiny.toml", replace(kRenderScene, "roughness = 0.3", "roughness = 0.31"));
+    const auto third = run_ssslab({"run", "r.toml"}, dir.path());
+    EXPECT_NE(third.out.find("2 computed, 0 reused"), std::string::npos) << third.out;
+    dir.write("r.toml", replace(kRenderExp, "reference_factor = 2", "reference_factor = 3"));
+    const auto fourth = run_ssslab({"run", "r.toml"}, dir.path());
+    EXPECT_NE(fourth.out.find("1 computed, 1 reused"), std::string::npos) << fourth.out;
+}
+
+TEST(RunnerRender, BadRenderConfigsAreRefusedWithTheirLocation) {
+    testing::TempDir dir;
+    dir.write("scenes/tiny.toml", kRenderScene);
+    dir.write("scenes/bad.toml", replace(kRenderScene, "radius = 8", "radius = -8"));
+    const std::vector<BadConfig> cases = {
+        {"no budget", replace(kRenderExp, "spp = 16\n", ""), {"e.toml:", "spp", "give a budget"}},
+        {"missing scene",
+         replace(kRenderExp, "scenes/tiny.toml", "scenes/none.toml"),
+         {"e.toml:6:", "no scene file"}},
+        {"bad scene",
+         replace(kRenderExp, "scenes/tiny.toml", "scenes/bad.toml"),
+         {"bad.toml:", "radius"}},
+        {"width without height", replace(kRenderExp, "height = 16\n", ""), {"e.toml:", "width"}},
+        {"materials nobody reads",
+         std::string(kRenderExp) + "[materials]\npresets = [\"Skin1\"]\n",
+         {"e.toml:", "no output of this experiment reads materials"}},
+        {"both budgets",
+         replace(kRenderExp, "spp = 16", "spp = 16\nseconds = 2"),
+         {"e.toml:", "not both"}},
+    };
+    for (const auto& c : cases) {
+        dir.write("e.toml", c.content);
+        const auto r = run_ssslab({"run", "e.toml"}, dir.path());
+        EXPECT_EQ(r.exit_code, 2) << c.name << "\n" << r.err;
+        for (const auto& piece : c.expect)
+            EXPECT_NE(r.err.find(piece), std::string::npos) << c.name << ": " << piece << "\n"
+                                                            << r.err;
+        EXPECT_FALSE(fs::exists(dir / "results" / "renders")) << c.name;
+    }
 }
 
 }  // namespace

@@ -384,6 +384,29 @@ TEST(Scene, CommandValidatesAndExportsOrWritesNothing) {
     EXPECT_TRUE(fs::exists(dir / "out" / "test" / "shapes_1_.obj"));
     const TriangleMesh torus = load_obj((dir / "out" / "test" / "shapes_1_.obj").string());
     EXPECT_EQ(torus.triangles.size(), 48u * 24u * 2u);
+    // scene.json for other renderers: coefficients per world unit, the lights in scene units.
+    const std::string json = testing::read_text(dir / "out" / "test" / "scene.json");
+    auto numbers_after = [&](const std::string& from, const std::string& key) {
+        std::vector<double> v;
+        size_t at = json.find(key, json.find(from));
+        if (at == std::string::npos) return v;
+        const char* p = json.c_str() + json.find('[', at) + 1;
+        for (int i = 0; i < 3; ++i) {
+            char* end = nullptr;
+            v.push_back(std::strtod(p, &end));
+            p = end + 1;
+        }
+        return v;
+    };
+    const auto ss = numbers_after("\"milk\"", "sigma_s_per_unit");
+    ASSERT_EQ(ss.size(), 3u) << json;
+    EXPECT_NEAR(ss[0], 2.55, 1e-12);  // per mm, and a world unit is 1 mm
+    EXPECT_NEAR(ss[2], 3.77, 1e-12);
+    const auto sun = numbers_after("directional", "irradiance");
+    ASSERT_EQ(sun.size(), 3u) << json;
+    EXPECT_DOUBLE_EQ(sun[1], 1.0);
+    EXPECT_NE(json.find("\"obj\": \"shapes_1_.obj\""), std::string::npos) << json;
+    EXPECT_NE(json.find("\"ggx_alpha\": 0.10000000000000001"), std::string::npos) << json;
     // A bad second scene: nothing is written.
     testing::TempDir dir2;
     dir2.write("a.toml", kScene);

@@ -1,6 +1,7 @@
 #include "experiments/runner/engines.h"
 
 #include "approx/diffusion.h"
+#include "core/stats.h"
 #include "experiments/runner/report.h"
 #include "volpath/pencil.h"
 
@@ -18,38 +19,6 @@ std::string fmt(double v) {
     char buf[40];
     std::snprintf(buf, sizeof buf, "%.10g", v);
     return buf;
-}
-
-// Regularised upper incomplete gamma Q(a, x) (series below a + 1, Lentz's continued fraction
-// above; Numerical Recipes §6.2), for chi-square p-values: p = Q(dof / 2, chi2 / 2).
-double gamma_q(double a, double x) {
-    if (x <= 0) return 1.0;
-    const double lg = std::lgamma(a);
-    if (x < a + 1) {
-        double sum = 1.0 / a, del = sum, ap = a;
-        for (int n = 0; n < 100000; ++n) {
-            ap += 1;
-            del *= x / ap;
-            sum += del;
-            if (std::fabs(del) < std::fabs(sum) * 1e-15) break;
-        }
-        return std::max(0.0, 1.0 - sum * std::exp(-x + a * std::log(x) - lg));
-    }
-    const double tiny = 1e-300;
-    double b = x + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
-    for (int i = 1; i < 100000; ++i) {
-        const double an = -i * (i - a);
-        b += 2;
-        d = an * d + b;
-        if (std::fabs(d) < tiny) d = tiny;
-        c = b + an / c;
-        if (std::fabs(c) < tiny) c = tiny;
-        d = 1 / d;
-        const double del = d * c;
-        h *= del;
-        if (std::fabs(del - 1) < 1e-15) break;
-    }
-    return std::exp(-x + a * std::log(x) - lg) * h;
 }
 
 // ---- display bins: the engines' bins merged into at most ~160 annuli --------------------------
@@ -231,7 +200,7 @@ CrossRow crossval(const RadialProfile& a, const RadialProfile& b, int c, double 
         out.z.push_back({(static_cast<double>(i) + 0.5) * a.dr_cm * 10, z});
         ++out.bins;
     }
-    out.p = out.bins > 0 ? gamma_q(0.5 * out.bins, 0.5 * out.chi2) : 1.0;
+    out.p = out.bins > 0 ? chi_square_p(out.chi2, out.bins) : 1.0;
     out.rd_z = (a.rd_total[c] - b.rd_total[c]) / std::hypot(a.rd_total_se[c], b.rd_total_se[c]);
     return out;
 }

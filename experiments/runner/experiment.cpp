@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
 #include <set>
 
 namespace ssslab::runner {
@@ -30,7 +31,7 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
     e.description = ex.string("description", "");
     e.seed = static_cast<std::uint64_t>(ex.integer("seed", 1, Range::nonnegative()));
 
-    ConfigTable mats = root.require_table("materials");
+    ConfigTable mats = root.table_or_empty("materials");
     std::set<std::string> labels;
     if (mats.has("presets")) {
         auto presets = mats.string_list("presets");
@@ -57,8 +58,6 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
             c.fail("name", "material \"" + label + "\" is defined twice");
         e.materials.push_back({label, m});
     }
-    if (e.materials.empty())
-        mats.fail("presets", "no materials: give presets = [...] or [[materials.custom]] tables");
 
     ConfigTable mc = root.table_or_empty("mcml");
     e.mcml.budget = mcml::read_budget(mc);
@@ -163,13 +162,22 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
                                    "\" is defined twice");
         }
     }
-    if (!e.profiles.enabled && !e.profile_plots.enabled && !e.convergence.enabled &&
-        e.kernel_studies.empty() && !e.crossval.enabled && !e.pencil.enabled &&
-        !e.efficiency.enabled)
+    if (auto t = outs.table("render"))
+        e.render = read_render_study(*t, std::filesystem::path(e.source).parent_path().string());
+    const bool material_outputs = e.profiles.enabled || e.profile_plots.enabled ||
+                                  e.convergence.enabled || !e.kernel_studies.empty() ||
+                                  e.crossval.enabled || e.pencil.enabled || e.efficiency.enabled;
+    if (!material_outputs && !e.render.enabled)
         outs.fail("profiles",
                   "no outputs: give at least one of [outputs.profiles], "
                   "[outputs.profile_plots], [outputs.convergence], [[outputs.kernels]], "
-                  "[outputs.crossval], [outputs.pencil], [outputs.efficiency]");
+                  "[outputs.crossval], [outputs.pencil], [outputs.efficiency], [outputs.render]");
+    if (material_outputs && e.materials.empty())
+        mats.fail("presets", "no materials: give presets = [...] or [[materials.custom]] tables");
+    if (!material_outputs && !e.materials.empty())
+        mats.fail("presets",
+                  "no output of this experiment reads materials ([outputs.render] takes them from "
+                  "its scenes): remove [materials]");
     root.finish();
     return e;
 }

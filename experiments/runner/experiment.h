@@ -23,6 +23,8 @@
 //                            (materials = [...]; needs [volpath])
 //   [[outputs.kernels]]      kernel studies: separable models scored in kernel and image space
 //                            (experiments/runner/kernel_study.h)
+//   [outputs.render]         ground-truth images of scene files with rays/s and time to 1 %
+//                            (experiments/runner/render_study.h); needs no [materials]
 // Every error names file:line:column and the key.
 #pragma once
 
@@ -31,6 +33,7 @@
 #include "core/material.h"
 #include "core/profile.h"
 #include "experiments/runner/kernel_study.h"
+#include "experiments/runner/render_study.h"
 #include "mcml/engine.h"
 #include "mcml/profile.h"
 
@@ -99,6 +102,7 @@ struct Experiment {
     } efficiency;
 
     std::vector<KernelStudySpec> kernel_studies;  ///< [[outputs.kernels]]
+    RenderStudySpec render;                       ///< [outputs.render]
 
     std::shared_ptr<ConfigDocument> doc;  ///< parsed config; holds the resolved configuration
 };

@@ -28,6 +28,7 @@ struct ReportContent {
     PlotResult plots;
     std::vector<StudyOutput> studies;
     const std::map<std::string, std::string>* engine_files = nullptr;  ///< engines.h tables
+    std::string render_html;  ///< [outputs.render] (render_study.h)
 };
 
 std::string render_report(const ExperimentRun& r, const ReportContent& c);

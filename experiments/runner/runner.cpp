@@ -424,6 +424,8 @@ void print_plan(const ExperimentRun& r, std::ostream& os, bool verbose) {
     if (r.exp.profiles.enabled) os << " profiles";
     if (r.exp.profile_plots.enabled) os << " profile_plots";
     if (r.exp.convergence.enabled) os << " convergence";
+    if (r.exp.render.enabled)
+        os << " render (" << r.exp.render.scenes.size() << " scenes, rendered or reused when run)";
     os << " report\n";
 }
 
@@ -661,6 +663,25 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
             write_file_atomic(stage / "kernels" / study.name / name, content);
         append_study_metrics(so.files, study.name, r.metrics);
         report.studies.push_back(std::move(so));
+    }
+    if (r.exp.render.enabled) {
+        RenderStudyContext ctx;
+        ctx.seed = r.exp.seed;
+        ctx.quick = r.quick;
+        ctx.threads = o.threads;
+        ctx.quiet = o.quiet;
+        ctx.checkpoint_seconds = o.checkpoint_seconds;
+        ctx.cancel = o.cancel;
+        fs::create_directories(stage / "render");
+        RenderStudyResult rr = run_render_study(r.exp.render, ctx, cache, stage, r.metrics);
+        if (rr.interrupted) {
+            fs::remove_all(stage, ec);
+            r.interrupted = true;
+            return false;
+        }
+        r.computed += rr.computed;
+        r.reused += rr.reused;
+        report.render_html = std::move(rr.html);
     }
     write_file_atomic(stage / "metrics.csv", metrics_csv(r.metrics));
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

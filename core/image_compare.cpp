@@ -1,0 +1,148 @@
+#include "core/image_compare.h"
+
+#include "core/stats.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace ssslab {
+
+namespace {
+
+const ImageLayer& rgb_layer(const LayeredImage& im, const std::string& layer,
+                            const std::string& source) {
+    if (!im.has_layer(layer)) throw std::invalid_argument(source + ": no layer \"" + layer + "\"");
+    const ImageLayer& l = im.layer(layer);
+    if (l.channels() != 3)
+        throw std::invalid_argument(source + ": layer \"" + layer + "\" is not RGB");
+    return l;
+}
+
+}  // namespace
+
+ImageEstimate estimate_with_stderr(const LayeredImage& image, const std::string& layer,
+                                   const std::string& source) {
+    const ImageLayer& m = rgb_layer(image, layer, source);
+    const ImageLayer& s = rgb_layer(image, layer + ".stderr", source);
+    ImageEstimate e;
+    e.width = image.width();
+    e.height = image.height();
+    e.source = source;
+    e.mean.assign(m.pixels().begin(), m.pixels().end());
+    e.var.resize(e.mean.size());
+    for (size_t i = 0; i < e.var.size(); ++i) {
+        const double v = s.pixels()[i];
+        e.var[i] = v * v;
+    }
+    return e;
+}
+
+ImageEstimate estimate_from_runs(const std::vector<LayeredImage>& runs, const std::string& layer,
+                                 const std::string& source) {
+    if (runs.size() < 2)
+        throw std::invalid_argument(source + ": need at least two independent runs for a variance");
+    ImageEstimate e;
+    e.width = runs[0].width();
+    e.height = runs[0].height();
+    e.source = source;
+    const size_t n = static_cast<size_t>(e.width) * static_cast<size_t>(e.height) * 3;
+    std::vector<double> sum(n, 0.0), sum2(n, 0.0);
+    for (const LayeredImage& r : runs) {
+        if (r.width() != e.width || r.height() != e.height)
+            throw std::invalid_argument(source + ": the runs differ in size");
+        const ImageLayer& l = rgb_layer(r, layer, source);
+        for (size_t i = 0; i < n; ++i) {
+            const double v = l.pixels()[i];
+            sum[i] += v;
+            sum2[i] += v * v;
+        }
+    }
+    const double K = static_cast<double>(runs.size());
+    e.mean.resize(n);
+    e.var.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        const double mu = sum[i] / K;
+        e.mean[i] = mu;
+        e.var[i] = std::max(0.0, (sum2[i] - K * mu * mu) / (K - 1)) / K;
+    }
+    return e;
+}
+
+double ImageComparison::p_min_corrected() const {
+    return std::min(1.0, 3 * std::min({p[0], p[1], p[2]}));
+}
+
+ImageComparison compare_images(const ImageEstimate& a, const ImageEstimate& b, int block) {
+    if (a.width != b.width || a.height != b.height)
+        throw std::invalid_argument("images differ in size: " + a.source + " is " +
+                                    std::to_string(a.width) + "x" + std::to_string(a.height) +
+                                    ", " + b.source + " is " + std::to_string(b.width) + "x" +
+                                    std::to_string(b.height));
+    if (block < 1) throw std::invalid_argument("block size must be >= 1");
+    ImageComparison r;
+    r.block = block;
+    const auto idx = [&](int x, int y, int c) {
+        return (static_cast<size_t>(y) * static_cast<size_t>(a.width) + static_cast<size_t>(x)) *
+                   3 +
+               static_cast<size_t>(c);
+    };
+    const double npix = static_cast<double>(a.width) * a.height;
+    for (int c = 0; c < 3; ++c) {
+        double sa = 0, va = 0, sb = 0, vb = 0;
+        for (int y = 0; y < a.height; ++y)
+            for (int x = 0; x < a.width; ++x) {
+                const size_t i = idx(x, y, c);
+                sa += a.mean[i];
+                va += a.var[i];
+                sb += b.mean[i];
+                vb += b.var[i];
+            }
+        const size_t k = static_cast<size_t>(c);
+        r.mean_a[k] = sa / npix;
+        r.se_a[k] = std::sqrt(va) / npix;
+        r.mean_b[k] = sb / npix;
+        r.se_b[k] = std::sqrt(vb) / npix;
+        const double se = std::hypot(r.se_a[k], r.se_b[k]);
+        r.z_mean[k] = se > 0 ? (r.mean_a[k] - r.mean_b[k]) / se : 0.0;
+    }
+    double d2 = 0, n2 = 0, b2 = 0;
+    for (int y0 = 0; y0 < a.height; y0 += block)
+        for (int x0 = 0; x0 < a.width; x0 += block)
+            for (int c = 0; c < 3; ++c) {
+                double sa = 0, sb = 0, v = 0, n = 0;
+                for (int y = y0; y < std::min(a.height, y0 + block); ++y)
+                    for (int x = x0; x < std::min(a.width, x0 + block); ++x) {
+                        const size_t i = idx(x, y, c);
+                        sa += a.mean[i];
+                        sb += b.mean[i];
+                        v += a.var[i] + b.var[i];
+                        n += 1;
+                    }
+                BlockDifference d;
+                d.x0 = x0;
+                d.y0 = y0;
+                d.channel = c;
+                d.a = sa / n;
+                d.b = sb / n;
+                d.se = std::sqrt(v) / n;
+                if (!(d.se > 0)) {
+                    ++r.skipped;
+                    continue;
+                }
+                d.z = (d.a - d.b) / d.se;
+                r.chi2[static_cast<size_t>(c)] += d.z * d.z;
+                ++r.dof[static_cast<size_t>(c)];
+                r.max_abs_z = std::max(r.max_abs_z, std::fabs(d.z));
+                d2 += (d.a - d.b) * (d.a - d.b);
+                n2 += d.se * d.se;
+                b2 += d.b * d.b;
+                r.blocks.push_back(d);
+            }
+    for (size_t c = 0; c < 3; ++c) r.p[c] = chi_square_p(r.chi2[c], r.dof[c]);
+    r.rel_rms_diff = b2 > 0 ? std::sqrt(d2 / b2) : 0.0;
+    r.rel_rms_noise = b2 > 0 ? std::sqrt(n2 / b2) : 0.0;
+    return r;
+}
+
+}  // namespace ssslab

@@ -1,0 +1,72 @@
+// Statistical comparison of two Monte Carlo images of the same scene (e.g. ssslab's path tracer
+// against Blender's Cycles): is their difference at the noise level? In the manner of Mitsuba's
+// render tests (reference mean and standard error, per-pixel z), but on blocks of pixels so that
+// each test statistic is close to Gaussian even where single pixels are not.
+//
+// An image estimate is a per-pixel RGB mean with the variance of that mean, from either
+//  - one image with a standard-error layer (ssslab's "<layer>" and "<layer>.stderr", from the
+//    batch statistics of core/stats.h), or
+//  - K >= 2 independent runs (different seeds) of a renderer that reports no variance: the
+//    per-pixel mean of the runs and its variance s^2 / K (K - 1 degrees of freedom per pixel).
+// Pixels are independent samples in both (each pixel has its own random numbers), so the
+// variance of a mean over n pixels is the sum of their variances over n^2; a block's variance
+// estimate thus has about n (K - 1) degrees of freedom and its z is close to standard normal.
+//
+// Per channel: the whole-image mean of both and their z; per block the difference of block means
+// over its standard error, summed over the blocks into a chi-square with its p-value. The three
+// channels are tested apart: their noise is strongly correlated (one path carries RGB, grey
+// surfaces scatter all three alike), so a sum over channels would not be chi-square distributed.
+// Blocks whose SE is zero on both sides (an unlit black region) are left out and counted.
+#pragma once
+
+#include "core/film_image.h"
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace ssslab {
+
+struct ImageEstimate {
+    int width = 0, height = 0;
+    std::vector<double> mean;  ///< (y * width + x) * 3 + c
+    std::vector<double> var;   ///< variance of `mean`, same layout
+    std::string source;        ///< for messages: file names
+};
+
+/// `layer` and `<layer>.stderr` of one image (RGB). Throws std::invalid_argument naming the
+/// layer if either is missing or not RGB.
+ImageEstimate estimate_with_stderr(const LayeredImage& image, const std::string& layer,
+                                   const std::string& source);
+/// The mean and variance of the mean of K >= 2 independent runs, from their `layer` (RGB;
+/// "" is the default layer, as Blender writes it). Throws std::invalid_argument on fewer than two
+/// runs, missing layers or different sizes.
+ImageEstimate estimate_from_runs(const std::vector<LayeredImage>& runs, const std::string& layer,
+                                 const std::string& source);
+
+struct BlockDifference {
+    int x0 = 0, y0 = 0, channel = 0;
+    double a = 0, b = 0, se = 0, z = 0;  ///< block means, SE of a - b, z = (a - b) / se
+};
+
+struct ImageComparison {
+    int block = 16;
+    std::array<double, 3> mean_a{}, se_a{}, mean_b{}, se_b{}, z_mean{};
+    std::vector<BlockDifference> blocks;
+    std::array<double, 3> chi2{};  ///< per channel, over its blocks
+    std::array<int, 3> dof{};      ///< blocks that entered, per channel
+    std::array<double, 3> p{1, 1, 1};
+    double max_abs_z = 0;
+    int skipped = 0;  ///< block-channels with zero SE on both sides
+    /// The smallest per-channel p-value times 3 (Bonferroni), capped at 1.
+    double p_min_corrected() const;
+    /// Relative RMS difference of block means, and what noise alone would give:
+    /// sqrt(sum (a - b)^2 / sum b^2) and sqrt(sum se^2 / sum b^2).
+    double rel_rms_diff = 0, rel_rms_noise = 0;
+};
+
+/// Compare two estimates of the same size (std::invalid_argument otherwise) on square blocks of
+/// `block` pixels (partial blocks at the right and bottom edges included).
+ImageComparison compare_images(const ImageEstimate& a, const ImageEstimate& b, int block);
+
+}  // namespace ssslab

@@ -1,0 +1,191 @@
+// core/image_compare.h and `ssslab compare`: two Monte Carlo images of one scene compared by
+// image means and per-block z-scores. Synthetic images with known noise: independent estimates
+// of the same image must pass, a bias of a fraction of the noise per block must be caught, and
+// the statistics must equal hand-computed values on tiny images.
+#include "core/film_image.h"
+#include "core/image_compare.h"
+#include "core/stats.h"
+#include "testing.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace ssslab {
+namespace {
+
+// A smooth "true" image with a dark corner (zero radiance, zero noise there).
+double truth(int x, int y, int c) {
+    if (x < 8 && y < 8) return 0.0;
+    return 0.2 + 0.1 * c + 0.3 * std::sin(0.1 * x) * std::cos(0.07 * y) + 0.3;
+}
+
+// One renderer's output: per pixel the mean of `spp` samples of truth x (1 + noise); noise
+// standard deviation sigma per sample, so the pixel's SE is truth x sigma / sqrt(spp).
+LayeredImage noisy(int w, int h, int spp, double sigma, std::uint32_t seed, double bias = 0,
+                   bool with_stderr = true) {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> n01;
+    LayeredImage im(w, h);
+    ImageLayer& L = im.add_layer(with_stderr ? "radiance" : "", 3);
+    ImageLayer* E = with_stderr ? &im.add_layer("radiance.stderr", 3) : nullptr;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const double t = truth(x, y, c) * (1 + bias);
+                double s = 0, s2 = 0;
+                for (int k = 0; k < spp; ++k) {
+                    const double v = t * (1 + sigma * n01(rng));
+                    s += v;
+                    s2 += v * v;
+                }
+                const double m = s / spp;
+                L.at(x, y, c) = static_cast<float>(m);
+                if (E)
+                    E->at(x, y, c) = static_cast<float>(
+                        std::sqrt(std::max(0.0, (s2 - spp * m * m) / (spp - 1)) / spp));
+            }
+    return im;
+}
+
+std::vector<LayeredImage> runs(int k, int w, int h, int spp, double sigma, std::uint32_t seed,
+                               double bias = 0) {
+    std::vector<LayeredImage> v;
+    for (int i = 0; i < k; ++i)
+        v.push_back(noisy(w, h, spp, sigma, seed + static_cast<std::uint32_t>(i), bias, false));
+    return v;
+}
+
+TEST(ChiSquareP, KnownQuantiles) {
+    // Upper 5 % points of the chi-square distribution (Abramowitz & Stegun Table 26.8).
+    EXPECT_NEAR(chi_square_p(3.841, 1), 0.05, 2e-4);
+    EXPECT_NEAR(chi_square_p(18.307, 10), 0.05, 2e-4);
+    EXPECT_NEAR(chi_square_p(67.505, 50), 0.05, 2e-4);
+    EXPECT_NEAR(chi_square_p(2, 2), std::exp(-1.0), 1e-12);  // dof 2: p = exp(-x / 2)
+    EXPECT_DOUBLE_EQ(chi_square_p(0, 5), 1.0);
+}
+
+TEST(ImageCompare, HandComputedStatisticsOnATinyImage) {
+    // 2 x 1 pixels, one block of 2: means a = (1, 3), b = (2, 2) per channel; variances 1, 3 (a)
+    // and 0 (b): block means 2 and 2 (z 0); second channel shifted.
+    ImageEstimate a, b;
+    a.width = b.width = 2;
+    a.height = b.height = 1;
+    a.mean = {1, 1, 1, 3, 5, 3};
+    a.var = {1, 1, 1, 3, 3, 3};
+    b.mean = {2, 2, 2, 2, 2, 2};
+    b.var = {0, 0, 0, 0, 0, 0};
+    const ImageComparison r = compare_images(a, b, 2);
+    ASSERT_EQ(r.blocks.size(), 3u);
+    EXPECT_DOUBLE_EQ(r.blocks[0].a, 2.0);
+    EXPECT_DOUBLE_EQ(r.blocks[0].se, 1.0);  // sqrt(1 + 3) / 2
+    EXPECT_DOUBLE_EQ(r.blocks[0].z, 0.0);
+    EXPECT_DOUBLE_EQ(r.blocks[1].a, 3.0);
+    EXPECT_DOUBLE_EQ(r.blocks[1].z, 1.0);  // (3 - 2) / 1
+    EXPECT_DOUBLE_EQ(r.chi2[1], 1.0);
+    EXPECT_DOUBLE_EQ(r.mean_a[1], 3.0);
+    EXPECT_DOUBLE_EQ(r.z_mean[1], 1.0);
+    EXPECT_DOUBLE_EQ(r.max_abs_z, 1.0);
+}
+
+TEST(ImageCompare, RunsGiveTheMeanAndTheVarianceOfTheMean) {
+    LayeredImage r1(1, 1), r2(1, 1), r3(1, 1);
+    r1.add_layer("", 3, {1, 2, 3});
+    r2.add_layer("", 3, {2, 2, 3});
+    r3.add_layer("", 3, {3, 2, 6});
+    const ImageEstimate e = estimate_from_runs({r1, r2, r3}, "", "runs");
+    EXPECT_DOUBLE_EQ(e.mean[0], 2.0);
+    EXPECT_DOUBLE_EQ(e.var[0], 1.0 / 3);  // s^2 = 1, / K
+    EXPECT_DOUBLE_EQ(e.var[1], 0.0);
+    EXPECT_DOUBLE_EQ(e.mean[2], 4.0);
+    EXPECT_DOUBLE_EQ(e.var[2], 3.0 / 3);  // s^2 = (1 + 1 + 4) / 2
+}
+
+TEST(ImageCompare, IndependentEstimatesOfOneImageAgree) {
+    // A: one image with a stderr layer (64 spp); B: 8 runs of 16 spp. Several seeds, fixed.
+    for (std::uint32_t seed : {1u, 2u, 3u}) {
+        const LayeredImage A = noisy(64, 48, 64, 0.5, 100 + seed);
+        const auto B = runs(8, 64, 48, 16, 0.5, 200 + 10 * seed);
+        const ImageComparison r = compare_images(estimate_with_stderr(A, "radiance", "A"),
+                                                 estimate_from_runs(B, "", "B"), 16);
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_EQ(r.dof[static_cast<size_t>(c)], 4 * 3);
+            EXPECT_GT(r.p[static_cast<size_t>(c)], 1e-3) << "seed " << seed << " channel " << c;
+            EXPECT_LT(std::fabs(r.z_mean[static_cast<size_t>(c)]), 3.5);
+        }
+        EXPECT_NEAR(r.rel_rms_diff, r.rel_rms_noise, 0.6 * r.rel_rms_noise);
+        // The dark corner's blocks have variance (it is 8 x 8 of a 16 x 16 block): none skipped.
+        EXPECT_EQ(r.skipped, 0);
+    }
+}
+
+TEST(ImageCompare, ABiasOfAFractionOfThePixelNoiseIsCaught) {
+    // 1 % bias; per-pixel relative SE about 6 % (A) and 4 % (B): invisible in one pixel,
+    // clear in 256-pixel blocks and in the image mean.
+    const LayeredImage A = noisy(64, 48, 64, 0.5, 7, 0.01);
+    const auto B = runs(8, 64, 48, 16, 0.5, 17);
+    const ImageComparison r = compare_images(estimate_with_stderr(A, "radiance", "A"),
+                                             estimate_from_runs(B, "", "B"), 16);
+    EXPECT_LT(r.p_min_corrected(), 1e-6);
+    for (int c = 0; c < 3; ++c) EXPECT_GT(r.z_mean[static_cast<size_t>(c)], 5.0);
+}
+
+TEST(ImageCompare, UnlitBlocksAreLeftOutAndCounted) {
+    ImageEstimate a, b;
+    a.width = b.width = 4;
+    a.height = b.height = 2;
+    a.mean.assign(24, 0.0);
+    a.var.assign(24, 0.0);
+    b = a;
+    for (size_t i = 12; i < 24; ++i) a.var[i] = b.var[i] = 0.01, a.mean[i] = b.mean[i] = 1.0;
+    const ImageComparison r = compare_images(a, b, 2);  // blocks: x 0-1 and 2-3 over both rows
+    // Every block holds a lit pixel: nothing skipped. With 1-pixel blocks the 4 black pixels x 3
+    // channels are skipped.
+    EXPECT_EQ(r.skipped, 0);
+    EXPECT_EQ(compare_images(a, b, 1).skipped, 12);
+}
+
+TEST(ImageCompare, MisuseIsRefusedWithTheReason) {
+    const LayeredImage A = noisy(8, 8, 4, 0.5, 1);
+    const LayeredImage small = noisy(4, 8, 4, 0.5, 1);
+    EXPECT_THROW(compare_images(estimate_with_stderr(A, "radiance", "A"),
+                                estimate_with_stderr(small, "radiance", "S"), 4),
+                 std::invalid_argument);
+    LayeredImage no_se(8, 8);
+    no_se.add_layer("radiance", 3);
+    try {
+        estimate_with_stderr(no_se, "radiance", "file.exr");
+        FAIL() << "no stderr layer accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("radiance.stderr"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(estimate_from_runs({A}, "radiance", "one"), std::invalid_argument);
+}
+
+TEST(CompareCommand, PrintsTheVerdictAndWritesTheBlocks) {
+    testing::TempDir dir;
+    write_exr(noisy(32, 32, 64, 0.5, 5), (dir / "a.exr").string());
+    const auto B = runs(4, 32, 32, 16, 0.5, 50);
+    std::vector<std::string> args = {"compare", "--a", "a.exr", "--b"};
+    for (size_t i = 0; i < B.size(); ++i) {
+        write_exr(B[i], (dir / ("b" + std::to_string(i) + ".exr")).string());
+        args.push_back("b" + std::to_string(i) + ".exr");
+    }
+    args.insert(args.end(), {"--block", "8", "--csv", "blocks.csv"});
+    const auto r = testing::run_ssslab(args, dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("chi2"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("3 more runs"), std::string::npos) << r.out;
+    const std::string csv = testing::read_text(dir / "blocks.csv");
+    // 16 blocks of 8 x 8; the first is the black corner (no variance), left out.
+    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 15 * 3);
+    // A single image without a stderr layer cannot give a variance: refused, naming the file.
+    const auto bad =
+        testing::run_ssslab({"compare", "--a", "b0.exr", "--b", "b1.exr", "b2.exr"}, dir.path());
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_NE(bad.err.find("b0.exr"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+}  // namespace ssslab
