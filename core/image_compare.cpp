@@ -126,9 +126,17 @@ ImageComparison compare_images(const ImageEstimate& a, const ImageEstimate& b, i
                 d.a = sa / n;
                 d.b = sb / n;
                 d.se = std::sqrt(v) / n;
-                if (!(d.se > 0)) {
-                    ++r.skipped;
-                    continue;
+                // No noise on either side (an unlit or directly seen constant background; the
+                // standard error of such a block is rounding, ~1e-8 of the value): left out if
+                // the two agree to float precision, a deterministic difference otherwise.
+                const double tol = 1e-6 * std::max(std::fabs(d.a), std::fabs(d.b));
+                if (!(d.se > tol)) {
+                    if (std::fabs(d.a - d.b) <= tol) {
+                        ++r.skipped;
+                        continue;
+                    }
+                    ++r.deterministic_differences;
+                    d.se = tol > 0 ? tol : 1e-300;
                 }
                 d.z = (d.a - d.b) / d.se;
                 r.chi2[static_cast<size_t>(c)] += d.z * d.z;
@@ -139,7 +147,8 @@ ImageComparison compare_images(const ImageEstimate& a, const ImageEstimate& b, i
                 b2 += d.b * d.b;
                 r.blocks.push_back(d);
             }
-    for (size_t c = 0; c < 3; ++c) r.p[c] = chi_square_p(r.chi2[c], r.dof[c]);
+    for (size_t c = 0; c < 3; ++c)
+        r.p[c] = r.deterministic_differences > 0 ? 0.0 : chi_square_p(r.chi2[c], r.dof[c]);
     r.rel_rms_diff = b2 > 0 ? std::sqrt(d2 / b2) : 0.0;
     r.rel_rms_noise = b2 > 0 ? std::sqrt(n2 / b2) : 0.0;
     return r;

@@ -16,7 +16,8 @@
 // over its standard error, summed over the blocks into a chi-square with its p-value. The three
 // channels are tested apart: their noise is strongly correlated (one path carries RGB, grey
 // surfaces scatter all three alike), so a sum over channels would not be chi-square distributed.
-// Blocks whose SE is zero on both sides (an unlit black region) are left out and counted.
+// Blocks without noise on either side (unlit, or a constant background seen directly; their SE
+// is rounding) are left out and counted when they agree, and make p = 0 when they differ.
 #pragma once
 
 #include "core/film_image.h"
@@ -57,7 +58,10 @@ struct ImageComparison {
     std::array<int, 3> dof{};      ///< blocks that entered, per channel
     std::array<double, 3> p{1, 1, 1};
     double max_abs_z = 0;
-    int skipped = 0;  ///< block-channels with zero SE on both sides
+    int skipped = 0;  ///< block-channels without noise on either side that agree
+    /// Block-channels without noise that differ (beyond float precision): the images are not
+    /// the same, whatever the noise elsewhere (p is then 0).
+    int deterministic_differences = 0;
     /// The smallest per-channel p-value times 3 (Bonferroni), capped at 1.
     double p_min_corrected() const;
     /// Relative RMS difference of block means, and what noise alone would give:

@@ -275,7 +275,11 @@ bool Scene::delta_light_through_smooth_boundary() const {
     bool smooth_medium = false;
     for (const SceneShape& sh : shapes) {
         const SceneMaterial& m = materials[static_cast<size_t>(sh.material)];
-        if (m.kind == SceneMaterial::Kind::kMedium && m.roughness == 0 && m.medium.eta != 1.0)
+        // Behind a smooth boundary (roughness 0) light is reached only by chance, unless the
+        // boundary is index-matched and the medium homogeneous: the path tracer's shadow rays
+        // then cross it (volpath/render.h).
+        if (m.kind == SceneMaterial::Kind::kMedium && m.roughness == 0 &&
+            (m.medium.eta != 1.0 || !m.density_file.empty()))
             smooth_medium = true;
     }
     if (!smooth_medium) return false;

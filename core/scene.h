@@ -98,7 +98,8 @@ struct Scene {
     std::size_t triangles() const;
     /// Whether any shape is bound to a medium (the path tracer then traces subsurface light).
     bool has_media() const;
-    /// Whether a delta light (directional with radius 0, point) lights a smooth medium boundary:
+    /// Whether a delta light (directional with radius 0, point) lights a smooth medium boundary
+    /// (other than an index-matched one of a homogeneous medium, which shadow rays cross):
     /// a unidirectional path tracer cannot connect it through the boundary (it renders the
     /// subsurface light of that shape black), so the path tracer refuses such scenes.
     bool delta_light_through_smooth_boundary() const;

@@ -144,6 +144,15 @@ TEST(ImageCompare, UnlitBlocksAreLeftOutAndCounted) {
     // channels are skipped.
     EXPECT_EQ(r.skipped, 0);
     EXPECT_EQ(compare_images(a, b, 1).skipped, 12);
+    // A constant background with a rounding-level SE (1e-9) is no noise: left out, not a
+    // z = 0 that would deflate the chi-square; where such blocks differ, p = 0.
+    a.var[0] = b.var[0] = 1e-18;
+    a.mean[0] = b.mean[0] = 0.05;
+    EXPECT_EQ(compare_images(a, b, 1).skipped, 12);
+    b.mean[0] = 0.06;
+    const ImageComparison d = compare_images(a, b, 1);
+    EXPECT_EQ(d.deterministic_differences, 1);
+    EXPECT_EQ(d.p[0], 0.0);
 }
 
 TEST(ImageCompare, MisuseIsRefusedWithTheReason) {

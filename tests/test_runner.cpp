@@ -612,7 +612,7 @@ name = "renders"
 seed = 3
 [outputs.render]
 scenes = ["scenes/tiny.toml"]
-spp = 16
+spp = 24
 width = 24
 height = 16
 reference_factor = 2
@@ -639,11 +639,11 @@ TEST(RunnerRender, ScenesAreRenderedCachedAndReportedWithTheirSpeed) {
     std::getline(is, header);
     std::getline(is, row);
     EXPECT_EQ(header.rfind("scene,width,height,spp,seconds,threads,rays,mrays_per_s", 0), 0u);
-    EXPECT_EQ(row.rfind("tiny,24,16,16,", 0), 0u) << row;
-    // The convergence table: 4 and 8 spp snapshots and the final 16, errors falling overall.
+    EXPECT_EQ(row.rfind("tiny,24,16,24,", 0), 0u) << row;
+    // The convergence table: the snapshot after 4 batches (of 3 spp) and the final 24 spp.
     const std::string conv = testing::read_text(out / "tiny_convergence.csv");
-    EXPECT_NE(conv.find("\n4,"), std::string::npos) << conv;
-    EXPECT_NE(conv.find("\n16,"), std::string::npos) << conv;
+    EXPECT_NE(conv.find("\n12,"), std::string::npos) << conv;
+    EXPECT_NE(conv.find("\n24,"), std::string::npos) << conv;
     const std::string metrics = testing::read_text(dir / "results" / "renders" / "metrics.csv");
     EXPECT_NE(metrics.find("tiny.G.radiance_mean"), std::string::npos) << metrics;
     EXPECT_NE(metrics.find("tiny.B.subsurface_mean"), std::string::npos) << metrics;
@@ -679,7 +679,7 @@ TEST(RunnerRender, BadRenderConfigsAreRefusedWithTheirLocation) {
     dir.write("scenes/tiny.toml", kRenderScene);
     dir.write("scenes/bad.toml", replace(kRenderScene, "radius = 8", "radius = -8"));
     const std::vector<BadConfig> cases = {
-        {"no budget", replace(kRenderExp, "spp = 16\n", ""), {"e.toml:", "spp", "give a budget"}},
+        {"no budget", replace(kRenderExp, "spp = 24\n", ""), {"e.toml:", "spp", "give a budget"}},
         {"missing scene",
          replace(kRenderExp, "scenes/tiny.toml", "scenes/none.toml"),
          {"e.toml:6:", "no scene file"}},
@@ -691,7 +691,7 @@ TEST(RunnerRender, BadRenderConfigsAreRefusedWithTheirLocation) {
          std::string(kRenderExp) + "[materials]\npresets = [\"Skin1\"]\n",
          {"e.toml:", "no output of this experiment reads materials"}},
         {"both budgets",
-         replace(kRenderExp, "spp = 16", "spp = 16\nseconds = 2"),
+         replace(kRenderExp, "spp = 24", "spp = 24\nseconds = 2"),
          {"e.toml:", "not both"}},
     };
     for (const auto& c : cases) {

@@ -9,16 +9,21 @@
 // Next-event estimation at every diffuse vertex and at every rough boundary vertex (from
 // outside: the reflection lobe; from inside: the transmission lobe, which is what lets delta
 // lights reach a medium behind a rough boundary), combined with BSDF sampling by the power
-// heuristic. A smooth boundary cannot be connected (a delta BSDF): behind it only light that
-// BSDF sampling finds arrives, which is why the built-in scenes use rough boundaries or area
-// lights, and scene files whose delta lights shine on smooth media are refused
+// heuristic. Index-matched boundaries (eta = 1) of homogeneous media are no vertices: shadow
+// rays cross them with the medium's transmittance, and inside such a medium NEE is done at
+// every scattering vertex (MIS with phase sampling when g is the same in all channels). A smooth
+// boundary cannot be connected (a delta BSDF): behind it only light that BSDF sampling finds
+// arrives, which is why the built-in scenes use rough boundaries or area lights, and scene files
+// whose delta lights shine on smooth media are refused
 // (Scene::delta_light_through_smooth_boundary).
 //
 // Film: per pixel the radiance, its subsurface part (light that entered a medium), its
 // surface-specular part (first-surface reflection off a medium's boundary), their standard
-// errors from the batch statistics, and the first hit's depth and normal. One batch is one
-// sample per pixel of the whole image, on stream (seed, kRender, batch): the image is
-// bit-identical for any thread count, and a run resumes from its checkpoint.
+// errors from the batch statistics, and the first hit's depth and normal. One batch is three
+// samples per pixel of the whole image, one per hero channel (the hero choice stratified, so
+// that the batches are i.i.d. and their spread is the estimator's error), on stream (seed,
+// kRender, batch): the image is bit-identical for any thread count, and a run resumes from its
+// checkpoint. Sample budgets are rounded up to a multiple of three.
 #pragma once
 
 #include "core/batch_runner.h"
@@ -44,6 +49,9 @@ struct RenderOptions {
     int roulette_depth = 5;
     /// Long-path roulette inside media [Bitterli13 §3.2], as in the pencil engine.
     std::int64_t long_path_events = 100000;
+    /// NEE inside index-matched homogeneous media and shadow rays through their boundaries.
+    /// Off: such boundaries are crossed by the path alone, as before (tests compare the two).
+    bool index_matched_nee = true;
     std::string checkpoint_path;  ///< empty: none
     double checkpoint_seconds = 30.0;
     const std::atomic<bool>* cancel = nullptr;

@@ -64,6 +64,9 @@ int run_compare(const CompareArgs& a) {
         "max |z| of a block %.2f (%d block-channels without variance left out); smallest "
         "p x 3 = %.3g\nrelative RMS difference of block means %.4g (noise alone: %.4g)\n",
         r.max_abs_z, r.skipped, r.p_min_corrected(), r.rel_rms_diff, r.rel_rms_noise);
+    if (r.deterministic_differences > 0)
+        std::printf("%d block-channels differ where neither image has noise\n",
+                    r.deterministic_differences);
     if (!a.csv.empty()) {
         std::ostringstream os;
         os << "x0,y0,channel,mean_a,mean_b,se,z\n";
