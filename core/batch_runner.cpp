@@ -3,6 +3,7 @@
 #include "core/atomic_file.h"
 #include "core/binary_io.h"
 #include "core/error.h"
+#include "core/hash.h"
 
 #include <tbb/concurrent_queue.h>
 #include <tbb/parallel_pipeline.h>
@@ -124,6 +125,15 @@ const char* to_string(BatchStop s) {
     return "?";
 }
 
+InputError checkpoint_refusal(const std::string& path, const std::string& before,
+                              const std::string& now) {
+    std::string what = key_difference(before, now);
+    if (what.empty()) what = "its tally has another size";
+    return InputError({path, 0, 0}, "",
+                      "this checkpoint is of other input, so the run cannot resume from it (" +
+                          what + "); remove the file or run again with --fresh to start afresh");
+}
+
 BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simulate) {
     const SampleBudget& b = opt.budget;
     if (!b.any()) throw std::invalid_argument("run_batches: the budget has no limit");
@@ -143,13 +153,11 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
 
     BatchAccumulator acc(opt.tally_size);
     double resumed_seconds = 0.0;
-    if (!opt.checkpoint_path.empty()) {
+    if (!opt.checkpoint_path.empty() && !opt.fresh) {
         if (auto ck = load_checkpoint(opt.checkpoint_path)) {
             if (ck->fingerprint != opt.fingerprint || ck->sum.size() != opt.tally_size ||
                 ck->q.size() != opt.tally_size)
-                throw InputError({opt.checkpoint_path, 0, 0}, "",
-                                 "checkpoint belongs to a different run (input, seed or batch "
-                                 "size differ); remove it to start afresh");
+                throw checkpoint_refusal(opt.checkpoint_path, ck->fingerprint, opt.fingerprint);
             acc.raw_sum() = std::move(ck->sum);
             acc.raw_q() = std::move(ck->q);
             acc.set_counts(ck->samples, ck->batches);
@@ -158,6 +166,11 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
             res.history = std::move(ck->history);
             res.snapshots = std::move(ck->snapshots);
             res.resumed = true;
+            if (opt.on_resume) {
+                BatchProgress at{acc.samples(), resumed_seconds, 0.0, 0.0};
+                if (!res.history.empty()) at = res.history.back();
+                opt.on_resume(at);
+            }
         }
     }
 

@@ -14,6 +14,7 @@
 // checkpoint format is fixed; the volumetric path tracer uses this one.
 #pragma once
 
+#include "core/error.h"
 #include "core/stats.h"
 
 #include <atomic>
@@ -65,10 +66,16 @@ struct BatchRunOptions {
     std::int64_t batch_samples = 1000;
     SampleBudget budget;  ///< must have at least one limit
     int threads = 0;      ///< 0: the caller's task arena; > 0: an arena of that many threads
-    /// Identifies everything that determines the result (engine version, input, seed, batch
-    /// size): a checkpoint is resumed only if its fingerprint matches.
+    /// Identifies everything that determines the result (engine version, the content of the
+    /// input, seed, batch size), best a ContentKey's text: a checkpoint is resumed only if its
+    /// fingerprint matches, and a refusal names the items that differ (key_difference).
     std::string fingerprint;
     std::string checkpoint_path;  ///< empty: no checkpoints
+    /// Ignore (and in time overwrite) a checkpoint found at checkpoint_path: start afresh.
+    bool fresh = false;
+    /// Called once, before any batch runs, when the run continues from a checkpoint: the samples
+    /// and seconds it holds (so that a command can say "resuming from 174 of 300 spp").
+    std::function<void(const BatchProgress&)> on_resume;
     double checkpoint_seconds = 30.0;
     const std::atomic<bool>* cancel = nullptr;
     int min_batches_for_error = 16;
@@ -89,9 +96,14 @@ struct BatchRunResult {
 };
 
 /// Run batches 0, 1, 2, ... until the budget is met or `cancel` is set. Throws InputError for a
-/// checkpoint of another run, InfeasibleError when a relative-error budget alone cannot be met
-/// (the quantity stays 0 for 10000 batches).
+/// checkpoint of another run (checkpoint_refusal's message), InfeasibleError when a relative-error
+/// budget alone cannot be met (the quantity stays 0 for 10000 batches).
 BatchRunResult run_batches(const BatchRunOptions& options, const BatchFunction& simulate);
+
+/// The error for a checkpoint at `path` whose fingerprint `before` is not `now`: what differs,
+/// and how to start afresh (remove the file, or --fresh). Shared by every engine's checkpoints.
+InputError checkpoint_refusal(const std::string& path, const std::string& before,
+                              const std::string& now);
 
 /// A finished result as bytes (exact doubles), and back (InputError naming `name` if corrupt).
 std::string serialize_batch_result(const BatchRunResult& r);

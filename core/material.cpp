@@ -1,5 +1,7 @@
 #include "core/material.h"
 
+#include "core/hash.h"
+
 #include "core/config.h"
 
 #include <algorithm>
@@ -213,6 +215,25 @@ Medium medium_from_config(ConfigTable& t) {
     m.eta_below = t.number("eta_below", 1.0, Range::positive());
     t.record("thickness_cm", m.thickness_cm);
     return m;
+}
+
+void add_to_key(ContentKey& k, const std::string& prefix, const Medium& m) {
+    k.add(prefix + "sigma_a_per_cm", m.sigma_a_per_cm)
+        .add(prefix + "sigma_s_per_cm", m.sigma_s_per_cm)
+        .add(prefix + "g", m.g)
+        .add(prefix + "eta", m.eta)
+        .add(prefix + "eta_above", m.eta_above)
+        .add(prefix + "eta_below", m.eta_below)
+        .add(prefix + "thickness_cm", m.thickness_cm);
+    for (std::size_t i = 0; i < m.lower_layers.size(); ++i) {
+        const MediumLayer& l = m.lower_layers[i];
+        const std::string p = prefix + "layers[" + std::to_string(i + 1) + "].";
+        k.add(p + "sigma_a_per_cm", l.sigma_a_per_cm)
+            .add(p + "sigma_s_per_cm", l.sigma_s_per_cm)
+            .add(p + "g", l.g)
+            .add(p + "eta", l.eta)
+            .add(p + "thickness_cm", l.thickness_cm);
+    }
 }
 
 }  // namespace ssslab

@@ -13,6 +13,7 @@
 namespace ssslab {
 
 class ConfigTable;
+class ContentKey;
 struct Range;
 
 /// One RGB channel index: 0 = R, 1 = G, 2 = B.
@@ -77,6 +78,11 @@ struct Medium {
 /// Throws std::invalid_argument("<what> needs a homogeneous medium; <name> has N layers") for
 /// a layered medium.
 void require_homogeneous(const Medium& m, const std::string& what);
+
+/// Every field of a medium that determines a result (coefficients of all channels and layers,
+/// indices, thickness; not its name) as lines `<prefix>sigma_a_per_cm=...` of a content key:
+/// the one description of a medium in fingerprints and cache keys.
+void add_to_key(ContentKey& k, const std::string& prefix, const Medium& m);
 
 /// A named measured material.
 struct MaterialPreset {

@@ -56,7 +56,7 @@ void Progress::update(double done, const std::string& extra) {
     if (drawn_ && now - last_ < std::chrono::milliseconds(200)) return;
     last_ = now;
     const double elapsed = std::chrono::duration<double>(now - start_).count();
-    const double rate = elapsed > 0 ? done / elapsed : 0.0;
+    const double rate = elapsed > 0 ? (done - base_) / elapsed : 0.0;
     std::string line = "\r\033[K" + label_ + "  " + si_count(done);
     if (total_ > 0) {
         char pct[16];

@@ -18,6 +18,9 @@ class Progress {
     /// Report `done` units finished; redraws at most a few times per second. `extra` is appended
     /// (e.g. the current relative error).
     void update(double done, const std::string& extra = {});
+    /// The run continues from a checkpoint holding `done` units: the rate and the ETA count only
+    /// what this run does from here on.
+    void resume_from(double done) { base_ = done; }
     /// Clear the line.
     void finish();
     bool enabled() const { return enabled_; }
@@ -28,6 +31,7 @@ class Progress {
   private:
     std::string label_, unit_;
     double total_;
+    double base_ = 0;
     bool enabled_;
     bool drawn_ = false;
     std::chrono::steady_clock::time_point start_, last_;

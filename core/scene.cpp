@@ -239,6 +239,7 @@ Scene parse(std::shared_ptr<ConfigDocument> doc, const std::string& path,
         }
     }
     root.finish();
+    s.resolved_toml = doc->resolved_toml();
     return s;
 }
 
@@ -288,6 +289,68 @@ bool Scene::delta_light_through_smooth_boundary() const {
             (l.type == LightType::kDirectional && l.angular_radius_deg == 0))
             return true;
     return false;
+}
+
+namespace {
+void add_vec(ContentKey& k, const std::string& name, const Vec3& v) {
+    k.add(name, std::array<double, 3>{v.x, v.y, v.z});
+}
+}  // namespace
+
+void add_to_key(ContentKey& k, const Scene& s) {
+    k.add("scene.name", s.name).add("scene.unit_mm", s.unit_mm);
+    add_vec(k, "camera.position", s.camera.position);
+    add_vec(k, "camera.target", s.camera.target);
+    add_vec(k, "camera.up", s.camera.up);
+    k.add("camera.fov_y_deg", s.camera.fov_y_deg)
+        .add("camera.width", s.camera.width)
+        .add("camera.height", s.camera.height);
+    for (std::size_t i = 0; i < s.lights.size(); ++i) {
+        const SceneLight& l = s.lights[i];
+        const std::string p = "lights[" + std::to_string(i) + "].";
+        k.add(p + "type", to_string(l.type)).add(p + "color", l.color);
+        add_vec(k, p + "direction", l.direction);
+        k.add(p + "angular_radius_deg", l.angular_radius_deg);
+        add_vec(k, p + "position", l.position);
+        k.add(p + "radius", l.radius);
+    }
+    for (std::size_t i = 0; i < s.materials.size(); ++i) {
+        const SceneMaterial& m = s.materials[i];
+        const std::string p = "materials[" + std::to_string(i) + "].";
+        k.add(p + "name", m.name);
+        if (m.kind == SceneMaterial::Kind::kDiffuse) {
+            k.add(p + "type", "diffuse").add(p + "albedo", m.albedo);
+            continue;
+        }
+        k.add(p + "type", "medium");
+        add_to_key(k, p, m.medium);
+        k.add(p + "roughness", m.roughness);
+        if (!m.density_file.empty())
+            k.add(p + "density_vdb", file_hash_hex(m.density_file))
+                .add(p + "density_grid", m.density_grid);
+    }
+    for (std::size_t i = 0; i < s.shapes.size(); ++i) {
+        const SceneShape& sh = s.shapes[i];
+        const std::string p = "shapes[" + std::to_string(i) + "].";
+        k.add(p + "name", sh.name).add(p + "type", sh.type).add(p + "material", sh.material);
+        // The placed mesh, bytes of its doubles and indices: what the renderers intersect.
+        std::string bytes;
+        bytes.reserve(sh.mesh.positions.size() * 24 + sh.mesh.triangles.size() * 12);
+        for (const Vec3& v : sh.mesh.positions) {
+            const double xyz[3] = {v.x == 0 ? 0.0 : v.x, v.y == 0 ? 0.0 : v.y,
+                                   v.z == 0 ? 0.0 : v.z};
+            bytes.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+        }
+        for (const auto& t : sh.mesh.triangles)
+            bytes.append(reinterpret_cast<const char*>(t.data()), sizeof(std::uint32_t) * 3);
+        k.add(p + "mesh", hash_hex(bytes))
+            .add(p + "triangles", static_cast<std::uint64_t>(sh.mesh.triangles.size()))
+            .add(p + "exact_sphere", sh.exact_sphere);
+        if (sh.exact_sphere) {
+            add_vec(k, p + "center", sh.center);
+            k.add(p + "radius", sh.radius);
+        }
+    }
 }
 
 Scene read_scene(const std::string& path) {

@@ -24,6 +24,7 @@
 #pragma once
 
 #include "core/error.h"
+#include "core/hash.h"
 #include "core/material.h"
 #include "core/mesh.h"
 #include "core/vec3.h"
@@ -86,7 +87,10 @@ struct SceneShape {
 
 struct Scene {
     std::string name, description;
-    std::string path;      ///< the file it came from
+    std::string path;  ///< the file it came from
+    /// The scene as resolved (every value read, defaults included, presets by name), TOML: what
+    /// outputs write beside them as the configuration that produced them.
+    std::string resolved_toml;
     double unit_mm = 1.0;  ///< one world unit in millimetres
     SceneCamera camera;
     std::vector<SceneLight> lights;
@@ -109,6 +113,14 @@ struct Scene {
 Scene read_scene(const std::string& path);
 /// The same from text; `name` is used in messages, `base_dir` resolves mesh files.
 Scene parse_scene(std::string_view text, const std::string& name, const std::string& base_dir);
+
+/// Everything in a scene that determines an image, as lines of a content key: the resolved
+/// values (a preset as its coefficients), each shape's placed mesh as a hash of its vertices and
+/// triangles (so an OBJ file's content is in it), and the content of every OpenVDB file a
+/// medium reads. Item names say where in the scene a value is (`materials[1].sigma_a_per_cm`,
+/// `shapes[2].mesh`), so that core/hash.h's key_difference names what changed. The one
+/// fingerprint of a scene: render checkpoints and the runner's cached renders use it.
+void add_to_key(ContentKey& k, const Scene& s);
 
 /// One line per part (camera, lights, materials, shapes with triangle counts and bounds).
 std::string describe(const Scene& s);

@@ -1,8 +1,10 @@
 #include "mcml/engine.h"
 
 #include "core/atomic_file.h"
+#include "core/batch_runner.h"
 #include "core/binary_io.h"
 #include "core/error.h"
+#include "core/hash.h"
 #include "core/rng.h"
 #include "core/stats.h"
 #include "mcml/mci.h"
@@ -166,14 +168,29 @@ std::int64_t default_batch_photons(const Budget& budget, std::int64_t run_photon
 
 std::string checkpoint_fingerprint(const RunSpec& run, const EngineOptions& o,
                                    std::int64_t batch_photons) {
-    std::string s = kEngineVersion;
-    s += "\nseed=" + std::to_string(o.seed) + " stream=" + std::to_string(o.stream) +
-         " batch=" + std::to_string(batch_photons) +
-         " mode=" + (o.mode == TallyMode::kFull ? "full" : "profile") + "\n";
-    RunSpec r = run;
-    r.photons = 1;  // the budget may change between a run and its resumption
-    s += format_mci({r});
-    return s;
+    // Everything the tallies depend on, by name (the photon budget may change between a run
+    // and its resumption; the output name does not matter).
+    ContentKey k("mcml-checkpoint");
+    k.add("engine", kEngineVersion)
+        .add("seed", o.seed)
+        .add("stream", o.stream)
+        .add("batch_photons", batch_photons)
+        .add("mode", o.mode == TallyMode::kFull ? "full" : "profile")
+        .add("grid.dz", run.grid.dz)
+        .add("grid.dr", run.grid.dr)
+        .add("grid.nz", run.grid.nz)
+        .add("grid.nr", run.grid.nr)
+        .add("grid.na", run.grid.na);
+    for (std::size_t i = 0; i < run.layers.size(); ++i) {
+        const Layer& l = run.layers[i];
+        const std::string p = i == 0                       ? std::string("above.")
+                              : i + 1 == run.layers.size() ? std::string("below.")
+                                                           : "layer" + std::to_string(i) + ".";
+        k.add(p + "n", l.n);
+        if (i == 0 || i + 1 == run.layers.size()) continue;
+        k.add(p + "mua", l.mua).add(p + "mus", l.mus).add(p + "g", l.g).add(p + "d", l.z1 - l.z0);
+    }
+    return k.text();
 }
 
 RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
@@ -203,12 +220,10 @@ RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
     BatchAccumulator acc(layout.size);
     const std::string fingerprint = checkpoint_fingerprint(run, opt, res.batch_photons);
     double resumed_seconds = 0.0;
-    if (!opt.checkpoint_path.empty()) {
+    if (!opt.checkpoint_path.empty() && !opt.fresh) {
         if (auto ck = load_checkpoint(opt.checkpoint_path)) {
             if (ck->fingerprint != fingerprint || ck->sum.size() != layout.size)
-                throw InputError({opt.checkpoint_path, 0, 0}, "",
-                                 "checkpoint belongs to a different run (input, seed or batch "
-                                 "size differ); remove it to start afresh");
+                throw checkpoint_refusal(opt.checkpoint_path, ck->fingerprint, fingerprint);
             acc.raw_sum() = std::move(ck->sum);
             acc.raw_q() = std::move(ck->q);
             acc.set_counts(ck->photons, ck->batches);
@@ -217,6 +232,11 @@ RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
             res.history = std::move(ck->history);
             res.snapshots = std::move(ck->snapshots);
             res.resumed = true;
+            if (opt.on_resume) {
+                ProgressPoint at{acc.samples(), resumed_seconds, 0.0, 0.0};
+                if (!res.history.empty()) at = res.history.back();
+                opt.on_resume(at);
+            }
         }
     }
 

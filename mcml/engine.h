@@ -47,6 +47,11 @@ struct EngineOptions {
     /// `checkpoint_seconds`, and when the run is interrupted; it is removed when the run ends.
     std::string checkpoint_path;
     double checkpoint_seconds = 30.0;
+    /// Ignore (and in time overwrite) a checkpoint found at checkpoint_path: start afresh.
+    bool fresh = false;
+    /// Called once, before any batch runs, when the run continues from a checkpoint: the photons
+    /// and seconds it holds.
+    std::function<void(const ProgressPoint&)> on_resume;
     /// Set asynchronously (e.g. by a signal handler) to stop after the batches in flight.
     const std::atomic<bool>* cancel = nullptr;
     /// Batches needed before a relative-error target may stop the run.

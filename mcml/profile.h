@@ -49,8 +49,12 @@ struct ProfileOptions {
     std::int64_t batch_photons = 0;
     /// Checkpoint files are <prefix>.<R|G|B>.ckpt (empty: none).
     std::string checkpoint_prefix;
+    /// Ignore existing checkpoints (start afresh) instead of resuming or refusing them.
+    bool fresh = false;
     const std::atomic<bool>* cancel = nullptr;
     std::function<void(int channel, const ProgressPoint&)> on_batch;
+    /// Called before a channel continues from its checkpoint, with what the checkpoint holds.
+    std::function<void(int channel, const ProgressPoint&)> on_resume;
 };
 
 inline constexpr std::int64_t kFreude14Photons = 10'000'000;

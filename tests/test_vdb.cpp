@@ -18,6 +18,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 
@@ -264,6 +265,56 @@ material = "m"
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("s.toml:9"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("smoke"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Vdb, ARenderCheckpointIsRefusedWhenItsGridChanged) {
+    // Issue 12: a render interrupted, its grid file rewritten with another density, resumed:
+    // refused naming the grid, not 10 samples of one medium and the rest of another.
+    testing::TempDir dir;
+    write_grid((dir / "d.vdb").string(), 0.05, 0.05, 0.05, 0.1, 1.0, {-0.6, -0.6, -0.6},
+               {0.6, 0.6, 0.6});
+    dir.write("s.toml", R"([camera]
+position = [0, 0, 10]
+target = [0, 0, 0]
+fov_y_deg = 20
+width = 8
+height = 8
+[[lights]]
+type = "environment"
+radiance = 1
+[[materials]]
+name = "m"
+preset = "Skin1"
+roughness = 0.2
+density_vdb = "d.vdb"
+[[shapes]]
+type = "sphere"
+radius = 1.2
+subdivisions = 3
+material = "m"
+)");
+    RenderOptions o;
+    o.budget.samples = 30;
+    o.checkpoint_path = (dir / "r.ckpt").string();
+    o.checkpoint_seconds = 0;
+    std::atomic<bool> cancel{false};
+    o.cancel = &cancel;
+    o.on_batch = [&](const BatchProgress& p) {
+        if (p.samples >= 6) cancel = true;
+    };
+    ASSERT_TRUE(render(read_scene((dir / "s.toml").string()), o).interrupted);
+    write_grid((dir / "d.vdb").string(), 0.05, 0.05, 0.05, 0.1, 2.0, {-0.6, -0.6, -0.6},
+               {0.6, 0.6, 0.6});
+    o.cancel = nullptr;
+    o.on_batch = nullptr;
+    try {
+        (void)render(read_scene((dir / "s.toml").string()), o);
+        FAIL() << "resumed across a changed grid";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("materials[0].density_vdb: content changed"),
+                  std::string::npos)
+            << e.what();
     }
 }
 

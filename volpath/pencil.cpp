@@ -1,6 +1,7 @@
 #include "volpath/pencil.h"
 
 #include "core/error.h"
+#include "core/hash.h"
 #include "core/rng.h"
 #include "volpath/sampling.h"
 
@@ -275,36 +276,21 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
 
 std::string fingerprint(const Medium& m, const PencilGrid& grid, const PencilOptions& o,
                         std::int64_t batch, int run) {
-    char buf[1024];
-    std::snprintf(buf, sizeof buf,
-                  "%s\nmode=%s absorption=%s run=%d seed=%" PRIu64 " batch=%" PRId64
-                  " flight=%d hero_sel=%d long=%" PRId64 ",%.17g\ngrid=%.17g,%d\n",
-                  kEngineVersion, to_string(o.mode),
-                  o.absorption == Absorption::kWeighted ? "weighted" : "analog", run, o.seed, batch,
-                  static_cast<int>(o.flight), static_cast<int>(o.hero_selection),
-                  long_path_threshold(m, o, run < 3 ? run : -1), o.long_path_survival, grid.dr_cm,
-                  grid.nr);
-    std::string s = buf;
-    for (int c = 0; c < 3; ++c) {
-        std::snprintf(buf, sizeof buf, "c%d %.17g %.17g %.17g\n", c, m.sigma_a_per_cm[c],
-                      m.sigma_s_per_cm[c], m.g[c]);
-        s += buf;
-    }
-    std::snprintf(buf, sizeof buf, "eta %.17g %.17g %.17g d %.17g\n", m.eta, m.eta_above,
-                  m.eta_below, m.thickness_cm);
-    s += buf;
-    for (size_t i = 0; i < m.lower_layers.size(); ++i) {  // none for a homogeneous slab
-        const MediumLayer& l = m.lower_layers[i];
-        for (int c = 0; c < 3; ++c) {
-            std::snprintf(buf, sizeof buf, "layer%zu c%d %.17g %.17g %.17g\n", i + 1, c,
-                          l.sigma_a_per_cm[c], l.sigma_s_per_cm[c], l.g[c]);
-            s += buf;
-        }
-        std::snprintf(buf, sizeof buf, "layer%zu eta %.17g d %.17g\n", i + 1, l.eta,
-                      l.thickness_cm);
-        s += buf;
-    }
-    return s;
+    ContentKey k("pencil-checkpoint");
+    k.add("engine", kEngineVersion)
+        .add("mode", to_string(o.mode))
+        .add("absorption", o.absorption == Absorption::kWeighted ? "weighted" : "analog")
+        .add("run", run)
+        .add("seed", o.seed)
+        .add("batch_paths", batch)
+        .add("flight", static_cast<int>(o.flight))
+        .add("hero_selection", static_cast<int>(o.hero_selection))
+        .add("long_path_events", long_path_threshold(m, o, run < 3 ? run : -1))
+        .add("long_path_survival", o.long_path_survival)
+        .add("grid.dr_cm", grid.dr_cm)
+        .add("grid.nr", grid.nr);
+    add_to_key(k, "medium.", m);
+    return k.text();
 }
 
 }  // namespace
@@ -523,6 +509,9 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
         };
         if (o.on_batch)
             bo.on_batch = [&o, stream](const BatchProgress& p) { o.on_batch(stream, p); };
+        if (o.on_resume)
+            bo.on_resume = [&o, stream](const BatchProgress& p) { o.on_resume(stream, p); };
+        bo.fresh = o.fresh;
 
         const std::uint64_t seed = o.seed;
         const bool weighted = o.absorption == Absorption::kWeighted;

@@ -614,6 +614,19 @@ struct Renderer {
     }
 };
 
+// sqrt(sum SE^2) / |sum v| over n elements: the relative standard error of their mean (the
+// elements' errors treated as independent).
+template <class Value, class Error>
+double image_mean_rel_se_of(std::size_t n, const Value& value, const Error& error) {
+    double v = 0, s2 = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        v += value(i);
+        const double e = error(i);
+        s2 += e * e;
+    }
+    return v != 0 ? std::sqrt(s2) / std::abs(v) : 0.0;
+}
+
 }  // namespace
 
 const char* render_engine_version() {
@@ -631,6 +644,44 @@ void check_renderable(const Scene& scene) {
                                  "tracer (it would render that medium black): give the medium a "
                                  "roughness (e.g. 0.05), the light an angular_radius_deg, or use a "
                                  "sphere light");
+}
+
+const char* to_string(RenderErrorMeasure m) {
+    return m == RenderErrorMeasure::kImageMean ? "image-mean" : "median-pixel";
+}
+
+double image_mean_rel_se(const std::vector<double>& mean, const std::vector<double>& se) {
+    const std::size_t n = mean.size() / RenderLayout::kPerPixel * 3;
+    auto element = [](std::size_t i) {
+        return (i / 3) * RenderLayout::kPerPixel + RenderLayout::kRadiance + i % 3;
+    };
+    return image_mean_rel_se_of(
+        n, [&](std::size_t i) { return mean[element(i)]; },
+        [&](std::size_t i) { return se[element(i)]; });
+}
+
+RelativeError pixel_rel_error(const std::vector<double>& mean, const std::vector<double>& se) {
+    const std::size_t n = mean.size() / RenderLayout::kPerPixel * 3;
+    auto element = [](std::size_t i) {
+        return (i / 3) * RenderLayout::kPerPixel + RenderLayout::kRadiance + i % 3;
+    };
+    return relative_error(
+        n, [&](std::size_t i) { return mean[element(i)]; },
+        [&](std::size_t i) { return se[element(i)]; });
+}
+
+std::string render_fingerprint(const Scene& scene, const RenderOptions& o) {
+    ContentKey k("render-checkpoint");
+    k.add("engine", kEngineVersion)
+        .add("seed", o.seed)
+        .add("width", o.width > 0 ? o.width : scene.camera.width)
+        .add("height", o.height > 0 ? o.height : scene.camera.height)
+        .add("roulette_depth", o.roulette_depth)
+        .add("long_path_events", o.long_path_events)
+        .add("index_matched_nee", o.index_matched_nee)
+        .add("samples_per_batch", 3);
+    add_to_key(k, scene);
+    return k.text();
 }
 
 RenderResult render(const Scene& scene, const RenderOptions& o) {
@@ -654,30 +705,30 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
     if (!bo.budget.any()) bo.budget.samples = 64;
     if (bo.budget.samples) bo.budget.samples = (*bo.budget.samples + 2) / 3 * 3;
     bo.threads = o.threads;
-    char fp[512];
-    std::snprintf(fp, sizeof fp,
-                  "%s\nscene=%s seed=%llu size=%dx%d roulette=%d long=%lld index_matched_nee=%d\n",
-                  kEngineVersion, scene.path.c_str(), static_cast<unsigned long long>(o.seed),
-                  R.width, R.height, o.roulette_depth, static_cast<long long>(o.long_path_events),
-                  o.index_matched_nee ? 1 : 0);
-    bo.fingerprint = fp;
+    if (!o.checkpoint_path.empty()) bo.fingerprint = render_fingerprint(scene, o);
     bo.checkpoint_path = o.checkpoint_path;
     bo.checkpoint_seconds = o.checkpoint_seconds;
     bo.cancel = o.cancel;
     bo.on_batch = o.on_batch;
+    bo.on_resume = o.on_resume;
+    bo.fresh = o.fresh;
     bo.snapshots = o.snapshots;
-    bo.quantity = [pixels](const BatchAccumulator& acc, double& value, double& se) {
-        // The image mean of the radiance (all channels): what a relative-error budget targets.
-        double v = 0, s2 = 0;
-        for (std::size_t i = 0; i < pixels; ++i)
-            for (int c = 0; c < 3; ++c) {
-                v += acc.mean(i * RenderLayout::kPerPixel + static_cast<size_t>(c));
-                const double e =
-                    acc.standard_error(i * RenderLayout::kPerPixel + static_cast<size_t>(c));
-                s2 += e * e;
-            }
-        value = v / (3.0 * static_cast<double>(pixels));
-        se = std::sqrt(s2) / (3.0 * static_cast<double>(pixels));
+    bo.quantity = [pixels, measure = o.error_measure](const BatchAccumulator& acc, double& value,
+                                                      double& se) {
+        auto element = [](std::size_t i) {
+            return (i / 3) * RenderLayout::kPerPixel + RenderLayout::kRadiance + i % 3;
+        };
+        auto mean = [&](std::size_t i) { return acc.mean(element(i)); };
+        auto error = [&](std::size_t i) { return acc.standard_error(element(i)); };
+        if (measure == RenderErrorMeasure::kImageMean) {
+            value = 1.0;
+            se = image_mean_rel_se_of(3 * pixels, mean, error);
+        } else {
+            // A median of relative errors: value 1 with that "standard error", so that the
+            // driver's test se <= rel_error * value reads median <= rel_error.
+            value = 1.0;
+            se = relative_error(3 * pixels, mean, error).median;
+        }
     };
     const std::uint64_t seed = o.seed;
     out.run = run_batches(

@@ -29,6 +29,7 @@
 #include "core/batch_runner.h"
 #include "core/film_image.h"
 #include "core/scene.h"
+#include "core/stats.h"
 
 #include <atomic>
 #include <cstdint>
@@ -39,11 +40,24 @@ namespace ssslab::volpath {
 
 const char* render_engine_version();
 
+/// What a relative-error budget (RenderOptions::budget.rel_error) measures.
+enum class RenderErrorMeasure {
+    /// The median over the pixel channels that see anything of the radiance's relative standard
+    /// error (core/stats.h relative_error): the image has converged to 1 % when half of its
+    /// lit pixels have.
+    kMedianPixel,
+    /// The relative standard error of the image mean of the radiance: far smaller than any
+    /// pixel's (it averages over all of them); a measure of the total, not of the image.
+    kImageMean,
+};
+const char* to_string(RenderErrorMeasure m);
+
 struct RenderOptions {
     std::uint64_t seed = 1;
     int threads = 0;
-    /// Samples per pixel (one per batch), seconds, or relative error of the image mean.
+    /// Samples per pixel (three per batch), seconds, or a relative error (error_measure).
     SampleBudget budget;
+    RenderErrorMeasure error_measure = RenderErrorMeasure::kMedianPixel;
     /// Camera path vertices before Russian roulette may end a path (then survival
     /// max(beta) clamped to [0.05, 1]).
     int roulette_depth = 5;
@@ -54,8 +68,12 @@ struct RenderOptions {
     bool index_matched_nee = true;
     std::string checkpoint_path;  ///< empty: none
     double checkpoint_seconds = 30.0;
+    /// Ignore an existing checkpoint (start afresh) instead of resuming or refusing it.
+    bool fresh = false;
     const std::atomic<bool>* cancel = nullptr;
     std::function<void(const BatchProgress&)> on_batch;
+    /// Called before the render continues from its checkpoint, with what the checkpoint holds.
+    std::function<void(const BatchProgress&)> on_resume;
     /// Render at this size instead of the camera's (0: the camera's), e.g. for tests.
     int width = 0, height = 0;
     /// Keep the image after 4, 8, 16, ... samples per pixel (RenderResult::run.snapshots), for
@@ -87,6 +105,18 @@ struct RenderResult {
 void check_renderable(const Scene& scene);
 
 RenderResult render(const Scene& scene, const RenderOptions& options);
+
+/// The render's own error measures of its radiance (per-element means and standard errors in
+/// RenderLayout, e.g. RenderResult::run.mean/se): the relative standard error of the image mean
+/// and the per-pixel relative errors.
+double image_mean_rel_se(const std::vector<double>& mean, const std::vector<double>& se);
+RelativeError pixel_rel_error(const std::vector<double>& mean, const std::vector<double>& se);
+
+/// What a render's checkpoint is keyed by: the renderer's version, the settings that change the
+/// image (seed, size, roulette, long paths, NEE), and the scene's content (core/scene.h
+/// add_to_key: resolved values, meshes, grid files), as a ContentKey's text. Not the budget: a
+/// resumed run may be given more samples.
+std::string render_fingerprint(const Scene& scene, const RenderOptions& options);
 
 /// One point of error against time: the radiance after `spp` samples per pixel (a snapshot or
 /// the final image) against a reference image.

@@ -1,6 +1,7 @@
 #include "volpath/sphere.h"
 
 #include "core/error.h"
+#include "core/hash.h"
 #include "core/quadrature.h"
 #include "core/rng.h"
 
@@ -253,24 +254,27 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
 
 std::string fingerprint(const SphereScene& sc, const SphereOptions& o, std::int64_t batch,
                         int run) {
-    char buf[1024];
-    std::snprintf(buf, sizeof buf,
-                  "%s\nmode=%s run=%d seed=%" PRIu64 " batch=%" PRId64 " long=%" PRId64
-                  ",%.17g image=%d\nR=%.17g l=%.17g,%.17g,%.17g v=%.17g,%.17g,%.17g "
-                  "up=%.17g,%.17g,%.17g\nframe=%dx%d s=%.17g accept=%.17g bins=%d\n",
-                  kEngineVersion, to_string(o.mode), run, o.seed, batch, o.long_path_events,
-                  o.long_path_survival, o.image ? 1 : 0, sc.radius_cm, sc.to_light.x, sc.to_light.y,
-                  sc.to_light.z, sc.to_camera.x, sc.to_camera.y, sc.to_camera.z, sc.up.x, sc.up.y,
-                  sc.up.z, sc.width, sc.height, sc.frame_scale, sc.acceptance_deg, sc.beta_bins);
-    std::string s = buf;
-    const Medium& m = sc.medium;
-    for (int c = 0; c < 3; ++c) {
-        std::snprintf(buf, sizeof buf, "c%d %.17g %.17g %.17g\n", c, m.sigma_a_per_cm[c],
-                      m.sigma_s_per_cm[c], m.g[c]);
-        s += buf;
-    }
-    std::snprintf(buf, sizeof buf, "eta %.17g %.17g\n", m.eta, m.eta_above);
-    return s + buf;
+    auto vec = [](const Vec3& v) { return std::array<double, 3>{v.x, v.y, v.z}; };
+    ContentKey k("sphere-checkpoint");
+    k.add("engine", kEngineVersion)
+        .add("mode", to_string(o.mode))
+        .add("run", run)
+        .add("seed", o.seed)
+        .add("batch_paths", batch)
+        .add("long_path_events", o.long_path_events)
+        .add("long_path_survival", o.long_path_survival)
+        .add("image", o.image)
+        .add("radius_cm", sc.radius_cm)
+        .add("to_light", vec(sc.to_light))
+        .add("to_camera", vec(sc.to_camera))
+        .add("up", vec(sc.up))
+        .add("frame.width", sc.width)
+        .add("frame.height", sc.height)
+        .add("frame.scale", sc.frame_scale)
+        .add("acceptance_deg", sc.acceptance_deg)
+        .add("beta_bins", sc.beta_bins);
+    add_to_key(k, "medium.", sc.medium);
+    return k.text();
 }
 
 bool finite_vec(const Vec3& a) {
@@ -538,6 +542,9 @@ SphereRun simulate_sphere(const SphereScene& scene, const SphereOptions& o) {
         };
         if (o.on_batch)
             bo.on_batch = [&o, stream](const BatchProgress& p) { o.on_batch(stream, p); };
+        if (o.on_resume)
+            bo.on_resume = [&o, stream](const BatchProgress& p) { o.on_resume(stream, p); };
+        bo.fresh = o.fresh;
 
         const std::uint64_t seed = o.seed;
         const std::uint64_t bsz = static_cast<std::uint64_t>(batch);

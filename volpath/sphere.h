@@ -95,9 +95,13 @@ struct SphereOptions {
     /// Checkpoints are <prefix>.<R|G|B|hero>.ckpt (empty: none).
     std::string checkpoint_prefix;
     double checkpoint_seconds = 30.0;
+    /// Ignore existing checkpoints (start afresh) instead of resuming or refusing them.
+    bool fresh = false;
     const std::atomic<bool>* cancel = nullptr;
     /// run: 0..2 (channel) in kPerChannel mode, 3 in kHero mode.
     std::function<void(int run, const BatchProgress&)> on_batch;
+    /// Called before a run continues from its checkpoint, with what the checkpoint holds.
+    std::function<void(int run, const BatchProgress&)> on_resume;
     bool snapshots = false;
     /// Tally the image layers (off: only the beta profile and the totals).
     bool image = true;

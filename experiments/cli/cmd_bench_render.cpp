@@ -3,6 +3,7 @@
 // anything), extrapolated from the measured variance (error ~ 1 / sqrt(time)).
 #include "core/error.h"
 #include "core/scene.h"
+#include "core/stats.h"
 #include "experiments/cli/bench_volpath.h"
 #include "volpath/render.h"
 
@@ -46,23 +47,16 @@ int run_render_bench(int threads, bool quick, const std::string& scenes_dir, int
         const volpath::RenderResult r = volpath::render(s, o);
         const ImageLayer& L = r.image.layer("radiance");
         const ImageLayer& E = r.image.layer("radiance.stderr");
-        std::vector<double> rel;
-        double sum = 0, var = 0;
-        for (int y = 0; y < size; ++y)
-            for (int x = 0; x < size; ++x)
-                for (int c = 0; c < 3; ++c) {
-                    sum += L.at(x, y, c);
-                    var += static_cast<double>(E.at(x, y, c)) * E.at(x, y, c);
-                    if (L.at(x, y, c) > 0 && E.at(x, y, c) > 0)
-                        rel.push_back(E.at(x, y, c) / L.at(x, y, c));
-                }
-        std::sort(rel.begin(), rel.end());
-        const double med = rel.empty() ? 0 : rel[rel.size() / 2];
+        const auto Lp = L.pixels();
+        const auto Ep = E.pixels();
+        const RelativeError err = relative_error(
+            Lp.size(), [&](std::size_t i) { return Lp[i]; }, [&](std::size_t i) { return Ep[i]; });
+        const double med = err.median;
         const double t1 = r.seconds * (med / 0.01) * (med / 0.01);
         const double paths = static_cast<double>(size) * size * static_cast<double>(r.spp);
         std::printf("%-10s %9.2f %12.2f %12.3g %10.3f %12.3g %14.2e\n", s.name.c_str(), r.seconds,
                     static_cast<double>(r.rays) / r.seconds * 1e-6, paths / r.seconds, med, t1,
-                    sum > 0 ? std::sqrt(var) / sum : 0.0);
+                    volpath::image_mean_rel_se(r.run.mean, r.run.se));
     }
     std::printf(
         "t_1%%_pixel: the extrapolated time until the median pixel's relative standard error of "

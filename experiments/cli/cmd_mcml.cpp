@@ -155,8 +155,7 @@ int run_mcml(McmlArgs& a) {
                                  : static_cast<double>(run.photons);
         Progress progress(run.out_name, total, "photons");
         auto on_batch = [&](const mcml::ProgressPoint& p) {
-            progress.update(static_cast<double>(p.photons),
-                            p.value > 0 ? "rel.err " + std::to_string(p.se / p.value) : "");
+            progress.update(static_cast<double>(p.photons), error_figure("rel.err", p.value, p.se));
         };
         mcml::RunResult res;
         if (compat) {
@@ -171,6 +170,12 @@ int run_mcml(McmlArgs& a) {
             o.cancel = cancel;
             o.on_batch = on_batch;
             if (!a.no_checkpoint) o.checkpoint_path = out_path.string() + ".ckpt";
+            o.fresh = a.common.fresh;
+            o.on_resume = [&](const mcml::ProgressPoint& p) {
+                progress.resume_from(static_cast<double>(p.photons));
+                say_resuming("mcml", run.out_name, static_cast<double>(p.photons), total, "photons",
+                             o.checkpoint_path, a.common.quiet);
+            };
             res = mcml::run_default(run, o);
         }
         progress.finish();
@@ -224,6 +229,7 @@ void register_mcml(CLI::App& app, std::function<int()>& action) {
     add_common_options(*sub, a->common,
                        "Directory for the outputs (default: current directory, as "
                        "the original)");
+    add_fresh_option(*sub, a->common.fresh);
     sub->callback([a, &action] { action = [a] { return run_mcml(*a); }; });
 }
 

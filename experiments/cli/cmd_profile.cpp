@@ -120,22 +120,24 @@ int run_volpath_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
                                                                : volpath::Absorption::kWeighted;
     po.cancel = cancel;
     po.checkpoint_prefix = out.string();
+    po.fresh = c.fresh;
     const double total = job.budget.photons ? static_cast<double>(*job.budget.photons) : 0.0;
-    std::unique_ptr<Progress> progress;
-    int current = -1;
+    RunsProgress progress(
+        "profile",
+        [&](int run) {
+            return job.medium.name + " " + (run < 3 ? kChannelNames[run] : "RGB (hero)");
+        },
+        total, "paths", c.quiet);
     po.on_batch = [&](int run, const BatchProgress& p) {
-        if (run != current) {
-            current = run;
-            progress = std::make_unique<Progress>(
-                job.medium.name + " " + (run < 3 ? kChannelNames[run] : "RGB (hero)"), total,
-                "paths");
-        }
-        progress->update(static_cast<double>(p.samples),
-                         p.value > 0 ? "rel.err " + std::to_string(p.se / p.value) : "");
+        progress.batch(run, static_cast<double>(p.samples), p.value, p.se);
+    };
+    po.on_resume = [&](int run, const BatchProgress& p) {
+        progress.resume(run, static_cast<double>(p.samples),
+                        out.string() + "." + (run < 3 ? kChannelNames[run] : "hero") + ".ckpt");
     };
     const volpath::PencilRun run =
         volpath::simulate_pencil(job.medium, {job.grid.dr_cm, job.grid.nr}, po);
-    progress.reset();
+    progress.finish();
     if (run.interrupted) {
         std::fprintf(stderr,
                      "ssslab profile: interrupted; checkpoints saved beside %s; run the same "
@@ -200,20 +202,20 @@ int run_profile_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
     po.batch_photons = job.batch;
     po.cancel = cancel;
     po.checkpoint_prefix = out.string();
+    po.fresh = c.fresh;
     const double total = job.budget.photons ? static_cast<double>(*job.budget.photons) : 0.0;
-    std::unique_ptr<Progress> progress;
-    int current = -1;
+    RunsProgress progress(
+        "profile", [&](int ch) { return job.medium.name + " " + kChannelNames[ch]; }, total,
+        "photons", c.quiet);
     po.on_batch = [&](int ch, const mcml::ProgressPoint& p) {
-        if (ch != current) {
-            current = ch;
-            progress = std::make_unique<Progress>(job.medium.name + " " + kChannelNames[ch], total,
-                                                  "photons");
-        }
-        progress->update(static_cast<double>(p.photons),
-                         p.value > 0 ? "rel.err " + std::to_string(p.se / p.value) : "");
+        progress.batch(ch, static_cast<double>(p.photons), p.value, p.se);
+    };
+    po.on_resume = [&](int ch, const mcml::ProgressPoint& p) {
+        progress.resume(ch, static_cast<double>(p.photons),
+                        out.string() + "." + kChannelNames[ch] + ".ckpt");
     };
     mcml::ProfileRun run = mcml::simulate_profile(job.medium, job.grid, po);
-    progress.reset();
+    progress.finish();
     if (run.interrupted) {
         std::fprintf(stderr,
                      "ssslab profile: interrupted; checkpoints saved beside %s; run the same "
@@ -310,6 +312,7 @@ void register_profile(CLI::App& app, std::function<int()>& action) {
                     "with implicit absorption)")
         ->check(CLI::IsMember({"analog", "weighted", "hero", "hero-weighted"}));
     add_common_options(*sub, a->common, "Output CSV (default results/profiles/<material>.csv)");
+    add_fresh_option(*sub, a->common.fresh);
     sub->callback([a, &action] { action = [a] { return run_profile(*a); }; });
 }
 

@@ -4,10 +4,14 @@
 // budget in samples per pixel, seconds or relative error of the image mean; checkpoints beside
 // the output; an interrupted run (SIGINT) resumes when the same command runs again.
 #include "core/atomic_file.h"
+#include "core/config.h"
 #include "core/error.h"
 #include "core/film_image.h"
+#include "core/hash.h"
 #include "core/progress.h"
+#include "core/provenance.h"
 #include "core/scene.h"
+#include "core/stats.h"
 #include "experiments/cli/commands.h"
 #include "experiments/cli/common.h"
 #include "volpath/render.h"
@@ -30,13 +34,68 @@ struct RenderArgs {
     int width = 0, height = 0;
     double exposure = 0;
     std::string reference;
+    std::string error_of = "median-pixel";
     CommonOptions common;
 };
+
+// <out>.exr.toml: what produced the image (the settings, the run and what it measured,
+// provenance, and the scene as resolved); the same essentials go into the EXR header.
+std::string render_toml(const RenderArgs& a, const Scene& scene, const volpath::RenderOptions& o,
+                        const volpath::RenderResult& r, std::uint64_t resumed_from,
+                        const std::string& content_key) {
+    auto doc = ConfigDocument::empty("render.toml");
+    ConfigTable root = doc->root();
+    ConfigTable in = root.table_or_empty("input");
+    in.record("scene_file", fs::absolute(a.scene).lexically_normal().string());
+    in.record("scene_name", scene.name);
+    in.record("content_key", content_key);
+    ConfigTable st = root.table_or_empty("render");
+    st.record("engine", std::string(volpath::render_engine_version()));
+    st.record("seed", static_cast<std::int64_t>(o.seed));
+    st.record("width", static_cast<std::int64_t>(r.width));
+    st.record("height", static_cast<std::int64_t>(r.height));
+    if (o.budget.samples) st.record("budget_spp", *o.budget.samples);
+    if (o.budget.seconds) st.record("budget_seconds", *o.budget.seconds);
+    if (o.budget.rel_error) {
+        st.record("budget_rel_error", *o.budget.rel_error);
+        st.record("rel_error_of", std::string(volpath::to_string(o.error_measure)));
+    }
+    st.record("roulette_depth", static_cast<std::int64_t>(o.roulette_depth));
+    st.record("long_path_events", o.long_path_events);
+    st.record("threads", static_cast<std::int64_t>(r.run.threads));
+    ConfigTable res = root.table_or_empty("result");
+    res.record("stop_reason", std::string(to_string(r.run.reason)));
+    res.record("spp", static_cast<std::int64_t>(r.spp));
+    res.record("resumed_from_spp", static_cast<std::int64_t>(resumed_from));
+    res.record("wall_seconds", r.seconds);
+    res.record("rays", static_cast<std::int64_t>(r.rays));
+    res.record("median_pixel_rel_se", volpath::pixel_rel_error(r.run.mean, r.run.se).median);
+    res.record("image_mean_rel_se", volpath::image_mean_rel_se(r.run.mean, r.run.se));
+    const std::size_t pixels =
+        static_cast<std::size_t>(r.width) * static_cast<std::size_t>(r.height);
+    for (int c = 0; c < 3; ++c) {
+        double m = 0, s2 = 0;
+        for (std::size_t i = 0; i < pixels; ++i) {
+            const std::size_t j = i * volpath::RenderLayout::kPerPixel + static_cast<size_t>(c);
+            m += r.run.mean[j];
+            s2 += r.run.se[j] * r.run.se[j];
+        }
+        res.record(std::string("image_mean_") + kChannelNames[c], m / static_cast<double>(pixels));
+        res.record(std::string("image_mean_se_") + kChannelNames[c],
+                   std::sqrt(s2) / static_cast<double>(pixels));
+    }
+    doc->add_resolved_section("provenance", provenance(command_line()));
+    // The scene's own tables ([scene], [camera], [[lights]], [[materials]], [[shapes]]) as
+    // resolved, then this run's ([input], [render], [result], [provenance]): one TOML document.
+    return "# ssslab render: the scene as resolved, the settings, the run and its result, "
+           "provenance\n" +
+           scene.resolved_toml + "\n" + doc->resolved_toml();
+}
 
 int run_render(const RenderArgs& a) {
     if (a.common.photons || a.common.batch)
         throw InputError({"<command line>", 0, 0}, a.common.photons ? "--photons" : "--batch",
-                         "ssslab render counts samples per pixel: use --spp (one per batch)");
+                         "ssslab render counts samples per pixel: use --spp (three per batch)");
     const Scene scene = read_scene(a.scene);
     volpath::check_renderable(scene);
     const fs::path out = a.common.out.empty()
@@ -51,8 +110,11 @@ int run_render(const RenderArgs& a) {
     if (a.common.seconds) o.budget.seconds = *a.common.seconds;
     if (a.common.rel_error) o.budget.rel_error = *a.common.rel_error;
     if (!o.budget.any()) o.budget.samples = 64;
+    o.error_measure = a.error_of == "image-mean" ? volpath::RenderErrorMeasure::kImageMean
+                                                 : volpath::RenderErrorMeasure::kMedianPixel;
     o.width = a.width;
     o.height = a.height;
+    o.fresh = a.common.fresh;
     std::optional<LayeredImage> reference;
     if (!a.reference.empty()) {
         reference = read_exr(a.reference);
@@ -69,13 +131,25 @@ int run_render(const RenderArgs& a) {
     fs::create_directories(out.parent_path().empty() ? fs::path(".") : out.parent_path());
     o.checkpoint_path = out.string() + ".ckpt";
     o.cancel = install_interrupt_handler();
-    const double total = o.budget.samples ? static_cast<double>(*o.budget.samples) : 0.0;
+    const std::string content_key = hash_hex(volpath::render_fingerprint(scene, o));
+    const double total =
+        o.budget.samples ? static_cast<double>((*o.budget.samples + 2) / 3 * 3) : 0.0;
     std::unique_ptr<Progress> progress;
     if (!a.common.quiet) progress = std::make_unique<Progress>(scene.name, total, "spp");
+    std::uint64_t resumed_from = 0;
+    o.on_resume = [&](const BatchProgress& p) {
+        resumed_from = p.samples;
+        if (progress) progress->resume_from(static_cast<double>(p.samples));
+        say_resuming("render", "", static_cast<double>(p.samples), total, "spp", o.checkpoint_path,
+                     a.common.quiet);
+    };
+    const std::string measure = volpath::to_string(o.error_measure);
     o.on_batch = [&](const BatchProgress& p) {
-        if (progress)
-            progress->update(static_cast<double>(p.samples),
-                             p.value > 0 ? "rel.err " + std::to_string(p.se / p.value) : "");
+        if (!progress) return;
+        // An error figure only once one exists (two batches, six spp, for batch means).
+        const std::string extra =
+            p.samples >= 6 ? error_figure(measure + " rel.err", p.value, p.se) : "";
+        progress->update(static_cast<double>(p.samples), extra);
     };
     volpath::RenderResult r = volpath::render(scene, o);
     progress.reset();
@@ -99,8 +173,17 @@ int run_render(const RenderArgs& a) {
             csv += line;
         }
     }
+    const std::string toml = render_toml(a, scene, o, r, resumed_from, content_key);
+    auto& md = r.image.metadata();
+    md["ssslab.git_revision"] = git_revision();
+    md["ssslab.command_line"] = command_line();
+    md["ssslab.scene_file"] = a.scene;
+    md["ssslab.content_key"] = content_key;
+    md["ssslab.resumed_from_spp"] = std::to_string(resumed_from);
+    md["ssslab.provenance"] = toml;
     write_exr(r.image, out.string());
     write_png_preview(r.image, "radiance", png.string(), a.exposure);
+    write_file_atomic(out.string() + ".toml", toml);
     if (reference) {
         fs::path conv = out;
         conv.replace_extension("");
@@ -109,11 +192,17 @@ int run_render(const RenderArgs& a) {
     }
     std::error_code ec;
     fs::remove(o.checkpoint_path, ec);
-    if (!a.common.quiet)
-        std::printf("%s: %d x %d, %llu spp in %.1f s, %.3g rays/s -> %s (+ .png)\n",
-                    scene.name.c_str(), r.width, r.height, static_cast<unsigned long long>(r.spp),
-                    r.seconds, static_cast<double>(r.rays) / std::max(1e-9, r.seconds),
-                    out.string().c_str());
+    if (!a.common.quiet) {
+        const std::string how =
+            resumed_from ? "resumed from " + std::to_string(resumed_from) + " spp" : "fresh";
+        std::printf(
+            "%s: %d x %d, %llu spp in %.1f s (%s), %.3g rays/s; median pixel rel. SE %.3g %%, "
+            "image mean rel. SE %.3g %% -> %s (+ .png, .exr.toml)\n",
+            scene.name.c_str(), r.width, r.height, static_cast<unsigned long long>(r.spp),
+            r.seconds, how.c_str(), static_cast<double>(r.rays) / std::max(1e-9, r.seconds),
+            100.0 * volpath::pixel_rel_error(r.run.mean, r.run.se).median,
+            100.0 * volpath::image_mean_rel_se(r.run.mean, r.run.se), out.string().c_str());
+    }
     return 0;
 }
 
@@ -139,6 +228,12 @@ void register_render(CLI::App& app, std::function<int()>& action) {
                     "the end, with the seconds it took")
         ->check(CLI::ExistingFile);
     add_common_options(*sub, a->common, "Output EXR (default results/render/<scene>.exr)");
+    add_fresh_option(*sub, a->common.fresh);
+    sub->add_option("--rel-error-of", a->error_of,
+                    "What --rel-error measures: median-pixel (default; the median over the lit "
+                    "pixel channels of the radiance's relative standard error) or image-mean (the "
+                    "relative standard error of the image mean, far smaller than any pixel's)")
+        ->check(CLI::IsMember({"median-pixel", "image-mean"}));
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
 

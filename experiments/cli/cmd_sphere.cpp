@@ -437,21 +437,23 @@ int run_sphere(const SphereArgs& a) {
     so.cancel = cancel;
     so.checkpoint_prefix = prefix;
     so.image = true;
+    so.fresh = c.fresh;
     const double total = job.budget.samples ? static_cast<double>(*job.budget.samples) : 0.0;
-    std::unique_ptr<Progress> progress;
-    int current = -1;
+    RunsProgress progress(
+        "sphere",
+        [&](int run) {
+            return sc.medium.name + " sphere " + (run < 3 ? kChannelNames[run] : "RGB (hero)");
+        },
+        total, "paths", c.quiet);
     so.on_batch = [&](int run, const BatchProgress& p) {
-        if (run != current) {
-            current = run;
-            progress = std::make_unique<Progress>(
-                sc.medium.name + " sphere " + (run < 3 ? kChannelNames[run] : "RGB (hero)"), total,
-                "photons");
-        }
-        progress->update(static_cast<double>(p.samples),
-                         p.value > 0 ? "rel.err " + std::to_string(p.se / p.value) : "");
+        progress.batch(run, static_cast<double>(p.samples), p.value, p.se);
+    };
+    so.on_resume = [&](int run, const BatchProgress& p) {
+        progress.resume(run, static_cast<double>(p.samples),
+                        prefix + "." + (run < 3 ? kChannelNames[run] : "hero") + ".ckpt");
     };
     volpath::SphereRun run = volpath::simulate_sphere(sc, so);
-    progress.reset();
+    progress.finish();
     if (run.interrupted) {
         std::fprintf(stderr,
                      "ssslab sphere: interrupted; checkpoints saved beside %s; run the same "
@@ -686,6 +688,7 @@ void register_sphere(CLI::App& app, std::function<int()>& action) {
     add_common_options(*sub, a->common,
                        "Output prefix (default results/sphere/<material>): <out>.exr, <out>.png, "
                        "<out>_beta.csv, <out>.toml");
+    add_fresh_option(*sub, a->common.fresh);
     sub->callback([a, &action] { action = [a] { return run_sphere(*a); }; });
 }
 

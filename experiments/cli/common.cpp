@@ -76,12 +76,65 @@ void add_common_options(CLI::App& app, CommonOptions& o, const std::string& out_
     app.add_flag("-q,--quiet", o.quiet, "Print nothing but errors");
 }
 
+void add_fresh_option(CLI::App& app, bool& fresh) {
+    app.add_flag("--fresh", fresh,
+                 "Start afresh even if a checkpoint of an earlier run is there (it is replaced). "
+                 "Without it a run resumes from a checkpoint of the same input and refuses one of "
+                 "other input, saying what differs");
+}
+
 mcml::Budget budget_from(const CommonOptions& o) {
     mcml::Budget b;
     b.photons = o.photons;
     b.seconds = o.seconds;
     b.rel_error = o.rel_error;
     return b;
+}
+
+void say_resuming(const std::string& command, const std::string& what, double done, double total,
+                  const std::string& unit, const std::string& checkpoint, bool quiet) {
+    if (quiet) return;
+    char d[32], t[32];
+    std::snprintf(d, sizeof d, "%.0f", done);
+    std::snprintf(t, sizeof t, "%.0f", total);
+    std::string line =
+        "ssslab " + command + ": " + (what.empty() ? "" : what + ": ") + "resuming from " + d;
+    if (total > 0) line += std::string(" of ") + t;
+    line += " " + unit + " (checkpoint " + checkpoint + ")\n";
+    std::fputs(line.c_str(), stderr);
+}
+
+std::string error_figure(const std::string& label, double value, double se) {
+    if (!(se > 0) || !(value != 0) || !std::isfinite(se / value)) return "";
+    char b[32];
+    std::snprintf(b, sizeof b, " %.3g%%", 100.0 * se / std::abs(value));
+    return label + b;
+}
+
+RunsProgress::RunsProgress(std::string command, std::function<std::string(int)> label, double total,
+                           std::string unit, bool quiet)
+    : command_(std::move(command)),
+      label_(std::move(label)),
+      total_(total),
+      unit_(std::move(unit)),
+      quiet_(quiet) {}
+
+void RunsProgress::start(int run) {
+    if (run == current_) return;
+    current_ = run;
+    progress_.reset();
+    if (!quiet_) progress_ = std::make_unique<Progress>(label_(run), total_, unit_);
+}
+
+void RunsProgress::batch(int run, double done, double value, double se) {
+    start(run);
+    if (progress_) progress_->update(done, error_figure("rel.err", value, se));
+}
+
+void RunsProgress::resume(int run, double done, const std::string& checkpoint) {
+    start(run);
+    if (progress_) progress_->resume_from(done);
+    say_resuming(command_, label_(run), done, total_, unit_, checkpoint, quiet_);
 }
 
 }  // namespace ssslab::cli

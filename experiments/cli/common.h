@@ -1,11 +1,14 @@
 // Shared pieces of the `ssslab` command line.
 #pragma once
 
+#include "core/progress.h"
 #include "mcml/engine.h"
 
 #include <CLI/CLI.hpp>
 
 #include <atomic>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -21,10 +24,14 @@ struct CommonOptions {
     std::optional<double> rel_error;
     std::int64_t batch = 0;
     bool quiet = false;
+    bool fresh = false;  ///< resumable commands: ignore a checkpoint and start afresh
 };
 
 /// Add --seed, --threads, --out, --photons, --time, --rel-error, --batch, --quiet.
 void add_common_options(CLI::App& app, CommonOptions& o, const std::string& out_help);
+
+/// Add --fresh (resumable commands): ignore a checkpoint of an earlier run and start afresh.
+void add_fresh_option(CLI::App& app, bool& fresh);
 
 /// Install SIGINT/SIGTERM handlers that set the returned flag (a second signal exits at once).
 const std::atomic<bool>* install_interrupt_handler();
@@ -38,6 +45,39 @@ std::string pm(double value, double se);
 
 /// Budget from the options (unset fields stay unset).
 mcml::Budget budget_from(const CommonOptions& o);
+
+/// Says on stderr (a terminal or a log alike) that a run continues from a checkpoint:
+/// "ssslab <command>: <what>: resuming from 174 of 300 spp (checkpoint <path>)"; total <= 0:
+/// no total. Nothing when quiet.
+void say_resuming(const std::string& command, const std::string& what, double done, double total,
+                  const std::string& unit, const std::string& checkpoint, bool quiet);
+
+/// The error figure of a progress line: "<label> 1.23%" for a relative standard error se/value,
+/// or "" while none exists yet (fewer than two batches: se is 0).
+std::string error_figure(const std::string& label, double value, double se);
+
+/// The progress of a run made of several runs one after another (the channels R, G, B, or one
+/// hero run): a progress line per run, labelled label(run), and the resume notice.
+class RunsProgress {
+  public:
+    RunsProgress(std::string command, std::function<std::string(int run)> label, double total,
+                 std::string unit, bool quiet);
+    /// After a batch of `run`: done units, the budget quantity and its standard error.
+    void batch(int run, double done, double value, double se);
+    /// `run` continues from its checkpoint at `checkpoint`, which holds `done` units.
+    void resume(int run, double done, const std::string& checkpoint);
+    void finish() { progress_.reset(); }
+
+  private:
+    void start(int run);
+    std::string command_;
+    std::function<std::string(int)> label_;
+    double total_;
+    std::string unit_;
+    bool quiet_;
+    int current_ = -1;
+    std::unique_ptr<Progress> progress_;
+};
 
 /// Exit status for an interrupted run.
 inline constexpr int kExitInterrupted = 130;

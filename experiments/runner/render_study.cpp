@@ -6,6 +6,7 @@
 #include "core/hash.h"
 #include "core/provenance.h"
 #include "core/scene.h"
+#include "core/stats.h"
 #include "experiments/runner/report.h"
 #include "experiments/runner/runner.h"
 #include "volpath/render.h"
@@ -41,28 +42,19 @@ struct RenderNode {
     std::string key, key_text;
 };
 
-// What a render depends on: the scene's text and every file it reads, size, budget, seed, the
-// renderer's version (which changes whenever its results would).
+// What a render depends on: the scene's content (core/scene.h add_to_key: resolved values,
+// meshes, grid files), size, budget, seed, the renderer's version (which changes whenever its
+// results would). The same scene description keys the renderer's checkpoints.
 ContentKey render_key(const RenderNode& n) {
     ContentKey k(kKind);
-    k.add("engine", volpath::render_engine_version())
-        .add("role", n.role)
-        .add("scene_name", n.scene.name)
-        .add("scene_file", hash_hex(read_file(n.scene_path)));
-    std::set<std::string> files;
-    for (const SceneShape& s : n.scene.shapes)
-        if (!s.file.empty()) files.insert(s.file);
-    for (const SceneMaterial& m : n.scene.materials)
-        if (!m.density_file.empty()) files.insert(m.density_file + "#" + m.density_grid);
-    for (const std::string& f : files) {
-        const std::string path = f.substr(0, f.find('#'));
-        k.add("file", fs::path(f).filename().string()).add("file_hash", hash_hex(read_file(path)));
-    }
+    k.add("engine", volpath::render_engine_version()).add("role", n.role);
+    add_to_key(k, n.scene);
     k.add("width", n.options.width)
         .add("height", n.options.height)
         .add("seed", n.options.seed)
         .add("roulette_depth", n.options.roulette_depth)
-        .add("long_path_events", n.options.long_path_events);
+        .add("long_path_events", n.options.long_path_events)
+        .add("index_matched_nee", n.options.index_matched_nee);
     if (n.options.budget.samples) k.add("spp", *n.options.budget.samples);
     if (n.options.budget.seconds) k.add("seconds", *n.options.budget.seconds);
     return k;
@@ -171,24 +163,12 @@ double rel_rms(const ImageLayer& a, const ImageLayer& ref) {
 // The image's own relative RMS standard error sqrt(sum SE^2 / sum L^2) and the median pixel's
 // relative SE (over pixel-channels that see anything).
 void own_error(const LayeredImage& im, double& image_rel_se, double& median_rel_se) {
-    const ImageLayer& L = im.layer("radiance");
-    const ImageLayer& E = im.layer("radiance.stderr");
-    double s2 = 0, l2 = 0;
-    std::vector<double> rel;
-    for (std::size_t i = 0; i < L.pixels().size(); ++i) {
-        const double l = L.pixels()[i], e = E.pixels()[i];
-        s2 += e * e;
-        l2 += l * l;
-        if (l > 0 && e > 0) rel.push_back(e / l);
-    }
-    image_rel_se = l2 > 0 ? std::sqrt(s2 / l2) : 0.0;
-    if (rel.empty()) {
-        median_rel_se = 0;
-        return;
-    }
-    std::nth_element(rel.begin(), rel.begin() + static_cast<std::ptrdiff_t>(rel.size() / 2),
-                     rel.end());
-    median_rel_se = rel[rel.size() / 2];
+    const auto L = im.layer("radiance").pixels();
+    const auto E = im.layer("radiance.stderr").pixels();
+    const RelativeError r = relative_error(
+        L.size(), [&](std::size_t i) { return L[i]; }, [&](std::size_t i) { return E[i]; });
+    image_rel_se = r.rms;
+    median_rel_se = r.median;
 }
 
 double t_1pct(double seconds, double e) {
