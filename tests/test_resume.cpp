@@ -8,7 +8,9 @@
 #include "core/film_image.h"
 #include "core/hash.h"
 #include "core/material.h"
+#include "core/progress.h"
 #include "core/scene.h"
+#include "experiments/cli/common.h"
 #include "mcml/engine.h"
 #include "mcml/run_spec.h"
 #include "testing.h"
@@ -334,6 +336,31 @@ TEST(ResumeSlabEngines, SphereRefusesAnEditedMediumNamingIt) {
     }
 }
 
+// ---- progress lines -----------------------------------------------------------------------
+
+TEST(ResumeProgress, TheRateAfterAResumeCountsOnlyThisRunsWork) {
+    ::setenv("SSSLAB_PROGRESS", "1", 1);
+    ::testing::internal::CaptureStderr();
+    {
+        Progress p("x", 300, "spp");
+        p.resume_from(174);
+        std::this_thread::sleep_for(std::chrono::milliseconds(60));
+        p.update(177);  // 3 spp in >= 60 ms: at most 50 spp/s
+    }
+    const std::string line = ::testing::internal::GetCapturedStderr();
+    ::unsetenv("SSSLAB_PROGRESS");
+    const std::size_t at = line.find("(59.0%)  ");
+    ASSERT_NE(at, std::string::npos) << line;
+    const double rate = std::stod(line.substr(at + 9));
+    EXPECT_LE(rate, 50.0) << line;  // 177 / elapsed would be thousands
+}
+
+TEST(ResumeProgress, NoErrorFigureBeforeOneExists) {
+    EXPECT_EQ(cli::error_figure("rel.err", 0.3, 0.0), "");  // one batch: no standard error yet
+    EXPECT_EQ(cli::error_figure("rel.err", 0.0, 0.1), "");
+    EXPECT_EQ(cli::error_figure("rel.err", 0.5, 0.01), "rel.err 2%");
+}
+
 // ---- `ssslab render` end to end ---------------------------------------------------------------
 
 struct Spawned {
@@ -343,7 +370,8 @@ struct Spawned {
 
 // Starts `ssslab args` in `cwd` with a progress line on stderr, waits for the first progress
 // line (a batch is done), sends SIGINT and waits for the exit.
-Spawned run_and_interrupt(const std::vector<std::string>& args, const fs::path& cwd) {
+Spawned run_and_interrupt(const std::vector<std::string>& args, const fs::path& cwd,
+                          bool interrupt = true) {
     const std::string bin = testing::ssslab_binary();
     const fs::path err_file = cwd / "stderr.txt";
     std::vector<std::string> argv_s = {bin};
@@ -370,17 +398,32 @@ Spawned run_and_interrupt(const std::vector<std::string>& args, const fs::path& 
     Spawned out;
     if (rc != 0) return out;
     const auto t0 = std::chrono::steady_clock::now();
-    while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60)) {
+    while (interrupt && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60)) {
         if (testing::read_text(err_file).find(" spp") != std::string::npos) break;
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
-    ::kill(pid, SIGINT);
+    if (interrupt) ::kill(pid, SIGINT);
     int status = 0;
     ::waitpid(pid, &status, 0);
     out.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     out.err = testing::read_text(err_file);
     fs::remove(err_file);
     return out;
+}
+
+TEST(ResumeProgress, TheCommandsFirstProgressLineHasNoErrorFigure) {
+    // The first line is drawn after one batch (3 spp): no standard error exists yet.
+    testing::TempDir dir;
+    dir.write("o.obj", octahedron_obj(0));
+    dir.write("s.toml", scene_text("2", "Marble"));
+    const auto r = run_and_interrupt({"render", "s.toml", "--spp", "30", "--out", "m.exr"},
+                                     dir.path(), /*interrupt=*/false);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::size_t first = r.err.find("3/30 spp");
+    ASSERT_NE(first, std::string::npos) << r.err;
+    const std::string line = r.err.substr(first, r.err.find('\r', first) - first);
+    EXPECT_EQ(line.find("rel.err"), std::string::npos) << line;
+    EXPECT_EQ(r.err.find("rel.err 0%"), std::string::npos) << r.err;
 }
 
 TEST(ResumeRenderCommand, RefusesAnEditedSceneResumesAnUnchangedOneAndWritesItsProvenance) {

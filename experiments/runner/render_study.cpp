@@ -87,6 +87,15 @@ Rendered compute(const RenderNode& n, const RenderStudyContext& ctx, const Artif
     o.checkpoint_path = cache.checkpoint_prefix(kKind, n.key).string() + ".ckpt";
     o.checkpoint_seconds = ctx.checkpoint_seconds;
     o.snapshots = n.role == "main";
+    o.on_resume = [&](const BatchProgress& p) {
+        if (ctx.quiet) return;
+        std::printf("  resuming %s (%s) from %llu%s spp (checkpoint of [%s])\n",
+                    n.scene.name.c_str(), n.role.c_str(),
+                    static_cast<unsigned long long>(p.samples),
+                    o.budget.samples ? (" of " + std::to_string(*o.budget.samples)).c_str() : "",
+                    n.key.substr(0, 16).c_str());
+        std::fflush(stdout);
+    };
     volpath::RenderResult r = volpath::render(n.scene, o);
     Rendered out;
     if (r.interrupted) {

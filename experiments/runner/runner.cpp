@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <iomanip>
 #include <mutex>
+#include <optional>
 #include <sstream>
 
 #include <unistd.h>
@@ -448,6 +449,17 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
     }
     std::mutex io;
     std::atomic<bool> interrupted{false};
+    // A node continuing from its checkpoint says so before it runs on.
+    auto say_resuming = [&](const ChannelNode& n, double done, std::optional<std::int64_t> total,
+                            const char* unit) {
+        if (o.quiet) return;
+        std::lock_guard<std::mutex> lock(io);
+        std::printf("  resuming %-10s %s %-9s from %.0f%s %s (checkpoint of [%s])\n",
+                    n.material.c_str(), kChannelNames[n.channel], n.role.c_str(), done,
+                    total ? (" of " + std::to_string(*total)).c_str() : "", unit,
+                    n.key.substr(0, 16).c_str());
+        std::fflush(stdout);
+    };
     auto compute_volpath = [&](ChannelNode& n) {
         volpath::PencilOptions po;
         po.seed = n.seed;
@@ -463,6 +475,9 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
         po.snapshots = true;
         po.checkpoint_prefix = cache.checkpoint_prefix(kVolpathKind, n.key).string();
         po.checkpoint_seconds = o.checkpoint_seconds;
+        po.on_resume = [&](int, const BatchProgress& p) {
+            say_resuming(n, static_cast<double>(p.samples), po.budget.samples, "paths");
+        };
         volpath::PencilRun run = volpath::simulate_pencil(n.medium, {n.grid.dr_cm, n.grid.nr}, po);
         n.vresult = std::move(run.runs[static_cast<size_t>(n.channel)]);
         if (run.interrupted) {
@@ -505,6 +520,9 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
         eo.snapshots = true;
         eo.checkpoint_path = cache.checkpoint_prefix(kKind, n.key).string();
         eo.checkpoint_seconds = o.checkpoint_seconds;
+        eo.on_resume = [&](const mcml::ProgressPoint& p) {
+            say_resuming(n, static_cast<double>(p.photons), n.budget.photons, "photons");
+        };
         n.result = mcml::run_default(spec, eo);
         if (n.result.reason == mcml::StopReason::kInterrupted) {
             interrupted = true;
