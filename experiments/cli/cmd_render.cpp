@@ -125,20 +125,35 @@ void register_render(CLI::App& app, std::function<int()>& action) {
         "render",
         "Path-trace a scene file (ground truth): layered EXR (radiance, subsurface, specular, "
         "standard errors, depth, normal) and a PNG preview; resumable");
-    sub->add_option("scene", a->scene, "Scene file (TOML)")->required()->check(CLI::ExistingFile);
-    sub->add_option("--spp", a->spp, "Samples per pixel (default 64 when no other budget is given)")
-        ->check(CLI::PositiveNumber);
+    sub->add_option("scene", a->scene, "Scene file (TOML)")
+        ->required()
+        ->check(existing_file("scene file"));
+    sub->add_option("--spp", a->spp,
+                    "Budget in samples per pixel, rounded up to a multiple of 3 (default 64 when "
+                    "no other budget is given)")
+        ->check(positive_integer());
+    add_time_option(*sub, a->common, "Budget in seconds of wall time");
+    add_rel_error_option(*sub, a->common,
+                         "Budget: stop when the relative standard error of the image mean (the "
+                         "radiance over all pixels and channels) falls below this");
     sub->add_option("--width", a->width, "Override the camera's width")
-        ->check(CLI::Range(1, 16384));
+        ->check(integer_in(1, 16384));
     sub->add_option("--height", a->height, "Override the camera's height")
-        ->check(CLI::Range(1, 16384));
-    sub->add_option("--exposure", a->exposure, "Exposure of the PNG preview in stops (default 0)");
+        ->check(integer_in(1, 16384));
+    sub->add_option("--exposure", a->exposure, "Exposure of the PNG preview in stops (default 0)")
+        ->check(number_in(-100, 100, false));
     sub->add_option("--reference", a->reference,
                     "A reference EXR (its \"radiance\" layer, same size): write "
                     "<out>_convergence.csv, the relative RMS error after 4, 8, 16, ... spp and at "
                     "the end, with the seconds it took")
-        ->check(CLI::ExistingFile);
-    add_common_options(*sub, a->common, "Output EXR (default results/render/<scene>.exr)");
+        ->check(existing_file("reference image"));
+    add_out_option(*sub, a->common, "Output EXR (default results/render/<scene>.exr)");
+    add_seed_option(*sub, a->common,
+                    "Seed of the counter-based random streams (default 1); with it the image is "
+                    "the same for any thread count");
+    add_threads_option(*sub, a->common,
+                       "Worker threads (default: all); the image does not depend on it");
+    add_quiet_flag(*sub, a->common);
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
 
