@@ -215,6 +215,14 @@ void ConfigTable::fail(std::string_view key, const std::string& message) const {
     fail_at(n, key, message);
 }
 
+void ConfigTable::fail_item(std::string_view key, std::size_t index,
+                            const std::string& message) const {
+    const toml::node* n = find(key);
+    if (n && n->is_array() && index < n->as_array()->size())
+        fail_at(n->as_array()->get(index), key, message);
+    fail(key, message);
+}
+
 double ConfigTable::to_number(std::string_view key, const toml::node& n, Range range) const {
     double v = 0;
     if (n.is_integer())

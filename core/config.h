@@ -100,6 +100,10 @@ class ConfigTable {
 
     /// Throws an InputError located at `key` (or at the table when the key is absent).
     [[noreturn]] void fail(std::string_view key, const std::string& message) const;
+    /// Throws an InputError located at item `index` of the array `key` (at the key itself when
+    /// it is not an array that long, e.g. one number given for all three channels).
+    [[noreturn]] void fail_item(std::string_view key, std::size_t index,
+                                const std::string& message) const;
     SourceLocation location(std::string_view key) const;
 
     /// Dotted path of this table ("" for the root).

@@ -1,13 +1,75 @@
 #include "core/error.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 #include <vector>
 
 namespace ssslab {
 
 namespace {
+
+// Length of the valid UTF-8 sequence at s[i] (1 for ASCII), or 0 if the bytes there are not one.
+size_t utf8_length(std::string_view s, size_t i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c < 0x80) return 1;
+    size_t n = 0;
+    unsigned min = 0;
+    if ((c & 0xE0) == 0xC0)
+        n = 2, min = 0x80;
+    else if ((c & 0xF0) == 0xE0)
+        n = 3, min = 0x800;
+    else if ((c & 0xF8) == 0xF0)
+        n = 4, min = 0x10000;
+    else
+        return 0;
+    if (i + n > s.size()) return 0;
+    unsigned cp = c & (0xFF >> (n + 1));
+    for (size_t k = 1; k < n; ++k) {
+        const auto b = static_cast<unsigned char>(s[i + k]);
+        if ((b & 0xC0) != 0x80) return 0;
+        cp = (cp << 6) | (b & 0x3F);
+    }
+    if (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return 0;
+    return n;
+}
+
+// Whether a byte is one a terminal shows as itself: not a control character (tab excepted).
+bool control(unsigned char c) {
+    return (c < 0x20 && c != '\t') || c == 0x7F;
+}
+
+// Whether a source line can be shown as it is: UTF-8 text without control characters.
+bool printable_line(std::string_view s) {
+    for (size_t i = 0; i < s.size();) {
+        const size_t n = utf8_length(s, i);
+        if (n == 0 || (n == 1 && control(static_cast<unsigned char>(s[i])))) return false;
+        i += n;
+    }
+    return true;
+}
+
+// `s` with every byte that is not text (control characters other than tab and newline, invalid
+// UTF-8) written as \xNN, so that a message quoting the input never echoes raw bytes.
+std::string printable(std::string_view s) {
+    std::string out;
+    out.reserve(s.size());
+    for (size_t i = 0; i < s.size();) {
+        const size_t n = utf8_length(s, i);
+        if (n == 0 || (n == 1 && control(static_cast<unsigned char>(s[i])) && s[i] != '\n')) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\x%02x", static_cast<unsigned char>(s[i]));
+            out += buf;
+            ++i;
+        } else {
+            out.append(s.substr(i, n));
+            i += n;
+        }
+    }
+    return out;
+}
 
 std::string format_input_error(const SourceLocation& where, const std::string& key,
                                const std::string& message, const std::string& line_text) {
@@ -18,9 +80,13 @@ std::string format_input_error(const SourceLocation& where, const std::string& k
         if (where.column > 0) os << ':' << where.column;
     }
     os << ": error: ";
-    if (!key.empty()) os << "key '" << key << "': ";
-    os << message;
-    if (!line_text.empty()) {
+    if (!key.empty()) os << "key '" << printable(key) << "': ";
+    os << printable(message);
+    if (!line_text.empty() && !printable_line(line_text)) {
+        // The bytes of a binary file (or stray control characters) would garble the terminal.
+        os << "\n    (the line is not shown: it holds bytes that are not text (NUL, control "
+              "characters or invalid UTF-8); is this a binary file?)";
+    } else if (!line_text.empty()) {
         os << "\n    " << line_text;
         if (where.column > 0) {
             os << "\n    ";

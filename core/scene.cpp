@@ -2,6 +2,7 @@
 
 #include "core/config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -78,7 +79,8 @@ SceneMaterial read_material(ConfigTable& t, const std::string& base_dir) {
         m.medium.name = m.name;
         for (int c = 0; c < 3; ++c)
             if (m.medium.g[c] <= -1 || m.medium.g[c] >= 1)
-                t.fail("g", "g must lie in (-1, 1) for the path tracer");
+                t.fail_item("g", static_cast<std::size_t>(c),
+                            "g must lie in (-1, 1) for the path tracer");
         m.roughness = t.number("roughness", 0.0, Range::closed(0, 1));
         if (auto f = t.optional_string("density_vdb")) {
             fs::path p = *f;
@@ -105,8 +107,8 @@ Transform read_transform(ConfigTable& t) {
     if (t.has("scale")) {
         if (auto s = t.optional_rgb("scale", Range::any())) {  // one number or three
             x.scale = {(*s)[0], (*s)[1], (*s)[2]};
-            if (x.scale.x == 0 || x.scale.y == 0 || x.scale.z == 0)
-                t.fail("scale", "scale factors must not be 0");
+            for (std::size_t i = 0; i < 3; ++i)
+                if ((*s)[i] == 0) t.fail_item("scale", i, "scale factors must not be 0");
         }
     }
     x.rotate_deg = t.optional_vec3("rotate_deg").value_or(Vec3{});
@@ -169,9 +171,17 @@ SceneShape read_shape(ConfigTable& t, const std::string& base_dir,
     const std::string mat = t.string("material");
     auto it = materials.find(mat);
     if (it == materials.end()) {
-        std::string list;
-        for (const auto& [k, v] : materials) list += (list.empty() ? "" : ", ") + k;
-        t.fail("material", "unknown material \"" + mat + "\"; the scene's materials: " + list);
+        std::string list, best;
+        int best_d = 1 << 30;
+        for (const auto& [k, v] : materials) {
+            list += (list.empty() ? "" : ", ") + k;
+            const int d = edit_distance(mat, k);
+            if (d < best_d) best_d = d, best = k;
+        }
+        std::string msg = "unknown material \"" + mat + "\"";
+        if (!best.empty() && best_d <= std::max<int>(2, static_cast<int>(mat.size()) / 3))
+            msg += " (did you mean \"" + best + "\"?)";
+        t.fail("material", msg + "; the scene's materials: " + list);
     }
     s.material = it->second;
     const MeshCheck check = check_mesh(s.mesh);

@@ -42,6 +42,92 @@ TEST(Cli, HelpForEveryCommand) {
     EXPECT_TRUE(dir.files().empty());
 }
 
+// The help text of a command's option, from its name to the next option.
+std::string option_help(const std::string& help, const std::string& option) {
+    const size_t at = help.find("  " + option + " ");
+    if (at == std::string::npos) return {};
+    const size_t next = help.find("\n  -", at + 1);
+    return help.substr(at, next == std::string::npos ? std::string::npos : next - at);
+}
+
+TEST(Cli, EachCommandListsOnlyItsOwnOptionsDescribedForIt) {
+    testing::TempDir dir;
+    const auto render = run_ssslab({"render", "--help"}, dir.path());
+    ASSERT_EQ(render.exit_code, 0) << render.err;
+    const std::string& h = render.out;
+    for (const char* opt : {"--spp", "--time", "--rel-error", "--seed", "--threads", "--out",
+                            "--quiet", "--width", "--reference"})
+        EXPECT_NE(h.find(opt), std::string::npos) << opt << " in\n" << h;
+    // render counts samples per pixel (--spp); photons and batches are other commands' budgets.
+    EXPECT_EQ(h.find("--photons"), std::string::npos) << h;
+    EXPECT_EQ(h.find("--batch"), std::string::npos) << h;
+    EXPECT_EQ(h.find("diffuse reflectance"), std::string::npos) << h;
+    // Its relative error is a pixel's (the median lit pixel), the image mean's on request.
+    EXPECT_NE(option_help(h, "--rel-error").find("median pixel"), std::string::npos) << h;
+    EXPECT_NE(option_help(h, "--rel-error-of").find("image-mean"), std::string::npos) << h;
+    EXPECT_NE(option_help(h, "--fresh").find("checkpoint"), std::string::npos) << h;
+    EXPECT_NE(option_help(h, "--spp").find("samples per pixel"), std::string::npos) << h;
+    // No 300-digit bound of a double in any check's description.
+    EXPECT_EQ(h.find("17976931348623157"), std::string::npos) << h;
+
+    for (const char* cmd : {"mcml", "profile"}) {
+        const auto r = run_ssslab({cmd, "--help"}, dir.path());
+        ASSERT_EQ(r.exit_code, 0) << r.err;
+        for (const char* opt : {"--photons", "--time", "--rel-error", "--batch", "--seed"})
+            EXPECT_NE(r.out.find(opt), std::string::npos) << cmd << " " << opt;
+        EXPECT_NE(option_help(r.out, "--rel-error").find("total diffuse"), std::string::npos)
+            << cmd << ":\n"
+            << r.out;
+    }
+    const auto mcml = run_ssslab({"mcml", "--help"}, dir.path());
+    EXPECT_NE(option_help(mcml.out, "--photons").find(".mci"), std::string::npos) << mcml.out;
+    const auto profile = run_ssslab({"profile", "--help"}, dir.path());
+    EXPECT_NE(option_help(profile.out, "--unit").find("mm (default"), std::string::npos)
+        << profile.out;
+    const auto sphere = run_ssslab({"sphere", "--help"}, dir.path());
+    EXPECT_NE(option_help(sphere.out, "--rel-error").find("exitance"), std::string::npos)
+        << sphere.out;
+    EXPECT_TRUE(dir.files().empty());
+}
+
+// Command-line values: exit 2 and one short readable line (see test_bad_input for the table).
+TEST(Cli, BadValuesExitTwoWithAShortMessage) {
+    testing::TempDir dir;
+    dir.write("s.toml", "# not read\n");
+    const auto r = run_ssslab({"render", "s.toml", "--spp", "0"}, dir.path());
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("ssslab render: error: --spp: must be a positive integer, got 0"),
+              std::string::npos)
+        << r.err;
+    EXPECT_LT(r.err.size(), 200u) << r.err;
+    EXPECT_EQ(r.out, "");
+    const auto missing = run_ssslab({"render", "x.toml"}, dir.path());
+    EXPECT_EQ(missing.exit_code, 2);
+    EXPECT_EQ(missing.err.rfind("ssslab render: error: scene file 'x.toml' does not exist\n", 0),
+              0u)
+        << missing.err;
+    EXPECT_EQ(dir.files(), std::vector<std::string>{"s.toml"});
+}
+
+// The CSV is in mm unless asked for cm, as the experiments and reports are.
+TEST(Cli, ProfileUnitIsMmByDefault) {
+    testing::TempDir dir;
+    for (const std::string unit : {"", "cm"}) {
+        std::vector<std::string> args = {
+            "profile", "-m", "Skin1", "--photons", "300", "--out", "p" + unit + ".csv"};
+        if (!unit.empty()) args.insert(args.end(), {"--unit", unit});
+        const auto r = run_ssslab(args, dir.path());
+        ASSERT_EQ(r.exit_code, 0) << r.err;
+        const std::string csv = testing::read_text(dir / ("p" + unit + ".csv"));
+        const std::string rec = testing::read_text(dir / ("p" + unit + ".csv.toml"));
+        const std::string want = unit.empty() ? "mm" : "cm";
+        EXPECT_NE(csv.find("r_mid_" + want), std::string::npos) << csv.substr(0, 300);
+        EXPECT_NE(csv.find("Rd_R_per_" + want + "2"), std::string::npos) << csv.substr(0, 300);
+        EXPECT_NE(rec.find("unit = '" + want + "'"), std::string::npos) << rec;
+        EXPECT_NE(r.out.find(" " + want + " (Skin1)"), std::string::npos) << r.out;
+    }
+}
+
 TEST(Cli, MaterialsListsTheElevenPresets) {
     testing::TempDir dir;
     const auto r = run_ssslab({"materials"}, dir.path());

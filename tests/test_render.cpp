@@ -330,7 +330,7 @@ TEST(Render, CommandWritesTheLayeredExrAndPreviewOrNothing) {
                                         "--height", "6", "--out", "o.exr", "-q"},  // 2 -> 3 spp
                                        dir.path());
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_EQ(dir.files(), (std::vector<std::string>{"o.exr", "o.png", "s.toml"}));
+    EXPECT_EQ(dir.files(), (std::vector<std::string>{"o.exr", "o.exr.toml", "o.png", "s.toml"}));
     const LayeredImage img = read_exr((dir / "o.exr").string());
     EXPECT_EQ(img.width(), 8);
     EXPECT_EQ(img.height(), 6);
@@ -347,9 +347,11 @@ TEST(Render, CommandWritesTheLayeredExrAndPreviewOrNothing) {
         testing::run_ssslab({"render", "s.toml", "--spp", "2", "--out", "o.exr"}, bad.path());
     EXPECT_EQ(e.exit_code, 2) << e.out << e.err;
     EXPECT_NE(e.err.find("s.toml:11"), std::string::npos) << e.err;
+    // render counts samples per pixel: --photons is not one of its options.
     const auto p = testing::run_ssslab({"render", "s.toml", "--photons", "5"}, bad.path());
     EXPECT_EQ(p.exit_code, 2);
-    EXPECT_NE(p.err.find("--spp"), std::string::npos) << p.err;
+    EXPECT_NE(p.err.find("ssslab render: error:"), std::string::npos) << p.err;
+    EXPECT_NE(p.err.find("--photons"), std::string::npos) << p.err;
     EXPECT_EQ(bad.files(), std::vector<std::string>{"s.toml"});
 }
 

@@ -391,10 +391,10 @@ TEST(Runner, BadExperimentConfigsAreRefusedWithTheirLocation) {
          {"e.toml:3:8", "experiment.seed", "[0, inf)"}},
         {"unknown preset",
          head + "[materials]\npresets = [\"Skim1\"]\n" + outs,
-         {"e.toml:4:11", "unknown material \"Skim1\"", "did you mean \"Skin1\""}},
+         {"e.toml:4:12", "unknown material \"Skim1\"", "did you mean \"Skin1\""}},  // the item
         {"preset twice",
          head + "[materials]\npresets = [\"Skin1\", \"skin1\"]\n" + outs,
-         {"e.toml:4:", "listed twice"}},
+         {"e.toml:4:21", "listed twice"}},
         {"presets not strings",
          head + "[materials]\npresets = [1, 2]\n" + outs,
          {"e.toml:4:", "materials.presets", "array of strings"}},

@@ -15,6 +15,7 @@
 #include "core/material.h"
 #include "experiments/cli/bench_volpath.h"
 #include "experiments/cli/commands.h"
+#include "experiments/cli/common.h"
 #include "mcml/engine.h"
 #include "mcml/mci.h"
 #include "mcml/profile.h"
@@ -423,12 +424,13 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
         "bench",
         "Benchmark the MCML engine: photons/ms and ns per scattering event, one thread "
         "and all threads; with --kernels, the kernel models' build times instead");
-    sub->add_option("--threads", a->threads, "Threads for the multi-threaded rows (default: all)");
+    sub->add_option("--threads", a->threads, "Threads for the multi-threaded rows (default: all)")
+        ->check(integer_in(0, 65536));
     sub->add_flag("--quick", a->quick, "A tenth of the photons (with --kernels: a fifth)");
     CLI::Option* repeat =
         sub->add_option("--repeat", a->repeat,
                         "Runs per row; the fastest is reported (default 3; 1 with --kernels)")
-            ->check(CLI::Range(1, 1'000'000));
+            ->check(integer_in(1, 1'000'000));
     CLI::Option* kernels = sub->add_flag(
         "--kernels", a->kernels,
         "Instead of MCML: time the kernel models' builds per channel for the eleven Freude14 "
@@ -447,10 +449,10 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
                     "With --render: the scene folder (default experiments/scenes)")
         ->needs(render);
     sub->add_option("--size", a->size, "With --render: image width and height (default 256)")
-        ->check(CLI::Range(1, 8192))
+        ->check(integer_in(1, 8192))
         ->needs(render);
     sub->add_option("--spp", a->spp, "With --render: samples per pixel (default 16)")
-        ->check(CLI::Range(1, 1'000'000))
+        ->check(integer_in(1, 1'000'000))
         ->needs(render);
     sub->add_option("--case", a->only, "Only the cases (or scenes) whose name contains this text")
         ->excludes(kernels)
@@ -462,7 +464,7 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--photons", a->photons,
                     "With --kernels: MCML photons per channel for the ground-truth profiles "
                     "(default 100000)")
-        ->check(CLI::Range(std::int64_t{1}, std::int64_t{1'000'000'000'000}))
+        ->check(integer_in(1, 1'000'000'000'000))
         ->needs(kernels);
     sub->add_option("--csv", a->csv,
                     "With --kernels: also write the times in long format (material, channel, "

@@ -8,6 +8,7 @@
 #include "core/film_image.h"
 #include "core/image_compare.h"
 #include "experiments/cli/commands.h"
+#include "experiments/cli/common.h"
 
 #include <cmath>
 #include <cstdio>
@@ -91,16 +92,16 @@ void register_compare(CLI::App& app, std::function<int()>& action) {
         "(each side one EXR with a .stderr layer, or several independent runs)");
     sub->add_option("--a", a->a, "Image A: one EXR with <layer>.stderr, or >= 2 runs")
         ->required()
-        ->check(CLI::ExistingFile);
+        ->check(existing_file("image"));
     sub->add_option("--b", a->b, "Image B: one EXR with <layer>.stderr, or >= 2 runs")
         ->required()
-        ->check(CLI::ExistingFile);
+        ->check(existing_file("image"));
     sub->add_option("--layer-a", a->layer_a,
                     "Layer of A (default radiance; else the default layer)");
     sub->add_option("--layer-b", a->layer_b,
                     "Layer of B (default radiance; else the default layer)");
     sub->add_option("--block", a->block, "Block size in pixels (default 16)")
-        ->check(CLI::Range(1, 4096));
+        ->check(integer_in(1, 4096));
     sub->add_option("--csv", a->csv, "Write every block's means, SE and z here");
     sub->callback([a, &action] { action = [a] { return run_compare(*a); }; });
 }

@@ -226,9 +226,23 @@ void register_mcml(CLI::App& app, std::function<int()>& action) {
     sub->add_flag("--no-checkpoint", a->no_checkpoint,
                   "Do not save <name>.mco.ckpt checkpoints (default mode saves one every 30 s and "
                   "on interruption, and resumes from it)");
-    add_common_options(*sub, a->common,
-                       "Directory for the outputs (default: current directory, as "
-                       "the original)");
+    add_out_option(*sub, a->common,
+                   "Directory for the outputs (default: current directory, as the original)");
+    add_photons_option(*sub, a->common, "Photons per run, instead of the count in the .mci file");
+    add_time_option(*sub, a->common, "Wall-time budget per run in seconds");
+    add_rel_error_option(*sub, a->common,
+                         "Stop a run when the relative standard error of its total diffuse "
+                         "reflectance (or of its transmittance, if larger) falls below this");
+    add_batch_option(*sub, a->common,
+                     "Photons per batch in the default mode (default: from the photon budget; "
+                     "part of what determines the result)");
+    add_seed_option(*sub, a->common,
+                    "Seed of the counter-based random streams in the default mode (default 1; "
+                    "--compat seeds with --idum)");
+    add_threads_option(*sub, a->common,
+                       "Worker threads in the default mode (default: all); the results do not "
+                       "depend on it (--compat runs on one)");
+    add_quiet_flag(*sub, a->common);
     add_fresh_option(*sub, a->common.fresh);
     sub->callback([a, &action] { action = [a] { return run_mcml(*a); }; });
 }

@@ -88,7 +88,7 @@ ProfileJob read_profile_job(const std::string& config_path, const std::string& m
                          "[volpath] and --mode apply to engine = \"volpath\" only");
 
     ConfigTable output = root.table_or_empty("output");
-    const std::string unit = output.choice("unit", "cm", {"cm", "mm"});
+    const std::string unit = output.choice("unit", "mm", {"cm", "mm"});
     job.unit = (unit_flag.empty() ? unit : unit_flag) == "mm" ? LengthUnit::kMm : LengthUnit::kCm;
     if (!unit_flag.empty()) output.record("unit", unit_flag);
     root.finish();
@@ -298,20 +298,36 @@ void register_profile(CLI::App& app, std::function<int()>& action) {
                     "TOML config: [material] (preset or sigma_a_per_mm/_per_cm, sigma_s_..., g, "
                     "eta, thickness_mm/_cm), [grid] (dr_mm/dr_cm, nr), [budget] (photons, "
                     "seconds, rel_error, batch_photons), [output] (unit), seed")
-        ->check(CLI::ExistingFile);
-    sub->add_option("--unit", a->unit, "Length unit of the CSV: cm (default) or mm")
-        ->check(CLI::IsMember({"cm", "mm"}));
+        ->check(existing_file("config file"));
+    sub->add_option("--unit", a->unit,
+                    "Length unit of the CSV: mm (default, as the experiments and reports) or cm")
+        ->check(one_of({"mm", "cm"}));
     sub->add_option("--engine", a->engine,
                     "Ground-truth engine: mcml (default) or volpath (the volumetric path tracer; "
                     "also writes <out>.single.csv, the single-scattering part)")
-        ->check(CLI::IsMember({"mcml", "volpath"}));
+        ->check(one_of({"mcml", "volpath"}));
     sub->add_option("--mode", a->mode,
                     "volpath estimator: analog (per channel, absorption by roulette; default), "
                     "weighted (per channel, implicit absorption), hero (one path for RGB, "
                     "spectral MIS, absorption by the hero's roulette) or hero-weighted (hero "
                     "with implicit absorption)")
-        ->check(CLI::IsMember({"analog", "weighted", "hero", "hero-weighted"}));
-    add_common_options(*sub, a->common, "Output CSV (default results/profiles/<material>.csv)");
+        ->check(one_of({"analog", "weighted", "hero", "hero-weighted"}));
+    add_out_option(*sub, a->common, "Output CSV (default results/profiles/<material>.csv)");
+    add_photons_option(*sub, a->common,
+                       "Photon (path) budget per RGB channel (default 1e7, as Freude14, when no "
+                       "other budget is given); overrides [budget] photons");
+    add_time_option(*sub, a->common, "Wall-time budget per RGB channel in seconds");
+    add_rel_error_option(*sub, a->common,
+                         "Stop a channel when the relative standard error of its total diffuse "
+                         "reflectance (or of its transmittance, if larger) falls below this");
+    add_batch_option(*sub, a->common,
+                     "Photons per batch (default: from the photon budget; part of what determines "
+                     "the result)");
+    add_seed_option(*sub, a->common,
+                    "Seed of the counter-based random streams (default 1, or the config's seed)");
+    add_threads_option(*sub, a->common,
+                       "Worker threads (default: all); the profile does not depend on it");
+    add_quiet_flag(*sub, a->common);
     add_fresh_option(*sub, a->common.fresh);
     sub->callback([a, &action] { action = [a] { return run_profile(*a); }; });
 }

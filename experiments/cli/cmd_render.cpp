@@ -93,9 +93,6 @@ std::string render_toml(const RenderArgs& a, const Scene& scene, const volpath::
 }
 
 int run_render(const RenderArgs& a) {
-    if (a.common.photons || a.common.batch)
-        throw InputError({"<command line>", 0, 0}, a.common.photons ? "--photons" : "--batch",
-                         "ssslab render counts samples per pixel: use --spp (three per batch)");
     const Scene scene = read_scene(a.scene);
     volpath::check_renderable(scene);
     const fs::path out = a.common.out.empty()
@@ -214,26 +211,41 @@ void register_render(CLI::App& app, std::function<int()>& action) {
         "render",
         "Path-trace a scene file (ground truth): layered EXR (radiance, subsurface, specular, "
         "standard errors, depth, normal) and a PNG preview; resumable");
-    sub->add_option("scene", a->scene, "Scene file (TOML)")->required()->check(CLI::ExistingFile);
-    sub->add_option("--spp", a->spp, "Samples per pixel (default 64 when no other budget is given)")
-        ->check(CLI::PositiveNumber);
+    sub->add_option("scene", a->scene, "Scene file (TOML)")
+        ->required()
+        ->check(existing_file("scene file"));
+    sub->add_option("--spp", a->spp,
+                    "Budget in samples per pixel, rounded up to a multiple of 3 (default 64 when "
+                    "no other budget is given)")
+        ->check(positive_integer());
+    add_time_option(*sub, a->common, "Budget in seconds of wall time");
+    add_rel_error_option(*sub, a->common,
+                         "Budget: stop when the median pixel's relative standard error of the "
+                         "radiance falls below this (see --rel-error-of)");
     sub->add_option("--width", a->width, "Override the camera's width")
-        ->check(CLI::Range(1, 16384));
+        ->check(integer_in(1, 16384));
     sub->add_option("--height", a->height, "Override the camera's height")
-        ->check(CLI::Range(1, 16384));
-    sub->add_option("--exposure", a->exposure, "Exposure of the PNG preview in stops (default 0)");
+        ->check(integer_in(1, 16384));
+    sub->add_option("--exposure", a->exposure, "Exposure of the PNG preview in stops (default 0)")
+        ->check(number_in(-100, 100, false));
     sub->add_option("--reference", a->reference,
                     "A reference EXR (its \"radiance\" layer, same size): write "
                     "<out>_convergence.csv, the relative RMS error after 4, 8, 16, ... spp and at "
                     "the end, with the seconds it took")
-        ->check(CLI::ExistingFile);
-    add_common_options(*sub, a->common, "Output EXR (default results/render/<scene>.exr)");
+        ->check(existing_file("reference image"));
+    add_out_option(*sub, a->common, "Output EXR (default results/render/<scene>.exr)");
+    add_seed_option(*sub, a->common,
+                    "Seed of the counter-based random streams (default 1); with it the image is "
+                    "the same for any thread count");
+    add_threads_option(*sub, a->common,
+                       "Worker threads (default: all); the image does not depend on it");
+    add_quiet_flag(*sub, a->common);
     add_fresh_option(*sub, a->common.fresh);
     sub->add_option("--rel-error-of", a->error_of,
                     "What --rel-error measures: median-pixel (default; the median over the lit "
                     "pixel channels of the radiance's relative standard error) or image-mean (the "
                     "relative standard error of the image mean, far smaller than any pixel's)")
-        ->check(CLI::IsMember({"median-pixel", "image-mean"}));
+        ->check(one_of({"median-pixel", "image-mean"}));
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
 

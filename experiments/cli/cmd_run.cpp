@@ -109,13 +109,13 @@ void common(CLI::App& sub, RunArgs& a) {
     sub.add_option("configs", a.configs,
                    "Experiment configs (TOML); none: the built-in default experiment "
                    "(experiments/freude14/profiles.toml)")
-        ->check(CLI::ExistingFile);
+        ->check(existing_file("experiment config"));
     sub.add_flag("--quick", a.quick,
                  "Scale every Monte Carlo budget by the experiment's quick_factor (CI and smoke "
                  "runs; recorded in the provenance, cached separately)");
     sub.add_option("--threads", a.threads,
                    "Worker threads (default: all); results do not depend on it")
-        ->check(CLI::NonNegativeNumber);
+        ->check(integer_in(0, 65536));
     sub.add_option("--results", a.results,
                    "Results root: <root>/<experiment>/ and the cache <root>/cache/ (default "
                    "results)");
@@ -150,7 +150,7 @@ void register_check(CLI::App& app, std::function<int()>& action) {
     sub->add_flag("--update", a->update, "Write the baselines from this run instead of comparing");
     sub->add_option("--alpha", a->alpha,
                     "Family-wise false-alarm rate of the z-tests (default 0.01)")
-        ->check(CLI::Range(1e-12, 0.5));
+        ->check(number_in(1e-12, 0.5, false));
     sub->add_option("--baselines", a->baselines, "Baselines directory (default results/baselines)");
     sub->callback([a, &action] { action = [a] { return check_experiments(*a); }; });
 }

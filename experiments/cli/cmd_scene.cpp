@@ -5,6 +5,7 @@
 #include "core/atomic_file.h"
 #include "core/scene.h"
 #include "experiments/cli/commands.h"
+#include "experiments/cli/common.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -141,7 +142,9 @@ void register_scene(CLI::App& app, std::function<int()>& action) {
         "scene",
         "Read and validate scene files (camera, lights, materials, shapes) and describe "
         "them; errors name file, line and key");
-    sub->add_option("files", a->files, "Scene files (TOML)")->required()->check(CLI::ExistingFile);
+    sub->add_option("files", a->files, "Scene files (TOML)")
+        ->required()
+        ->check(existing_file("scene file"));
     sub->add_option("--export-obj", a->export_dir,
                     "Write every shape's tessellation, placed in world units, as "
                     "<dir>/<scene>/<shape>.obj, and <dir>/<scene>/scene.json (camera, lights, "

@@ -176,8 +176,8 @@ SphereJob read_sphere_job(const SphereArgs& a) {
         models = split_list(a.models);
         if (models.size() == 1 && models[0] == "none") models.clear();
     }
-    auto models_error = [&](const std::string& msg) {
-        if (a.models.empty() && models_in_config) root.fail("models", msg);
+    auto models_error = [&](size_t i, const std::string& msg) {
+        if (a.models.empty() && models_in_config) root.fail_item("models", i, msg);
         throw InputError({kCommandLine, 0, 0}, "--models", msg);
     };
     const auto& known = approx::diffusion_model_names();
@@ -185,11 +185,11 @@ SphereJob read_sphere_job(const SphereArgs& a) {
     for (const auto& n : known) known_list += (known_list.empty() ? "" : ", ") + n;
     for (size_t i = 0; i < models.size(); ++i) {
         if (std::find(known.begin(), known.end(), models[i]) == known.end())
-            models_error("unknown model \"" + models[i] + "\"; known models: " + known_list +
-                         " (or \"none\")");
+            models_error(i, "unknown model \"" + models[i] + "\"; known models: " + known_list +
+                                " (or \"none\")");
         if (std::find(models.begin(), models.begin() + static_cast<long>(i), models[i]) !=
             models.begin() + static_cast<long>(i))
-            models_error("model \"" + models[i] + "\" given twice");
+            models_error(i, "model \"" + models[i] + "\" given twice");
     }
     {
         std::string list;
@@ -286,7 +286,8 @@ SphereJob read_sphere_job(const SphereArgs& a) {
         throw InputError({src, 0, 0}, "sphere", e.what());
     }
     const Medium& m = sc.medium;
-    for (const std::string& name : job.models) {
+    for (size_t k = 0; k < job.models.size(); ++k) {
+        const std::string& name = job.models[k];
         auto& per_channel = job.profiles.emplace_back();
         for (int ch = 0; ch < 3; ++ch) {
             approx::DiffusionMedium dm;
@@ -297,8 +298,8 @@ SphereJob read_sphere_job(const SphereArgs& a) {
             try {
                 per_channel[static_cast<size_t>(ch)] = approx::make_diffusion_profile(name, dm);
             } catch (const std::invalid_argument& e) {
-                models_error("model \"" + name + "\" refuses channel " + kChannelNames[ch] +
-                             " of the material: " + e.what());
+                models_error(k, "model \"" + name + "\" refuses channel " + kChannelNames[ch] +
+                                    " of the material: " + e.what());
             }
         }
     }
@@ -669,7 +670,7 @@ void register_sphere(CLI::App& app, std::function<int()>& action) {
                     "acceptance_deg, beta_bins), [budget] (photons, seconds, rel_error, "
                     "batch_photons), [volpath] (mode), [integration] (entry, nodes_per_bin, "
                     "rel_tol, supersampling), seed")
-        ->check(CLI::ExistingFile);
+        ->check(existing_file("config file"));
     sub->add_option("--radius-mm", a->radius_mm, "Sphere radius in mm (default 5)");
     sub->add_option("--models", a->models,
                     "Analytic models, comma-separated (default dipole,better-dipole,pbd; "
@@ -685,9 +686,24 @@ void register_sphere(CLI::App& app, std::function<int()>& action) {
                     "Direction to the light, degrees from +z in the x-z plane (default 0)");
     sub->add_option("--camera-deg", a->camera_deg,
                     "Direction to the camera, degrees from +z in the x-z plane (default 60)");
-    add_common_options(*sub, a->common,
-                       "Output prefix (default results/sphere/<material>): <out>.exr, <out>.png, "
-                       "<out>_beta.csv, <out>.toml");
+    add_out_option(*sub, a->common,
+                   "Output prefix (default results/sphere/<material>): <out>.exr, <out>.png, "
+                   "<out>_beta.csv, <out>.toml");
+    add_photons_option(*sub, a->common,
+                       "Light paths per path-tracer run (one run per channel in analog mode, one "
+                       "in hero mode; default 1e6 when no other budget is given)");
+    add_time_option(*sub, a->common, "Wall-time budget per path-tracer run in seconds");
+    add_rel_error_option(*sub, a->common,
+                         "Stop a path-tracer run when the relative standard error of the total "
+                         "diffuse exitance (of its least precise channel) falls below this");
+    add_batch_option(*sub, a->common,
+                     "Light paths per batch (default: from the budget and the image size; part "
+                     "of what determines the result)");
+    add_seed_option(*sub, a->common,
+                    "Seed of the counter-based random streams (default 1, or the config's seed)");
+    add_threads_option(*sub, a->common,
+                       "Worker threads (default: all); the results do not depend on it");
+    add_quiet_flag(*sub, a->common);
     add_fresh_option(*sub, a->common.fresh);
     sub->callback([a, &action] { action = [a] { return run_sphere(*a); }; });
 }

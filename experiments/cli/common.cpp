@@ -1,9 +1,15 @@
 #include "experiments/cli/common.h"
 
+#include "core/error.h"
+
 #include <unistd.h>
+#include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
+#include <limits>
 
 namespace ssslab::cli {
 
@@ -55,25 +61,168 @@ std::string pm(double value, double se) {
     return buf;
 }
 
-void add_common_options(CLI::App& app, CommonOptions& o, const std::string& out_help) {
-    app.add_option("--seed", o.seed, "Seed of the counter-based random streams (default 1)");
-    app.add_option("--threads", o.threads,
-                   "Worker threads (default: all); results do not depend on it")
-        ->check(CLI::NonNegativeNumber);
-    app.add_option("--out", o.out, out_help);
-    app.add_option("--photons", o.photons, "Photon budget (per run or per channel)")
-        ->check(CLI::PositiveNumber);
-    app.add_option("--time", o.seconds, "Wall-time budget in seconds (per run or per channel)")
-        ->check(CLI::PositiveNumber);
-    app.add_option("--rel-error", o.rel_error,
-                   "Stop when the relative standard error of the total diffuse reflectance "
-                   "(or of the transmittance, if larger) falls below this")
-        ->check(CLI::Range(1e-9, 1.0));
-    app.add_option("--batch", o.batch,
-                   "Photons per batch (default: from the photon budget; part of what determines "
-                   "the result)")
-        ->check(CLI::PositiveNumber);
+void add_seed_option(CLI::App& app, CommonOptions& o, const std::string& help) {
+    app.add_option("--seed", o.seed, help)->check(nonnegative_integer());
+}
+
+void add_threads_option(CLI::App& app, CommonOptions& o, const std::string& help) {
+    app.add_option("--threads", o.threads, help)->check(integer_in(0, 65536));
+}
+
+void add_out_option(CLI::App& app, CommonOptions& o, const std::string& help) {
+    app.add_option("--out", o.out, help);
+}
+
+void add_photons_option(CLI::App& app, CommonOptions& o, const std::string& help) {
+    app.add_option("--photons", o.photons, help)->check(positive_integer());
+}
+
+void add_time_option(CLI::App& app, CommonOptions& o, const std::string& help) {
+    app.add_option("--time", o.seconds, help)->check(positive_number());
+}
+
+void add_rel_error_option(CLI::App& app, CommonOptions& o, const std::string& help) {
+    app.add_option("--rel-error", o.rel_error, help)->check(number_in(0.0, 1.0, true));
+}
+
+void add_batch_option(CLI::App& app, CommonOptions& o, const std::string& help) {
+    app.add_option("--batch", o.batch, help)->check(positive_integer());
+}
+
+void add_quiet_flag(CLI::App& app, CommonOptions& o) {
     app.add_flag("-q,--quiet", o.quiet, "Print nothing but errors");
+}
+
+namespace {
+
+// A whole number written in decimal digits (an optional sign), within int64.
+std::optional<std::int64_t> parse_integer(const std::string& s) {
+    const char* b = s.data();
+    const char* e = s.data() + s.size();
+    if (b != e && *b == '+') ++b;
+    std::int64_t v = 0;
+    const auto r = std::from_chars(b, e, v);
+    if (r.ec != std::errc() || r.ptr != e || b == e) return std::nullopt;
+    return v;
+}
+
+bool is_integer_text(const std::string& s) {
+    size_t i = (!s.empty() && (s[0] == '+' || s[0] == '-')) ? 1 : 0;
+    if (i == s.size()) return false;
+    for (; i < s.size(); ++i)
+        if (s[i] < '0' || s[i] > '9') return false;
+    return true;
+}
+
+std::optional<double> parse_number(const std::string& s) {
+    const char* b = s.data();
+    const char* e = s.data() + s.size();
+    if (b != e && *b == '+') ++b;
+    double v = 0;
+    const auto r = std::from_chars(b, e, v);
+    if (r.ec != std::errc() || r.ptr != e || b == e || !std::isfinite(v)) return std::nullopt;
+    return v;
+}
+
+std::string shown(const std::string& s) {
+    return "'" + s + "'";
+}
+
+std::string format_number(double x) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%g", x);
+    return buf;
+}
+
+CLI::Validator integer_check(std::int64_t lo, std::int64_t hi, const std::string& what,
+                             const std::string& desc) {
+    return CLI::Validator(
+        [lo, hi, what](std::string& s) -> std::string {
+            const auto v = parse_integer(s);
+            if (!v) {
+                // A whole number beyond int64 is out of range, anything else is not a number.
+                if (is_integer_text(s)) return "must be " + what + ", got " + s;
+                return "must be " + what + ", got " + shown(s);
+            }
+            if (*v < lo || *v > hi) return "must be " + what + ", got " + s;
+            return {};
+        },
+        desc);
+}
+
+}  // namespace
+
+CLI::Validator integer_in(std::int64_t lo, std::int64_t hi) {
+    const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    return integer_check(lo, hi, "an integer in " + range, range);
+}
+
+CLI::Validator positive_integer() {
+    return integer_check(1, std::numeric_limits<std::int64_t>::max(), "a positive integer",
+                         "POSITIVE");
+}
+
+CLI::Validator nonnegative_integer() {
+    return integer_check(0, std::numeric_limits<std::int64_t>::max(), "a non-negative integer",
+                         "NONNEGATIVE");
+}
+
+CLI::Validator number_in(double lo, double hi, bool open) {
+    const std::string range = std::string(open ? "(" : "[") + format_number(lo) + ", " +
+                              format_number(hi) + (open ? ")" : "]");
+    const std::string what = "a number in " + range;
+    return CLI::Validator(
+        [lo, hi, open, what](std::string& s) -> std::string {
+            const auto v = parse_number(s);
+            if (!v) return "must be " + what + ", got " + shown(s);
+            if (open ? !(*v > lo && *v < hi) : !(*v >= lo && *v <= hi))
+                return "must be " + what + ", got " + s;
+            return {};
+        },
+        range);
+}
+
+CLI::Validator positive_number() {
+    return CLI::Validator(
+        [](std::string& s) -> std::string {
+            const auto v = parse_number(s);
+            if (!v) return "must be a positive number, got " + shown(s);
+            if (!(*v > 0)) return "must be a positive number, got " + s;
+            return {};
+        },
+        "POSITIVE");
+}
+
+CLI::Validator one_of(std::vector<std::string> choices) {
+    std::string list;
+    for (const auto& c : choices) list += (list.empty() ? "" : ", ") + c;
+    return CLI::Validator(
+        [choices, list](std::string& s) -> std::string {
+            if (std::find(choices.begin(), choices.end(), s) != choices.end()) return {};
+            std::string msg = "must be one of " + list + ", got " + shown(s);
+            std::string best;
+            int best_d = 3;
+            for (const auto& c : choices) {
+                const int d = edit_distance(s, c);
+                if (d < best_d) best_d = d, best = c;
+            }
+            if (!best.empty()) msg += " (did you mean '" + best + "'?)";
+            return msg;
+        },
+        "{" + list + "}");
+}
+
+CLI::Validator existing_file(const std::string& what) {
+    return CLI::Validator(
+        [what](std::string& s) -> std::string {
+            std::error_code ec;
+            const auto st = std::filesystem::status(s, ec);
+            if (!std::filesystem::exists(st)) return what + " " + shown(s) + " does not exist";
+            if (std::filesystem::is_directory(st))
+                return what + " " + shown(s) + " is a directory, not a file";
+            return {};
+        },
+        "FILE");
 }
 
 void add_fresh_option(CLI::App& app, bool& fresh) {

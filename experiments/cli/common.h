@@ -11,10 +11,12 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace ssslab::cli {
 
-/// Options most subcommands share.
+/// Options several subcommands share. Each command registers only those it takes, with help
+/// text of its own (add_seed_option, ... below); the others stay unset.
 struct CommonOptions {
     std::optional<std::uint64_t> seed;
     int threads = 0;
@@ -27,8 +29,36 @@ struct CommonOptions {
     bool fresh = false;  ///< resumable commands: ignore a checkpoint and start afresh
 };
 
-/// Add --seed, --threads, --out, --photons, --time, --rel-error, --batch, --quiet.
-void add_common_options(CLI::App& app, CommonOptions& o, const std::string& out_help);
+/// --seed (a non-negative integer).
+void add_seed_option(CLI::App& app, CommonOptions& o, const std::string& help);
+/// --threads (0: all cores).
+void add_threads_option(CLI::App& app, CommonOptions& o, const std::string& help);
+/// --out.
+void add_out_option(CLI::App& app, CommonOptions& o, const std::string& help);
+/// --photons (a positive integer).
+void add_photons_option(CLI::App& app, CommonOptions& o, const std::string& help);
+/// --time (positive seconds).
+void add_time_option(CLI::App& app, CommonOptions& o, const std::string& help);
+/// --rel-error (in (0, 1)).
+void add_rel_error_option(CLI::App& app, CommonOptions& o, const std::string& help);
+/// --batch (a positive integer).
+void add_batch_option(CLI::App& app, CommonOptions& o, const std::string& help);
+/// -q, --quiet.
+void add_quiet_flag(CLI::App& app, CommonOptions& o);
+
+/// Checks of command-line values whose messages read as sentences ("must be a positive
+/// integer, got 0"); CLI11 prefixes the option's name. Integers are checked as whole numbers
+/// (no fractions, no exponents), so the value's conversion cannot fail after them.
+CLI::Validator integer_in(std::int64_t lo, std::int64_t hi);
+CLI::Validator positive_integer();
+CLI::Validator nonnegative_integer();
+/// A finite number in (lo, hi) or [lo, hi] (`open`: both ends excluded).
+CLI::Validator number_in(double lo, double hi, bool open);
+CLI::Validator positive_number();
+CLI::Validator one_of(std::vector<std::string> choices);
+/// An existing regular file; `what` names it in the message ("scene file 'x.toml' does not
+/// exist"). On a positional argument the message stands alone (main drops the argument's name).
+CLI::Validator existing_file(const std::string& what);
 
 /// Add --fresh (resumable commands): ignore a checkpoint of an earlier run and start afresh.
 void add_fresh_option(CLI::App& app, bool& fresh);

@@ -5,8 +5,58 @@
 
 #include <cstdio>
 #include <exception>
+#include <sstream>
+#include <string>
+#include <vector>
 
 namespace ssslab::cli {
+
+namespace {
+
+// A bad command line is bad input like any other: exit 2 with one readable line on stderr,
+// "ssslab render: error: --spp: must be a positive integer, got 0" (CLI11's own exit codes, 105 and
+// so on, and its help text are left out).
+int command_line_error(CLI::App& app, const CLI::ParseError& e) {
+    std::string command = "ssslab";
+    const CLI::App* sub = nullptr;
+    for (const CLI::App* s : app.get_subcommands()) {
+        command += " " + s->get_name();
+        sub = s;
+    }
+    std::string message = e.what();
+    // A positional argument's check says what it is ("scene file 'x.toml' does not exist"):
+    // CLI11's "scene: " in front of it adds nothing.
+    if (sub && dynamic_cast<const CLI::ValidationError*>(&e))
+        for (const CLI::Option* o : sub->get_options())
+            if (o->get_positional() && message.rfind(o->get_name() + ": ", 0) == 0) {
+                message = message.substr(o->get_name().size() + 2);
+                break;
+            }
+    if (dynamic_cast<const CLI::ExtrasError*>(&e)) {
+        // CLI11 lists the extra arguments in reverse ("... not expected: 3 --photons").
+        const size_t colon = message.find(": ");
+        std::vector<std::string> words;
+        if (colon != std::string::npos) {
+            std::istringstream in(message.substr(colon + 2));
+            for (std::string w; in >> w;) words.insert(words.begin(), w);
+        }
+        if (!words.empty()) {
+            std::string extras;
+            for (const std::string& w : words) extras += (extras.empty() ? "" : " ") + w;
+            message =
+                std::string(words.size() > 1 ? "unexpected arguments: " : "unexpected argument: ") +
+                extras +
+                (words[0].rfind("-", 0) == 0
+                     ? " (" + words[0] + " is not an option of " + command + ")"
+                     : std::string());
+        }
+    }
+    std::fprintf(stderr, "%s: error: %s\nRun `%s --help` for the options.\n", command.c_str(),
+                 message.c_str(), command.c_str());
+    return 2;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
     set_command_line(argc, argv);
@@ -39,7 +89,9 @@ int main(int argc, char** argv) {
     try {
         app.parse(static_cast<int>(av.size()), av.data());
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success))
+            return app.exit(e);  // --help, --version
+        return command_line_error(app, e);
     }
     if (!action) return app.exit(CLI::CallForHelp());
     try {

@@ -20,7 +20,7 @@ struct ProfileJob {
     mcml::ProfileGrid grid;
     mcml::Budget budget;
     std::int64_t batch = 0;
-    LengthUnit unit = LengthUnit::kCm;
+    LengthUnit unit = LengthUnit::kMm;
     /// "mcml" (default) or "volpath"; with volpath, `mode` is "analog", "weighted" or "hero"
     /// (volpath/pencil.h: per-channel analog or implicit absorption, or one hero path).
     std::string engine = "mcml", mode = "analog";

@@ -41,10 +41,10 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
                 std::string msg = "unknown material \"" + presets[i] + "\"";
                 const std::string near = nearest_material(presets[i]);
                 if (!near.empty()) msg += " (did you mean \"" + near + "\"?)";
-                mats.fail("presets", msg + "; known materials: " + material_names());
+                mats.fail_item("presets", i, msg + "; known materials: " + material_names());
             }
             if (!labels.insert(m->name).second)
-                mats.fail("presets", "material \"" + m->name + "\" is listed twice");
+                mats.fail_item("presets", i, "material \"" + m->name + "\" is listed twice");
             e.materials.push_back({m->name, *m});
         }
     }
@@ -101,11 +101,13 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
         e.pencil.enabled = true;
         e.pencil.models = t->string_list("models");
         const auto& known = approx::diffusion_model_names();
-        for (const auto& m : e.pencil.models)
-            if (std::find(known.begin(), known.end(), m) == known.end()) {
+        for (size_t i = 0; i < e.pencil.models.size(); ++i)
+            if (std::find(known.begin(), known.end(), e.pencil.models[i]) == known.end()) {
                 std::string list;
                 for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-                t->fail("models", "unknown diffusion model \"" + m + "\"; known: " + list);
+                t->fail_item(
+                    "models", i,
+                    "unknown diffusion model \"" + e.pencil.models[i] + "\"; known: " + list);
             }
         if (e.pencil.models.empty()) t->fail("models", "expected at least one diffusion model");
         for (const MaterialEntry& m : e.materials)
@@ -121,9 +123,11 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
         e.efficiency.materials = t->string_list("materials");
         if (e.efficiency.materials.empty())
             t->fail("materials", "expected at least one material of this experiment");
-        for (const auto& m : e.efficiency.materials)
-            if (!labels.count(m))
-                t->fail("materials", "\"" + m + "\" is not a material of this experiment");
+        for (size_t i = 0; i < e.efficiency.materials.size(); ++i)
+            if (!labels.count(e.efficiency.materials[i]))
+                t->fail_item(
+                    "materials", i,
+                    "\"" + e.efficiency.materials[i] + "\" is not a material of this experiment");
         need_volpath(*t, "[outputs.efficiency]");
     }
     if (auto t = outs.table("profiles")) {
@@ -141,9 +145,11 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
         e.convergence.materials = t->string_list("materials");
         if (e.convergence.materials.empty())
             t->fail("materials", "expected at least one material of this experiment");
-        for (const auto& m : e.convergence.materials)
-            if (!labels.count(m))
-                t->fail("materials", "\"" + m + "\" is not a material of this experiment");
+        for (size_t i = 0; i < e.convergence.materials.size(); ++i)
+            if (!labels.count(e.convergence.materials[i]))
+                t->fail_item(
+                    "materials", i,
+                    "\"" + e.convergence.materials[i] + "\" is not a material of this experiment");
         e.convergence.reference_factor =
             t->number("reference_factor", 4.0, Range::closed(1.0, 1000.0));
         if (!e.mcml.budget.photons)

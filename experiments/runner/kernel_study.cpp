@@ -121,9 +121,10 @@ KernelStudySpec read_kernel_study(ConfigTable& t, const std::vector<std::string>
                            s.name + "\"");
     if (auto ms = t.optional_string_list("materials")) {
         s.materials = *ms;
-        for (const auto& m : s.materials)
-            if (std::find(labels.begin(), labels.end(), m) == labels.end())
-                t.fail("materials", "\"" + m + "\" is not a material of this experiment");
+        for (size_t i = 0; i < s.materials.size(); ++i)
+            if (std::find(labels.begin(), labels.end(), s.materials[i]) == labels.end())
+                t.fail_item("materials", i,
+                            "\"" + s.materials[i] + "\" is not a material of this experiment");
     } else {
         s.materials = labels;
     }
@@ -131,22 +132,24 @@ KernelStudySpec read_kernel_study(ConfigTable& t, const std::vector<std::string>
     const std::vector<std::string> models =
         t.optional_string_list("models").value_or(std::vector<std::string>{});
     std::set<std::string> seen;
-    for (const auto& m : models) {
+    for (size_t i = 0; i < models.size(); ++i) {
         try {
-            s.models.push_back(approx::parse_model(m));
+            s.models.push_back(approx::parse_model(models[i]));
         } catch (const std::invalid_argument& e) {
-            t.fail("models", e.what());
+            t.fail_item("models", i, e.what());
         }
         if (!seen.insert(s.models.back().label()).second)
-            t.fail("models", "model \"" + m + "\" is listed twice");
+            t.fail_item("models", i, "model \"" + models[i] + "\" is listed twice");
     }
     if (auto names = t.optional_string_list("signals"))
-        for (const auto& name : *names) {
+        for (size_t i = 0; i < names->size(); ++i) {
+            const std::string& name = (*names)[i];
             approx::Signal sig;
             if (!approx::parse_signal(name, sig))
-                t.fail("signals", "unknown signal \"" + name +
-                                      "\"; signals: edge, circle_squares, dot, skin_shaded, "
-                                      "skin_uniform");
+                t.fail_item("signals", i,
+                            "unknown signal \"" + name +
+                                "\"; signals: edge, circle_squares, dot, skin_shaded, "
+                                "skin_uniform");
             s.signals.push_back(sig);
         }
     s.taps = static_cast<int>(t.integer("taps", 17, Range::closed(0, 1001)));

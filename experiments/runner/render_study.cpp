@@ -192,14 +192,15 @@ RenderStudySpec read_render_study(ConfigTable& t, const std::string& config_dir)
     const auto scenes = t.string_list("scenes");
     if (scenes.empty()) t.fail("scenes", "expected at least one scene file");
     std::set<std::string> names;
-    for (const std::string& f : scenes) {
+    for (size_t i = 0; i < scenes.size(); ++i) {
+        const std::string& f = scenes[i];
         const fs::path p = fs::path(f).is_absolute() ? fs::path(f) : fs::path(config_dir) / f;
-        if (!fs::exists(p)) t.fail("scenes", "no scene file " + p.string());
+        if (!fs::exists(p)) t.fail_item("scenes", i, "no scene file " + p.string());
         const Scene sc = read_scene(p.string());
         volpath::check_renderable(sc);
         if (!names.insert(sc.name).second)
-            t.fail("scenes",
-                   "two scenes are named \"" + sc.name + "\" (they name the output files)");
+            t.fail_item("scenes", i,
+                        "two scenes are named \"" + sc.name + "\" (they name the output files)");
         s.scenes.push_back(p.lexically_normal().string());
     }
     if (auto v = t.optional_integer("spp", Range::closed(2, 1e9))) s.budget.samples = *v;
