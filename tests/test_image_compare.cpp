@@ -189,6 +189,11 @@ TEST(CompareCommand, PrintsTheVerdictAndWritesTheBlocks) {
     const std::string csv = testing::read_text(dir / "blocks.csv");
     // 16 blocks of 8 x 8; the first is the black corner (no variance), left out.
     EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 15 * 3);
+    // Beside it, what produced it: the inputs by content, the settings, provenance.
+    const std::string toml = testing::read_text(dir / "blocks.csv.toml");
+    for (const char* k : {"a_1_content_hash", "b_4_content_hash", "block = 8", "git_revision",
+                          "command_line", "chi2_R"})
+        EXPECT_NE(toml.find(k), std::string::npos) << k << "\n" << toml;
     // A single image without a stderr layer cannot give a variance: refused, naming the file.
     const auto bad =
         testing::run_ssslab({"compare", "--a", "b0.exr", "--b", "b1.exr", "b2.exr"}, dir.path());

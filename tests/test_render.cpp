@@ -307,6 +307,31 @@ TEST(Render, BitIdenticalForAnyThreadCountAndResumable) {
     EXPECT_EQ(resumed.run.se, full.run.se);
 }
 
+TEST(Render, ARelativeErrorBudgetMeasuresTheMedianPixelUnlessAskedForTheImageMean) {
+    // Issue 12: a --rel-error of the image mean stopped a visibly noisy image early; the
+    // default measure is the median lit pixel's relative standard error.
+    const Scene s = parse_scene(
+        scene_text("[[materials]]\nname = \"m\"\npreset = \"Skin1\"\nroughness = 0.3\n", kEnv),
+        "t.toml", ".");
+    RenderOptions o;
+    o.threads = 2;
+    o.width = o.height = 12;
+    o.budget.rel_error = 0.05;
+    o.budget.samples = 30000;  // a cap that is never reached
+    const RenderResult pixel = render(s, o);
+    EXPECT_EQ(pixel.run.reason, BatchStop::kRelError);
+    const RelativeError pe = pixel_rel_error(pixel.run.mean, pixel.run.se);
+    EXPECT_LE(pe.median, 0.05);
+    EXPECT_GT(pe.counted, 100u);
+    o.error_measure = RenderErrorMeasure::kImageMean;
+    const RenderResult mean = render(s, o);
+    EXPECT_EQ(mean.run.reason, BatchStop::kRelError);
+    EXPECT_LE(image_mean_rel_se(mean.run.mean, mean.run.se), 0.05);
+    // The image mean reaches 5 % long before its pixels do.
+    EXPECT_LT(mean.spp * 4, pixel.spp);
+    EXPECT_GT(pixel_rel_error(mean.run.mean, mean.run.se).median, 0.1);
+}
+
 TEST(Render, DeltaLightOnASmoothMediumIsRefusedAtTheLight) {
     const Scene s = parse_scene(
         scene_text("[[materials]]\nname = \"m\"\npreset = \"Skin1\"\n",

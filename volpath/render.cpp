@@ -614,6 +614,11 @@ struct Renderer {
     }
 };
 
+// Radiance channel i % 3 of pixel i / 3 in the tally (RenderLayout).
+std::size_t radiance_element(std::size_t i) {
+    return (i / 3) * RenderLayout::kPerPixel + RenderLayout::kRadiance + i % 3;
+}
+
 // sqrt(sum SE^2) / |sum v| over n elements: the relative standard error of their mean (the
 // elements' errors treated as independent).
 template <class Value, class Error>
@@ -652,22 +657,16 @@ const char* to_string(RenderErrorMeasure m) {
 
 double image_mean_rel_se(const std::vector<double>& mean, const std::vector<double>& se) {
     const std::size_t n = mean.size() / RenderLayout::kPerPixel * 3;
-    auto element = [](std::size_t i) {
-        return (i / 3) * RenderLayout::kPerPixel + RenderLayout::kRadiance + i % 3;
-    };
     return image_mean_rel_se_of(
-        n, [&](std::size_t i) { return mean[element(i)]; },
-        [&](std::size_t i) { return se[element(i)]; });
+        n, [&](std::size_t i) { return mean[radiance_element(i)]; },
+        [&](std::size_t i) { return se[radiance_element(i)]; });
 }
 
 RelativeError pixel_rel_error(const std::vector<double>& mean, const std::vector<double>& se) {
     const std::size_t n = mean.size() / RenderLayout::kPerPixel * 3;
-    auto element = [](std::size_t i) {
-        return (i / 3) * RenderLayout::kPerPixel + RenderLayout::kRadiance + i % 3;
-    };
     return relative_error(
-        n, [&](std::size_t i) { return mean[element(i)]; },
-        [&](std::size_t i) { return se[element(i)]; });
+        n, [&](std::size_t i) { return mean[radiance_element(i)]; },
+        [&](std::size_t i) { return se[radiance_element(i)]; });
 }
 
 std::string render_fingerprint(const Scene& scene, const RenderOptions& o) {
@@ -715,11 +714,8 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
     bo.snapshots = o.snapshots;
     bo.quantity = [pixels, measure = o.error_measure](const BatchAccumulator& acc, double& value,
                                                       double& se) {
-        auto element = [](std::size_t i) {
-            return (i / 3) * RenderLayout::kPerPixel + RenderLayout::kRadiance + i % 3;
-        };
-        auto mean = [&](std::size_t i) { return acc.mean(element(i)); };
-        auto error = [&](std::size_t i) { return acc.standard_error(element(i)); };
+        auto mean = [&](std::size_t i) { return acc.mean(radiance_element(i)); };
+        auto error = [&](std::size_t i) { return acc.standard_error(radiance_element(i)); };
         if (measure == RenderErrorMeasure::kImageMean) {
             value = 1.0;
             se = image_mean_rel_se_of(3 * pixels, mean, error);

@@ -4,19 +4,25 @@
 // Prints the whole-image means with their standard errors and z per channel, and the per-block
 // chi-square (core/image_compare.h); --csv writes every block's z.
 #include "core/atomic_file.h"
+#include "core/config.h"
 #include "core/error.h"
 #include "core/film_image.h"
+#include "core/hash.h"
 #include "core/image_compare.h"
+#include "core/provenance.h"
 #include "experiments/cli/commands.h"
 #include "experiments/cli/common.h"
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 
 namespace ssslab::cli {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 struct CompareArgs {
     std::vector<std::string> a, b;
@@ -77,7 +83,33 @@ int run_compare(const CompareArgs& a) {
                           names[d.channel], d.a, d.b, d.se, d.z);
             os << buf;
         }
-        write_file_atomic(a.csv, os.str());
+        // Beside it what produced it: the inputs (by content), the settings, the totals.
+        auto doc = ConfigDocument::empty("compare.toml");
+        ConfigTable root = doc->root();
+        ConfigTable in = root.table_or_empty("input");
+        for (const auto& [flag, files] : {std::pair{"a", &a.a}, std::pair{"b", &a.b}})
+            for (std::size_t i = 0; i < files->size(); ++i) {
+                const std::string k = std::string(flag) + "_" + std::to_string(i + 1);
+                in.record(k, fs::absolute((*files)[i]).lexically_normal().string());
+                in.record(k + "_content_hash", file_hash_hex((*files)[i]));
+            }
+        in.record("layer_a", a.layer_a);
+        in.record("layer_b", a.layer_b);
+        in.record("block", static_cast<std::int64_t>(a.block));
+        ConfigTable res = root.table_or_empty("result");
+        for (size_t c = 0; c < 3; ++c) {
+            res.record(std::string("z_mean_") + names[c], r.z_mean[c]);
+            res.record(std::string("chi2_") + names[c], r.chi2[c]);
+            res.record(std::string("dof_") + names[c], static_cast<std::int64_t>(r.dof[c]));
+            res.record(std::string("p_") + names[c], r.p[c]);
+        }
+        doc->add_resolved_section("provenance", provenance(command_line()));
+        OutputTransaction tx;
+        tx.stage(a.csv, os.str());
+        tx.stage(a.csv + ".toml",
+                 "# ssslab compare: the inputs, settings, result and provenance of " + a.csv +
+                     "\n" + doc->resolved_toml());
+        tx.commit();
     }
     return 0;
 }

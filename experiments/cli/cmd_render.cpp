@@ -178,15 +178,18 @@ int run_render(const RenderArgs& a) {
     md["ssslab.content_key"] = content_key;
     md["ssslab.resumed_from_spp"] = std::to_string(resumed_from);
     md["ssslab.provenance"] = toml;
-    write_exr(r.image, out.string());
-    write_png_preview(r.image, "radiance", png.string(), a.exposure);
-    write_file_atomic(out.string() + ".toml", toml);
-    if (reference) {
-        fs::path conv = out;
-        conv.replace_extension("");
-        write_file_atomic(conv.string() + "_convergence.csv", csv);
-        if (!a.common.quiet) std::printf("%s", csv.c_str());
-    }
+    // The image, its preview, its provenance (and the convergence table): all or none.
+    OutputTransaction tx;
+    tx.stage(out, encode_through_file(out, [&](const std::string& p) { write_exr(r.image, p); }));
+    tx.stage(png, encode_through_file(png, [&](const std::string& p) {
+                 write_png_preview(r.image, "radiance", p, a.exposure);
+             }));
+    tx.stage(out.string() + ".toml", toml);
+    fs::path conv = out;
+    conv.replace_extension("");
+    if (reference) tx.stage(conv.string() + "_convergence.csv", csv);
+    tx.commit();
+    if (reference && !a.common.quiet) std::printf("%s", csv.c_str());
     std::error_code ec;
     fs::remove(o.checkpoint_path, ec);
     if (!a.common.quiet) {

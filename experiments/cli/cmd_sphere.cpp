@@ -346,29 +346,6 @@ void check_same_camera(const volpath::SphereScene& sc, const approx::SphereView&
                                fmt(worst) + " R (approx::resolve_view vs volpath::sphere_camera)");
 }
 
-// Bytes of a file written by `write` (write_exr, write_png_preview write to a path): a scratch
-// file beside `target`, removed afterwards, so that the bytes can join an OutputTransaction.
-template <class W>
-std::string encode_through_file(const fs::path& target, W&& write) {
-    if (!target.parent_path().empty()) {
-        std::error_code ec;
-        fs::create_directories(target.parent_path(), ec);
-        if (ec)
-            throw IoError("cannot create directory '" + target.parent_path().string() +
-                          "': " + ec.message());
-    }
-    const fs::path scratch = target.string() + ".encode." + std::to_string(::getpid());
-    struct Remove {
-        fs::path p;
-        ~Remove() {
-            std::error_code ec;
-            fs::remove(p, ec);
-        }
-    } guard{scratch};
-    write(scratch.string());
-    return read_file(scratch);
-}
-
 struct Comparison {
     double rel_l2_lit = 0, rel_l2_unlit = 0, chi2 = 0;
     int dof = 0;

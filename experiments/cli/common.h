@@ -1,12 +1,17 @@
 // Shared pieces of the `ssslab` command line.
 #pragma once
 
+#include "core/atomic_file.h"
+#include "core/error.h"
 #include "core/progress.h"
 #include "mcml/engine.h"
 
 #include <CLI/CLI.hpp>
 
+#include <unistd.h>
+
 #include <atomic>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -108,6 +113,29 @@ class RunsProgress {
     int current_ = -1;
     std::unique_ptr<Progress> progress_;
 };
+
+// Bytes of a file written by `write` (write_exr, write_png_preview write to a path): a scratch
+// file beside `target`, removed afterwards, so that the bytes can join an OutputTransaction.
+template <class W>
+std::string encode_through_file(const std::filesystem::path& target, W&& write) {
+    if (!target.parent_path().empty()) {
+        std::error_code ec;
+        std::filesystem::create_directories(target.parent_path(), ec);
+        if (ec)
+            throw IoError("cannot create directory '" + target.parent_path().string() +
+                          "': " + ec.message());
+    }
+    const std::filesystem::path scratch = target.string() + ".encode." + std::to_string(::getpid());
+    struct Remove {
+        std::filesystem::path p;
+        ~Remove() {
+            std::error_code ec;
+            std::filesystem::remove(p, ec);
+        }
+    } guard{scratch};
+    write(scratch.string());
+    return read_file(scratch);
+}
 
 /// Exit status for an interrupted run.
 inline constexpr int kExitInterrupted = 130;
