@@ -78,6 +78,7 @@ table.prov td.w { white-space: normal; overflow-wrap: anywhere; }
 div.metrics { display: flex; flex-wrap: wrap; gap: 0 1.6em; align-items: flex-start; }
 table.metrics caption { text-align: left; padding-bottom: 0.2em; }
 table.metrics caption span { color: #666; }
+div.metrics details { flex-basis: 100%; margin: 0.4em 0; }
 th.R { color: #d62728; } th.G { color: #2ca02c; } th.B { color: #1f77b4; }
 )CSS";
 
@@ -325,20 +326,34 @@ namespace {
 
 // The metrics as small tables instead of one flat list: a name "<row>.<R|G|B>.<quantity>" (the
 // row a material, a scene or a study entry) goes into its quantity's table, in the row's line
-// and the channel's column; names without a channel ("<row>.<quantity>", e.g. a material's grid)
-// go into one table with a column per quantity. Every value keeps its full name as its title.
+// and the channel's column. Names without a channel, "<row>.<quantity>": a quantity whose rows
+// all end in one of a few variants ("<entry>.full", "<entry>.taps17") gets a table with a
+// column per variant (where that makes fewer rows); the others (a material's grid: nr, dr) share
+// one table with a column per quantity. Tables of more than 40 rows are folded. Every value keeps
+// its name as its title.
 void metrics_tables(std::ostringstream& os, const std::vector<Metric>& ms) {
     struct Table {
-        std::string quantity;
-        std::vector<std::string> rows;                              // in order of appearance
-        std::map<std::string, std::array<const Metric*, 3>> cells;  // row -> R, G, B
+        std::string caption;  // the quantity ("" for the shared table)
+        std::vector<std::string> columns, rows;
+        std::map<std::string, std::map<std::string, const Metric*>> cells;  // row -> column -> m
+        bool channels = false;
+        void add(const std::string& row, const std::string& col, const Metric* m) {
+            if (!cells.count(row)) rows.push_back(row);
+            if (std::find(columns.begin(), columns.end(), col) == columns.end())
+                columns.push_back(col);
+            cells[row][col] = m;
+        }
     };
     std::vector<Table> tables;
-    std::vector<std::string> plain_rows, plain_quantities;
-    std::map<std::string, std::map<std::string, const Metric*>> plain;  // row -> quantity -> m
-    auto add_unique = [](std::vector<std::string>& v, const std::string& x) {
-        if (std::find(v.begin(), v.end(), x) == v.end()) v.push_back(x);
+    auto table = [&](const std::string& caption, bool channels) -> Table& {
+        for (Table& t : tables)
+            if (t.caption == caption && t.channels == channels) return t;
+        tables.push_back({caption, {}, {}, {}, channels});
+        if (channels) tables.back().columns = {"R", "G", "B"};
+        return tables.back();
     };
+    // Channel-less metrics by quantity: (row, metric) in order.
+    std::vector<std::pair<std::string, std::vector<std::pair<std::string, const Metric*>>>> plain;
     for (const Metric& m : ms) {
         std::vector<std::string> part;
         std::stringstream in(m.name);
@@ -350,22 +365,41 @@ void metrics_tables(std::ostringstream& os, const std::vector<Metric>& ms) {
             for (size_t i = from; i < to; ++i) o += (i > from ? "." : "") + part[i];
             return o;
         };
-        if (part.size() < 2) {
-            add_unique(plain_rows, "");
-            add_unique(plain_quantities, m.name);
-            plain[""][m.name] = &m;
-        } else if (ch + 1 >= part.size()) {  // no channel component
-            const std::string row = join(0, part.size() - 1), q = part.back();
-            add_unique(plain_rows, row);
-            add_unique(plain_quantities, q);
-            plain[row][q] = &m;
+        if (part.size() >= 3 && ch + 1 < part.size()) {
+            table(join(ch + 1, part.size()), true).add(join(0, ch), part[ch], &m);
+            continue;
+        }
+        const std::string q = part.size() < 2 ? m.name : part.back();
+        const std::string row = part.size() < 2 ? "" : join(0, part.size() - 1);
+        auto it =
+            std::find_if(plain.begin(), plain.end(), [&](const auto& x) { return x.first == q; });
+        if (it == plain.end()) it = plain.insert(plain.end(), {q, {}});
+        it->second.emplace_back(row, &m);
+    }
+    for (const auto& [q, entries] : plain) {
+        std::vector<std::string> variants, heads;
+        bool split = true;
+        for (const auto& [row, m] : entries) {
+            const size_t dot = row.rfind('.');
+            if (dot == std::string::npos) {
+                split = false;
+                break;
+            }
+            const std::string v = row.substr(dot + 1), h = row.substr(0, dot);
+            if (std::find(variants.begin(), variants.end(), v) == variants.end())
+                variants.push_back(v);
+            if (std::find(heads.begin(), heads.end(), h) == heads.end()) heads.push_back(h);
+        }
+        if (split && variants.size() >= 2 && variants.size() <= 6 &&
+            heads.size() < entries.size()) {
+            Table& t = table(q, false);
+            for (const auto& [row, m] : entries) {
+                const size_t dot = row.rfind('.');
+                t.add(row.substr(0, dot), row.substr(dot + 1), m);
+            }
         } else {
-            const std::string row = join(0, ch), q = join(ch + 1, part.size());
-            auto t = std::find_if(tables.begin(), tables.end(),
-                                  [&](const Table& x) { return x.quantity == q; });
-            if (t == tables.end()) t = tables.insert(tables.end(), Table{q, {}, {}});
-            if (!t->cells.count(row)) t->rows.push_back(row), t->cells[row] = {};
-            t->cells[row][part[ch] == "R" ? 0 : part[ch] == "G" ? 1 : 2] = &m;
+            Table& t = table("", false);
+            for (const auto& [row, m] : entries) t.add(row, q, m);
         }
     }
     auto value = [](const Metric* m) {
@@ -375,56 +409,59 @@ void metrics_tables(std::ostringstream& os, const std::vector<Metric>& ms) {
     };
     auto kind = [](const std::vector<const Metric*>& v) {
         std::vector<std::string> kinds;
-        for (const Metric* m : v)
-            if (m) {
-                std::string k =
-                    m->stochastic ? "&plusmn; standard error" : "rel. tol. " + num(m->tolerance);
-                if (std::find(kinds.begin(), kinds.end(), k) == kinds.end()) kinds.push_back(k);
-            }
+        for (const Metric* m : v) {
+            std::string k =
+                m->stochastic ? "&plusmn; standard error" : "rel. tol. " + num(m->tolerance);
+            if (std::find(kinds.begin(), kinds.end(), k) == kinds.end()) kinds.push_back(k);
+        }
         std::string o;
         for (const auto& k : kinds) o += (o.empty() ? "" : ", ") + k;
         return o;
     };
+    auto unit_of = [](const std::vector<const Metric*>& v) {
+        const std::string u = v.empty() ? "" : v.front()->unit;
+        return u.empty() || u == "1" ? std::string() : " [" + esc(u) + "]";
+    };
+    // The shared table first (a material's grid), then the tables in order of appearance.
+    std::stable_partition(tables.begin(), tables.end(),
+                          [](const Table& t) { return t.caption.empty(); });
     os << "<div class=\"metrics\">\n";
-    if (!plain_rows.empty()) {
-        os << "<table class=\"metrics\" id=\"metrics-per-row\"><caption><b>per "
-              "material</b></caption>\n"
-              "<tr><th class=\"l\"></th>";
-        for (const auto& q : plain_quantities) {
-            std::vector<const Metric*> col;
-            std::string unit;
-            for (const auto& row : plain_rows)
-                if (plain[row].count(q)) col.push_back(plain[row][q]), unit = plain[row][q]->unit;
-            os << "<th title=\"" << kind(col) << "\">" << esc(q)
-               << (unit.empty() || unit == "1" ? "" : " [" + esc(unit) + "]") << "</th>";
-        }
-        os << "</tr>\n";
-        for (const auto& row : plain_rows) {
-            os << "<tr><td class=\"l\">" << esc(row) << "</td>";
-            for (const auto& q : plain_quantities)
-                os << value(plain[row].count(q) ? plain[row][q] : nullptr);
-            os << "</tr>\n";
-        }
-        os << "</table>\n";
-    }
     for (const Table& t : tables) {
         std::vector<const Metric*> all;
-        std::string unit;
-        for (const auto& [row, c] : t.cells)
-            for (const Metric* m : c)
-                if (m) all.push_back(m), unit = m->unit;
-        os << "<table class=\"metrics\"><caption><b>" << esc(t.quantity) << "</b>"
-           << (unit.empty() || unit == "1" ? "" : " [" + esc(unit) + "]") << " <span>(" << kind(all)
-           << ")</span></caption>\n<tr><th class=\"l\"></th>";
-        for (int c = 0; c < 3; ++c)
-            os << "<th class=\"" << kChannelNames[c] << "\">" << kChannelNames[c] << "</th>";
+        for (const auto& [row, cols] : t.cells)
+            for (const auto& [col, m] : cols) all.push_back(m);
+        const bool fold = t.rows.size() > 40;
+        if (fold)
+            os << "<details><summary><b>" << esc(t.caption.empty() ? "per material" : t.caption)
+               << "</b>: " << all.size() << " values in " << t.rows.size() << " rows</summary>\n";
+        os << "<table class=\"metrics\"><caption>";
+        if (t.caption.empty())
+            os << "<b>per material</b>";
+        else
+            os << "<b>" << esc(t.caption) << "</b>" << unit_of(all) << " <span>(" << kind(all)
+               << ")</span>";
+        os << "</caption>\n<tr><th class=\"l\"></th>";
+        for (const auto& col : t.columns) {
+            if (t.channels) {
+                os << "<th class=\"" << col << "\">" << col << "</th>";
+                continue;
+            }
+            std::vector<const Metric*> c;
+            for (const auto& row : t.rows)
+                if (t.cells.at(row).count(col)) c.push_back(t.cells.at(row).at(col));
+            os << "<th title=\"" << kind(c) << "\">" << esc(col)
+               << (t.caption.empty() ? unit_of(c) : "") << "</th>";
+        }
         os << "</tr>\n";
         for (const auto& row : t.rows) {
             os << "<tr><td class=\"l\">" << esc(row) << "</td>";
-            for (const Metric* m : t.cells.at(row)) os << value(m);
+            for (const auto& col : t.columns) {
+                const auto& r = t.cells.at(row);
+                os << value(r.count(col) ? r.at(col) : nullptr);
+            }
             os << "</tr>\n";
         }
-        os << "</table>\n";
+        os << "</table>\n" << (fold ? "</details>\n" : "");
     }
     os << "</div>\n";
 }
