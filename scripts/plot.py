@@ -269,10 +269,12 @@ def convergence_plot(root, p):
         Line2D([], [], color="k", marker="o", ms=3, lw=1.0, label="profile error (snapshots)"),
         Line2D([], [], color="k", ls=":", lw=1.0, label="1/sqrt(t) through the last point"),
         Line2D([], [], color="k", ls="--", lw=0.6, label="the reference run's own noise")]
+    legend_size = 10
     fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=4,
-               fontsize=10, frameon=False)
+               fontsize=legend_size, frameon=False)
     fig.suptitle(p["title"])
-    save(fig, root, p["out"], {"notes": notes, "markers_per_panel": markers})
+    save(fig, root, p["out"], {"notes": notes, "markers_per_panel": markers,
+                               "legend_fontsize": legend_size})
 
 
 def singular_values_plot(root, p):
