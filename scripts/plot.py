@@ -270,6 +270,9 @@ def convergence_plot(root, p):
         Line2D([], [], color="k", ls=":", lw=1.0, label="1/sqrt(t) through the last point"),
         Line2D([], [], color="k", ls="--", lw=0.6, label="the reference run's own noise")]
     legend_size = 10
+    # matplotlib fills a legend's columns first: this order reads R G B |err| on the first row
+    # and the curve styles on the second.
+    handles = [handles[i] for i in (0, 4, 1, 5, 2, 6, 3, 7)]
     fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=4,
                fontsize=legend_size, frameon=False)
     fig.suptitle(p["title"])

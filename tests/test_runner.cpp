@@ -822,31 +822,35 @@ TEST_F(PlotScript, OverlapCheckFindsAPlantedOverlap) {
 }
 
 TEST_F(PlotScript, AFallingEfficiencyGetsACaption) {
-    // Efficiency = 1 / (rel_se^2 t): flat when rel_se falls as 1/sqrt(t); falling to a quarter
-    // when it falls as t^-1/4. Throughput held: photons grow with time.
-    std::ostringstream flat, falling, snaps;
+    // Efficiency = 1 / (rel_se^2 t): flat when rel_se falls as 1/sqrt(t); falling when it falls
+    // as t^-1/4 at a steady throughput (the variance per photon rose), or when the batches take
+    // longer and longer (the throughput fell).
+    std::ostringstream flat, falling, slower, snaps;
     const std::string head =
         "channel,batches,photons,seconds,Rd,Rd_se,Rd_reference,Rd_reference_se,abs_error,"
         "rel_error,rel_se,efficiency_per_s\n";
     flat << head;
     falling << head;
+    slower << head;
     for (const char* c : {"R", "G", "B"})
         for (int b = 2; b <= 256; ++b) {
             const double t = 0.01 * b, photons = 1000.0 * b;
             const double se_flat = 0.1 / std::sqrt(b), se_fall = 0.1 / std::pow(b, 0.25);
-            auto row = [&](std::ostringstream& os, double rse) {
-                os << c << ',' << b << ',' << photons << ',' << t << ",0.5," << 0.5 * rse
-                   << ",0.5,0.0001,0.001,0.002," << rse << ',' << 1 / (rse * rse * t) << '\n';
+            auto row = [&](std::ostringstream& os, double rse, double sec) {
+                os << c << ',' << b << ',' << photons << ',' << sec << ",0.5," << 0.5 * rse
+                   << ",0.5,0.0001,0.001,0.002," << rse << ',' << 1 / (rse * rse * sec) << '\n';
             };
-            row(flat, se_flat);
-            row(falling, se_fall);
+            row(flat, se_flat, t);
+            row(falling, se_fall, t);
+            row(slower, se_flat, 0.0001 * b * b);
         }
     snaps << "channel,batches,photons,seconds,rRd_rel_l2_error,rRd_rel_l2_reference_floor\n"
           << "R,4,4000,0.04,0.1,0.01\nR,8,8000,0.08,0.07,0.01\n";
     dir_.write("flat.csv", flat.str());
     dir_.write("falling.csv", falling.str());
+    dir_.write("slower.csv", slower.str());
     dir_.write("snaps.csv", snaps.str());
-    ASSERT_EQ(python("for h in ('flat', 'falling'):\n"
+    ASSERT_EQ(python("for h in ('flat', 'falling', 'slower'):\n"
                      "    plot.convergence_plot('.', {'history': h + '.csv', 'snapshots': "
                      "'snaps.csv', 'title': h, 'out': h})\n"),
               0)
@@ -858,6 +862,9 @@ TEST_F(PlotScript, AFallingEfficiencyGetsACaption) {
         EXPECT_NE(fa.find("The efficiency of " + std::string(ch) + " falls"), std::string::npos)
             << fa;
     EXPECT_NE(fa.find("The throughput held"), std::string::npos) << fa;
+    const std::string sl = testing::read_text(dir_ / "slower.json");
+    EXPECT_NE(sl.find("The efficiency of channel R falls"), std::string::npos) << sl;
+    EXPECT_NE(sl.find("The throughput fell with it"), std::string::npos) << sl;
     EXPECT_NE(fa.find("\"overlapping_texts\": []"), std::string::npos) << fa;
 }
 
