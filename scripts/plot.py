@@ -418,8 +418,10 @@ def pencil_plot(root, p):
                 pos = [v for v in vp if v > 0]
                 if pos:
                     a.set_ylim(min(pos) * 0.5, max(pos) * 2)
-            if name == "linear":
-                a.set_xlim(0, 0.25 * r99)
+                    # to the last bin the tracer reached (dense channels end early on the grid)
+                    a.set_xlim(0, 1.05 * max(rr for rr, v in zip(r, vp) if v > 0))
+            if name == "linear":  # zoomed to where the tracer's profile falls, as profile_plot
+                a.set_xlim(0, near_zero_range(r, [vp], 0.25 * r99))
             elif name != "log":
                 a.set_xlim(0, r99)
             a.set_title("%s, %s" % (c, name), fontsize=9)
