@@ -24,11 +24,106 @@ def read_csv(path):
         return list(csv.DictReader(f))
 
 
-def save(fig, root, out):
+def text_boxes(fig):
+    """(owner, name, bbox in pixels) of every visible text of the figure: titles, axis labels,
+    tick labels, legends; owner is the index of the axes the text belongs to (-1: the figure)."""
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    out = []
+
+    def add(owner, name, artist):
+        if artist is not None and artist.get_visible() and \
+                (not hasattr(artist, "get_text") or artist.get_text()):
+            bb = artist.get_window_extent(r)
+            if bb.width > 0 and bb.height > 0:
+                out.append((owner, name, bb))
+
+    if fig._suptitle is not None:
+        add(-1, "suptitle", fig._suptitle)
+    for leg in fig.legends:
+        add(-1, "figure legend", leg)
+    for i, a in enumerate(fig.axes):
+        add(i, "axes %d title" % i, a.title)
+        add(i, "axes %d x label" % i, a.xaxis.label)
+        add(i, "axes %d y label" % i, a.yaxis.label)
+        add(i, "axes %d legend" % i, a.get_legend())
+        for axis, name in ((a.xaxis, "x"), (a.yaxis, "y")):
+            for t in axis._update_ticks():  # the ticks drawn (inside the view)
+                add(i, "axes %d %s tick %s" % (i, name, t.label1.get_text()), t.label1)
+    return out
+
+
+def overlaps(fig):
+    """What overlaps by more than a pixel each way: two texts of the figure (an axis label over
+    tick labels, crowded tick labels, a title over a neighbour's), or a text over the plotting
+    area of another axes (a y label over the panel to its left). A legend inside its own axes
+    is allowed."""
+    boxes = text_boxes(fig)
+    areas = [(i, "axes %d area" % i, a.get_window_extent()) for i, a in enumerate(fig.axes)]
+
+    def hit(a, b):
+        return min(a.x1, b.x1) - max(a.x0, b.x0) > 1 and min(a.y1, b.y1) - max(a.y0, b.y0) > 1
+
+    found = []
+    for i in range(len(boxes)):
+        for j in range(i + 1, len(boxes)):
+            if hit(boxes[i][2], boxes[j][2]):
+                found.append("%s / %s" % (boxes[i][1], boxes[j][1]))
+        for owner, name, bb in areas:
+            if owner != boxes[i][0] and hit(boxes[i][2], bb):
+                found.append("%s / %s" % (boxes[i][1], name))
+    return found
+
+
+def declutter(fig):
+    """Drop the minor tick labels of an axis where its tick labels collide (a log axis spanning
+    less than a decade labels its minor ticks, as 3x10^-3 4x10^-3 ...)."""
+    from matplotlib.ticker import NullFormatter
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    for a in fig.axes:
+        for axis in (a.xaxis, a.yaxis):
+            bbs = [t.label1.get_window_extent(r) for t in axis._update_ticks()
+                   if t.label1.get_visible() and t.label1.get_text()]
+            if any(min(p.x1, q.x1) - max(p.x0, q.x0) > 1 and min(p.y1, q.y1) - max(p.y0, q.y0) > 1
+                   for k, p in enumerate(bbs) for q in bbs[k + 1:]):
+                axis.set_minor_formatter(NullFormatter())
+
+
+def save(fig, root, out, info=None):
+    """PNG and SVG, and <out>.json: the caption notes the report shows under the figure, and
+    facts the tests read (overlapping texts, the ranges chosen)."""
+    declutter(fig)
     for ext in ("png", "svg"):
         fig.savefig(os.path.join(root, out + "." + ext), dpi=110 if ext == "png" else None,
                     bbox_inches="tight")
+    info = dict(info or {})
+    info.setdefault("notes", [])
+    info["overlapping_texts"] = overlaps(fig)
+    with open(os.path.join(root, out + ".json"), "w") as f:
+        json.dump(info, f, indent=1)
     plt.close(fig)
+
+
+NEAR_ZERO_FRACTION = 0.02
+NEAR_ZERO_MIN_BINS = 8
+
+
+def near_zero_range(r, profiles, limit):
+    """The right end of the "near zero" panel: where every channel's profile has fallen to
+    NEAR_ZERO_FRACTION of its peak (the first of three bins in a row below it, so that noise does
+    not end it early), with a margin of a half, between NEAR_ZERO_MIN_BINS bins and `limit`.
+    Profiles of dense media are a spike at r = 0 and a long flat tail on a linear scale: a range
+    of a few mean free paths shows the spike as one line."""
+    end = 0.0
+    for v in profiles:
+        peak = max(v) if v else 0
+        i = 0
+        while i + 2 < len(v) and not all(x < NEAR_ZERO_FRACTION * peak for x in v[i:i + 3]):
+            i += 1
+        end = max(end, r[min(i, len(r) - 1)])
+    lo = r[min(NEAR_ZERO_MIN_BINS, len(r)) - 1]
+    return min(limit, max(1.5 * end, lo))
 
 
 def profile_plot(root, p):
@@ -36,13 +131,15 @@ def profile_plot(root, p):
     unit = p["unit"]
     r = [float(x["r_mid_" + unit]) for x in rows]
     dr = float(rows[0]["r_hi_" + unit]) - float(rows[0]["r_lo_" + unit])
-    fig, ax = plt.subplots(1, 3, figsize=(16, 4.6))
+    fig, ax = plt.subplots(1, 3, figsize=(16, 4.8), constrained_layout=True)
+    xmax = near_zero_range(r, [[float(x["Rd_%s_per_%s2" % (c, unit)]) for x in rows]
+                               for c in "RGB"], p["linear_range"])
     for c in "RGB":
         v = [float(x["Rd_%s_per_%s2" % (c, unit)]) for x in rows]
         se = [float(x["Rd_%s_se_per_%s2" % (c, unit)]) for x in rows]
         lo = [a - 2 * b for a, b in zip(v, se)]
         hi = [a + 2 * b for a, b in zip(v, se)]
-        n = sum(1 for x in r if x <= p["linear_range"]) or len(r)
+        n = min(len(r), sum(1 for x in r if x <= xmax) + 1)
         ax[0].plot(r[:n], v[:n], color=COLOURS[c], lw=1.2, label=c)
         ax[0].fill_between(r[:n], lo[:n], hi[:n], color=COLOURS[c], alpha=0.25, lw=0)
         pos = [(a, b, s) for a, b, s in zip(r, v, se) if b > 0]
@@ -55,7 +152,8 @@ def profile_plot(root, p):
         ax[2].plot(r, rr, color=COLOURS[c], lw=1.0, label=c)
         ax[2].fill_between(r, [a - 2 * b for a, b in zip(rr, rs)], [a + 2 * b for a, b in zip(rr, rs)],
                            color=COLOURS[c], alpha=0.25, lw=0)
-    ax[0].set_title("R_d(r) near zero (linear)")
+    ax[0].set_title("R_d(r) near zero (linear, to %g %% of the peak)" % (100 * NEAR_ZERO_FRACTION))
+    ax[0].set_xlim(0, xmax)
     ax[1].set_title("R_d(r) over the whole range (log)")
     ax[2].set_title("2 pi r R_d(r): reflectance per unit radius")
     for a in ax:
@@ -67,9 +165,10 @@ def profile_plot(root, p):
     ax[2].set_ylabel("2 pi r R_d [1/%s]" % unit)
     ax[2].set_xscale("log")
     ax[2].set_xlim(left=max(r[0], dr / 2))
-    fig.suptitle("%s  (bands: +-2 standard errors; %d bins of %.4g %s)" % (p["title"], len(r), dr, unit),
-                 y=1.02)
-    save(fig, root, p["out"])
+    fig.suptitle("%s  (bands: +-2 standard errors; %d bins of %.4g %s)" % (p["title"], len(r), dr,
+                                                                           unit))
+    save(fig, root, p["out"], {"near_zero_xlim": [0, xmax], "linear_range": p["linear_range"],
+                               "near_zero_fraction": NEAR_ZERO_FRACTION})
 
 
 def guide(ax, t, y, colour):
@@ -81,10 +180,50 @@ def guide(ax, t, y, colour):
     ax.plot(ts, [y1 * math.sqrt(t1 / x) for x in ts], color=colour, ls=":", lw=1.0)
 
 
+def log_spaced(n, k):
+    """At most k indices into a series of n, evenly spaced in log(index): the markers of a
+    per-batch series on a log time axis, which would otherwise pile up at the right."""
+    if n <= k:
+        return list(range(n))
+    return sorted(set(int(round(math.exp(math.log(n) * i / (k - 1)))) - 1 for i in range(k)))
+
+
+def efficiency_notes(label, t, eff, work):
+    """A sentence for the caption when an efficiency 1 / (relative variance x time), flat for a
+    well-behaved estimator, falls over the run: by how much, and whether the throughput (work
+    per second) fell with it (the machine got slower) or not (the variance per sample rose: the
+    early standard errors, from few batches, were low)."""
+    if len(eff) < 8:
+        return []
+    q = max(2, len(eff) // 4)
+
+    def median(v):
+        v = sorted(v)
+        return 0.5 * (v[(len(v) - 1) // 2] + v[len(v) // 2])
+
+    early, late = median(eff[:q]), median(eff[-q:])
+    if not (early > 0 and late < 0.75 * early):
+        return []
+    rate_early = median([w / x for w, x in zip(work[:q], t[:q]) if x > 0] or [0])
+    rate_late = median([w / x for w, x in zip(work[-q:], t[-q:]) if x > 0] or [0])
+    s = ("The efficiency of %s falls from %.3g/s to %.3g/s (%.0f %%) between %.3g s and %.3g s: "
+         "its standard error shrinks more slowly than 1/sqrt(t). "
+         % (label, early, late, 100 * (late / early - 1), t[0], t[-1]))
+    if rate_early > 0 and rate_late < 0.85 * rate_early:
+        s += ("The throughput fell with it (%.3g to %.3g per second): the runs got slower, not "
+              "noisier." % (rate_early, rate_late))
+    else:
+        s += ("The throughput held (%.3g per second), so the variance per sample rose: the "
+              "early standard errors, from few batches, were too low (rare long paths had not "
+              "yet been seen)." % rate_late)
+    return [s]
+
+
 def convergence_plot(root, p):
     hist = read_csv(os.path.join(root, p["history"]))
     snaps = read_csv(os.path.join(root, p["snapshots"]))
-    fig, ax = plt.subplots(1, 3, figsize=(16, 4.6))
+    fig, ax = plt.subplots(1, 3, figsize=(14, 4.8), constrained_layout=True)
+    notes, markers = [], 0
     for c in "RGB":
         h = [x for x in hist if x["channel"] == c]
         if not h:
@@ -96,36 +235,49 @@ def convergence_plot(root, p):
         ts = [float(x["seconds"]) for x in hs]
         rse = [float(x["rel_se"]) for x in hs]
         eff = [float(x["efficiency_per_s"]) for x in hs]
-        ax[0].loglog(t, err, ".", ms=2.5, color=COLOURS[c], alpha=0.6,
-                     label="%s |Rd(t) - Rd_ref| / Rd_ref" % c)
-        ax[0].loglog(ts, rse, "-", lw=1.2, color=COLOURS[c], label="%s standard error" % c)
+        every = log_spaced(len(t), 40)
+        markers += len(every)
+        ax[0].loglog(t, err, ".", ms=4, color=COLOURS[c], alpha=0.8, markevery=every)
+        ax[0].loglog(ts, rse, "-", lw=1.2, color=COLOURS[c])
         guide(ax[0], ts, rse, COLOURS[c])
         ref_floor = float(h[-1]["Rd_reference_se"]) / float(h[-1]["Rd_reference"])
         ax[0].axhline(ref_floor, color=COLOURS[c], lw=0.6, ls="--")
         s = [x for x in snaps if x["channel"] == c]
         tn = [float(x["seconds"]) for x in s]
         l2 = [float(x["rRd_rel_l2_error"]) for x in s]
-        ax[1].loglog(tn, l2, "o-", ms=3, lw=1.0, color=COLOURS[c], label=c)
+        ax[1].loglog(tn, l2, "o-", ms=3, lw=1.0, color=COLOURS[c])
         guide(ax[1], tn, l2, COLOURS[c])
         if s:
             ax[1].axhline(float(s[-1]["rRd_rel_l2_reference_floor"]), color=COLOURS[c], lw=0.6,
                           ls="--")
-        ax[2].loglog(ts, eff, "-", lw=1.0, color=COLOURS[c], label=c)
+        ax[2].loglog(ts, eff, "-", lw=1.0, color=COLOURS[c])
+        notes += efficiency_notes("channel " + c, ts, eff, [float(x["photons"]) for x in hs])
     ax[0].set_title("total diffuse reflectance: error and standard error")
     ax[0].set_ylabel("relative error [-]")
     ax[1].set_title("profile: relative L2 error of r R_d(r)")
     ax[1].set_ylabel("relative L2 error [-]")
-    ax[2].set_title("efficiency 1 / (relative variance x time), from 16 batches on")
+    ax[2].set_title("efficiency 1 / (rel. variance x time), 16 batches on")
     ax[2].set_ylabel("efficiency [1/s]")
     for a in ax:
         a.set_xlabel("wall time [s]")
         a.grid(alpha=0.3, which="both")
-    ax[0].legend(fontsize=7, loc="lower left")
-    ax[1].legend(fontsize=8, loc="lower left")
-    ax[2].legend(fontsize=8, loc="lower right")
-    fig.suptitle("%s: dotted lines 1/sqrt(t) through the last point; dashed lines: the "
-                 "reference run's own noise" % p["title"], y=1.02)
-    save(fig, root, p["out"])
+    # One legend for the figure, below the panels: the channels by colour, the curves by style.
+    from matplotlib.lines import Line2D
+    handles = [Line2D([], [], color=COLOURS[c], lw=2, label=c) for c in "RGB"] + [
+        Line2D([], [], color="k", ls="", marker=".", ms=6, label="|R_d(t) - R_d,ref| / R_d,ref"),
+        Line2D([], [], color="k", lw=1.2, label="standard error"),
+        Line2D([], [], color="k", marker="o", ms=3, lw=1.0, label="profile error (snapshots)"),
+        Line2D([], [], color="k", ls=":", lw=1.0, label="1/sqrt(t) through the last point"),
+        Line2D([], [], color="k", ls="--", lw=0.6, label="the reference run's own noise")]
+    legend_size = 10
+    # matplotlib fills a legend's columns first: this order reads R G B |err| on the first row
+    # and the curve styles on the second.
+    handles = [handles[i] for i in (0, 4, 1, 5, 2, 6, 3, 7)]
+    fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=4,
+               fontsize=legend_size, frameon=False)
+    fig.suptitle(p["title"])
+    save(fig, root, p["out"], {"notes": notes, "markers_per_panel": markers,
+                               "legend_fontsize": legend_size})
 
 
 def singular_values_plot(root, p):
@@ -134,7 +286,8 @@ def singular_values_plot(root, p):
     for x in rows:
         if x["material"] not in materials:
             materials.append(x["material"])
-    fig, ax = plt.subplots(1, len(materials), figsize=(3.6 * len(materials), 3.6), squeeze=False)
+    fig, ax = plt.subplots(1, len(materials), figsize=(3.6 * len(materials), 3.6), squeeze=False,
+                           constrained_layout=True)
     for a, m in zip(ax[0], materials):
         for c in "RGB":
             v = [(int(x["index"]), float(x["sigma_over_sigma1"])) for x in rows
@@ -146,7 +299,7 @@ def singular_values_plot(root, p):
         a.grid(alpha=0.3, which="both")
         a.legend(fontsize=8)
     ax[0][0].set_ylabel("sigma_i / sigma_1")
-    fig.suptitle("Singular values of the ground-truth kernels (%s)" % p["title"], y=1.02)
+    fig.suptitle("Singular values of the ground-truth kernels (%s)" % p["title"])
     save(fig, root, p["out"])
 
 
@@ -190,7 +343,7 @@ def kernel_slices_plot(root, p):
 def z_histogram_plot(root, p):
     rows = read_csv(os.path.join(root, p["csv"]))
     z = [float(x["z"]) for x in rows]
-    fig, ax = plt.subplots(1, 2, figsize=(13, 4.6))
+    fig, ax = plt.subplots(1, 2, figsize=(13, 4.6), constrained_layout=True)
     if z:
         lim = max(4.5, max(abs(v) for v in z) + 0.5)
         nb = 40
@@ -216,7 +369,7 @@ def z_histogram_plot(root, p):
     ax[1].set_xlabel("r [mm]")
     for a in ax:
         a.grid(alpha=0.3)
-    fig.suptitle(p["title"], y=1.02)
+    fig.suptitle(p["title"])
     save(fig, root, p["out"])
 
 
@@ -265,8 +418,10 @@ def pencil_plot(root, p):
                 pos = [v for v in vp if v > 0]
                 if pos:
                     a.set_ylim(min(pos) * 0.5, max(pos) * 2)
-            if name == "linear":
-                a.set_xlim(0, 0.25 * r99)
+                    # to the last bin the tracer reached (dense channels end early on the grid)
+                    a.set_xlim(0, 1.05 * max(rr for rr, v in zip(r, vp) if v > 0))
+            if name == "linear":  # zoomed to where the tracer's profile falls, as profile_plot
+                a.set_xlim(0, near_zero_range(r, [vp], 0.25 * r99))
             elif name != "log":
                 a.set_xlim(0, r99)
             a.set_title("%s, %s" % (c, name), fontsize=9)
@@ -281,8 +436,9 @@ def pencil_plot(root, p):
 
 def efficiency_plot(root, p):
     rows = read_csv(os.path.join(root, p["csv"]))
-    fig, ax = plt.subplots(1, 2, figsize=(13, 4.6))
+    fig, ax = plt.subplots(1, 2, figsize=(13, 4.6), constrained_layout=True)
     engines = sorted(set(x["engine"] for x in rows))
+    notes = []
     for e_i, e in enumerate(engines):
         style = "-" if e_i == 0 else "--"
         for c in "RGB":
@@ -293,16 +449,17 @@ def efficiency_plot(root, p):
             t = [float(x["seconds"]) for x in h]
             ax[0].loglog(t, [float(x["rel_se"]) for x in h], style, lw=1.2, color=COLOURS[c],
                          label="%s %s" % (e, c))
-            ax[1].loglog(t, [float(x["efficiency_per_s"]) for x in h], style, lw=1.2,
-                         color=COLOURS[c], label="%s %s" % (e, c))
+            eff = [float(x["efficiency_per_s"]) for x in h]
+            ax[1].loglog(t, eff, style, lw=1.2, color=COLOURS[c], label="%s %s" % (e, c))
+            notes += efficiency_notes("%s %s" % (e, c), t, eff, [float(x["paths"]) for x in h])
     ax[0].set_title("relative standard error of R_d against wall time")
     ax[1].set_title("efficiency 1 / (relative variance x time)")
     for a in ax:
         a.set_xlabel("wall time [s]")
         a.grid(alpha=0.3, which="both")
         a.legend(fontsize=7)
-    fig.suptitle("%s: MCML (solid) and the path tracer (dashed)" % p["title"], y=1.02)
-    save(fig, root, p["out"])
+    fig.suptitle("%s: MCML (solid) and the path tracer (dashed)" % p["title"])
+    save(fig, root, p["out"], {"notes": notes})
 
 
 def main():

@@ -2,15 +2,18 @@
 // regression checks, and the report in a headless browser.
 #include "core/film_image.h"
 #include "experiments/runner/experiment.h"
+#include "experiments/runner/plots.h"
 #include "experiments/runner/runner.h"
 #include "testing.h"
 
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -544,41 +547,349 @@ TEST(Runner, BadExperimentConfigsAreRefusedWithTheirLocation) {
     }
 }
 
-TEST(Report, OpensInHeadlessChromiumWithItsPlots) {
-    if (std::system("command -v chromium >/dev/null 2>&1") != 0)
+// The report of the default experiment (--quick), made once for the Report tests.
+class Report : public ::testing::Test {
+  protected:
+    static void SetUpTestSuite() {
+        dir_ = new testing::TempDir;
+        const auto r = run_ssslab({"run", "--quick", "-q"}, dir_->path());  // default experiment
+        ok_ = r.exit_code == 0;
+        err_ = r.err;
+    }
+    static void TearDownTestSuite() {
+        delete dir_;
+        dir_ = nullptr;
+    }
+    void SetUp() override { ASSERT_TRUE(ok_) << err_; }
+    static fs::path out() { return dir_->path() / "results" / "freude14-profiles"; }
+    static fs::path report() { return out() / "report.html"; }
+
+    static bool have_chromium() { return std::system("command -v chromium >/dev/null 2>&1") == 0; }
+    // Headless Chromium on a file: `what` is "--dump-dom" (the DOM after the page's scripts, to
+    // `to`) or "--screenshot=<png>".
+    static int chromium(const std::string& what, const fs::path& page, const std::string& size,
+                        const std::string& to = "/dev/null") {
+        const std::string flags =
+            "--headless=new --no-sandbox --disable-gpu --disable-quic --no-first-run "
+            "--disable-background-networking --disable-component-update --disable-sync "
+            "--hide-scrollbars --virtual-time-budget=10000 --enable-logging=stderr --v=0 "
+            "--user-data-dir=" +
+            (dir_->path() / "chromium-profile").string();
+        return std::system(("chromium " + flags + " --window-size=" + size + " " + what +
+                            " 'file://" + page.string() + "' >'" + to + "' 2>>'" +
+                            (dir_->path() / "chromium.log").string() + "'")
+                               .c_str());
+    }
+
+    static testing::TempDir* dir_;
+    static bool ok_;
+    static std::string err_;
+};
+testing::TempDir* Report::dir_ = nullptr;
+bool Report::ok_ = false;
+std::string Report::err_;
+
+// The text of the section <h2 id="id"> up to the next <h2.
+std::string section(const std::string& html, const std::string& id) {
+    const size_t at = html.find("<h2 id=\"" + id + "\">");
+    if (at == std::string::npos) return {};
+    return html.substr(at, html.find("<h2", at + 1) - at);
+}
+
+size_t count(const std::string& text, const std::string& what) {
+    size_t n = 0;
+    for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+}
+
+// The value of attribute `name` on the first element that carries it.
+std::string attribute(const std::string& html, const std::string& name) {
+    const size_t at = html.find(" " + name + "=\"");
+    if (at == std::string::npos) return {};
+    const size_t v = at + name.size() + 3;
+    return html.substr(v, html.find('"', v) - v);
+}
+
+TEST_F(Report, OpensInHeadlessChromiumWithItsPlots) {
+    if (!have_chromium())
         GTEST_SKIP() << "chromium is not installed (scripts/setup.sh installs it)";
-    testing::TempDir dir;
-    const auto r = run_ssslab({"run", "--quick", "-q"}, dir.path());  // the default experiment
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    const fs::path report = dir / "results" / "freude14-profiles" / "report.html";
-    ASSERT_TRUE(fs::exists(report));
-    const std::string flags =
-        "--headless=new --no-sandbox --disable-gpu --disable-quic --no-first-run "
-        "--disable-background-networking --disable-component-update --disable-sync "
-        "--hide-scrollbars --virtual-time-budget=10000 --enable-logging=stderr --v=0 "
-        "--user-data-dir=" +
-        (dir / "chromium-profile").string();
-    const std::string dom = (dir / "dom.html").string(), log = (dir / "chromium.log").string();
-    const std::string url = "file://" + report.string();
-    ASSERT_EQ(std::system(
-                  ("chromium " + flags + " --dump-dom '" + url + "' >'" + dom + "' 2>'" + log + "'")
-                      .c_str()),
-              0);
+    const fs::path dom = dir_->path() / "dom.html";
+    ASSERT_EQ(chromium("--dump-dom", report(), "1280,2000", dom.string()), 0);
     const std::string page = testing::read_text(dom);
     EXPECT_NE(page.find("data-images-ok=\"yes\""), std::string::npos) << page.substr(0, 400);
     EXPECT_NE(page.find("data-images=\"6\""), std::string::npos);
     // The page's own console: no JavaScript errors, no failed loads.
-    const std::string console = testing::read_text(log);
+    const std::string console = testing::read_text(dir_->path() / "chromium.log");
     EXPECT_EQ(console.find("Uncaught"), std::string::npos) << console;
     EXPECT_EQ(console.find("Failed to load resource"), std::string::npos) << console;
     // A screenshot of the rendered page.
-    const std::string shot = (dir / "report.png").string();
-    ASSERT_EQ(std::system(("chromium " + flags + " --window-size=1280,2000 --screenshot='" + shot +
-                           "' '" + url + "' >/dev/null 2>&1")
-                              .c_str()),
-              0);
+    const fs::path shot = dir_->path() / "report.png";
+    ASSERT_EQ(chromium("--screenshot='" + shot.string() + "'", report(), "1280,2000"), 0);
     ASSERT_TRUE(fs::exists(shot));
     EXPECT_GT(fs::file_size(shot), 50000u) << "a blank page compresses to a few kB";
+}
+
+TEST_F(Report, HasAContentsEntryForEverySection) {
+    const std::string html = testing::read_text(report());
+    const size_t nav = html.find("<nav id=\"contents\">"), nav_end = html.find("</nav>");
+    ASSERT_NE(nav, std::string::npos);
+    ASSERT_NE(nav_end, std::string::npos);
+    EXPECT_LT(nav, html.find("<h2")) << "the contents come before the first section";
+    const std::string toc = html.substr(nav, nav_end - nav);
+    std::set<std::string> ids, linked;
+    for (size_t at = html.find(" id=\""); at != std::string::npos; at = html.find(" id=\"", at + 1))
+        ids.insert(html.substr(at + 5, html.find('"', at + 5) - at - 5));
+    for (size_t at = toc.find("href=\"#"); at != std::string::npos;
+         at = toc.find("href=\"#", at + 1)) {
+        const std::string id = toc.substr(at + 7, toc.find('"', at + 7) - at - 7);
+        EXPECT_TRUE(ids.count(id)) << "contents entry #" << id << " has no target";
+        linked.insert(id);
+    }
+    size_t sections = 0;
+    for (size_t at = html.find("<h2 id=\""); at != std::string::npos;
+         at = html.find("<h2 id=\"", at + 1), ++sections) {
+        const std::string id = html.substr(at + 8, html.find('"', at + 8) - at - 8);
+        EXPECT_TRUE(linked.count(id)) << "section #" << id << " is not in the contents";
+    }
+    EXPECT_GE(sections, 6u);  // description, profiles, convergence, metrics, provenance, config
+    for (const char* id : {"description", "profiles", "convergence", "metrics", "provenance"})
+        EXPECT_TRUE(linked.count(id)) << id;
+}
+
+TEST_F(Report, MetricsAreTablesOfMaterialsByChannel) {
+    const std::string html = testing::read_text(report());
+    const std::string m = section(html, "metrics");
+    ASSERT_FALSE(m.empty());
+    // Every metric of metrics.csv is in the section once, as the title of its cell.
+    const std::string csv = testing::read_text(out() / "metrics.csv");
+    std::istringstream in(csv);
+    std::string line;
+    std::getline(in, line);
+    size_t metrics = 0;
+    while (std::getline(in, line)) {
+        const std::string name = line.substr(0, line.find(','));
+        EXPECT_EQ(count(m, "title=\"" + name + "\""), 1u) << name;
+        ++metrics;
+    }
+    EXPECT_GE(metrics, 80u);
+    // ... in far fewer rows than metrics: one table per quantity, a row per material.
+    EXPECT_LT(count(m, "<tr>"), metrics / 2) << "not a flat list of metrics";
+    // The total diffuse reflectance: a table with a column per channel and a row per material.
+    const size_t rd = m.find("<caption><b>Rd</b>");
+    ASSERT_NE(rd, std::string::npos) << m.substr(0, 2000);
+    const std::string t = m.substr(rd, m.find("</table>", rd) - rd);
+    EXPECT_NE(t.find("<th class=\"R\">R</th><th class=\"G\">G</th><th class=\"B\">B</th>"),
+              std::string::npos)
+        << t;
+    EXPECT_EQ(count(t, "<tr>"), 6u) << "a header and five materials";
+    size_t last = 0;
+    for (const char* mat : {"Apple", "Marble", "Ketchup", "Skin1", "Wholemilk"}) {
+        const size_t at = t.find("<tr><td class=\"l\">" + std::string(mat) + "</td>");
+        ASSERT_NE(at, std::string::npos) << mat;
+        EXPECT_GT(at, last) << "materials in the config's order";
+        last = at;
+        const size_t end = t.find("</tr>", at);
+        EXPECT_EQ(count(t.substr(at, end - at), "<td"), 4u) << "material, R, G, B";
+        for (const char* ch : {".R.Rd\"", ".G.Rd\"", ".B.Rd\""})
+            EXPECT_NE(t.substr(at, end - at).find(std::string(mat) + ch), std::string::npos);
+    }
+    // The per-material grid (metrics without a channel) in one table.
+    EXPECT_NE(m.find("<th title=\"rel. tol. 0\">nr [bins]</th>"), std::string::npos) << m;
+}
+
+TEST_F(Report, ProvenanceTableFitsA1280PixelWindow) {
+    // The CSS that makes it fit: long values wrap, repeated ones are said once.
+    const std::string html = testing::read_text(report());
+    const std::string prov = section(html, "provenance");
+    EXPECT_NE(prov.find("The same for every run: engine mcml"), std::string::npos) << prov;
+    EXPECT_EQ(prov.find("<th class=\"l\">engine</th>"), std::string::npos);
+    EXPECT_NE(html.find("table.prov td.w { white-space: normal; overflow-wrap: anywhere; }"),
+              std::string::npos);
+    if (!have_chromium())
+        GTEST_SKIP() << "chromium is not installed (scripts/setup.sh installs it)";
+    // Measured in the browser at 1280 px, on a copy of the page with a script that writes the
+    // widths into the DOM (the report itself is left as it is).
+    std::string copy = html;
+    const std::string probe =
+        "<script>window.addEventListener('load', function () {"
+        "var t = document.querySelector('table.prov'), b = document.body;"
+        "b.setAttribute('data-prov-right', String(Math.ceil(t.getBoundingClientRect().right)));"
+        "b.setAttribute('data-prov-scroll', String(t.parentNode.scrollWidth - "
+        "t.parentNode.clientWidth));"
+        "b.setAttribute('data-page-width', String(document.documentElement.scrollWidth));"
+        "b.setAttribute('data-page-height', String(document.documentElement.scrollHeight));"
+        "});</script>";
+    copy.insert(copy.rfind("</body>"), probe);
+    const fs::path measure = out() / "measure.html", dom = dir_->path() / "measure-dom.html";
+    std::ofstream(measure) << copy;
+    ASSERT_EQ(chromium("--dump-dom", measure, "1280,2000", dom.string()), 0);
+    fs::remove(measure);
+    const std::string page = testing::read_text(dom);
+    const std::string right = attribute(page, "data-prov-right");
+    ASSERT_FALSE(right.empty()) << page.substr(0, 400);
+    EXPECT_LE(std::stoi(right), 1280);
+    EXPECT_EQ(attribute(page, "data-prov-scroll"), "0") << "the table's box does not scroll";
+    EXPECT_LE(std::stoi(attribute(page, "data-page-width")), 1280) << "no horizontal scrolling";
+    // And in a screenshot of the whole page at 1280 px: nothing is drawn in the right margin
+    // (an overflowing table would run to the window's edge), and the page is not blank.
+    const int height = std::stoi(attribute(page, "data-page-height"));
+    ASSERT_GT(height, 2000);
+    const fs::path shot = dir_->path() / "full.png";
+    ASSERT_EQ(chromium("--screenshot='" + shot.string() + "'", report(),
+                       "1280," + std::to_string(std::min(height, 16000))),
+              0);
+    const testing::RgbImage img = testing::read_png(shot);
+    ASSERT_EQ(img.width, 1280);
+    size_t margin = 0, ink = 0;
+    int rightmost = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+            const unsigned char* p = img.at(x, y);
+            if (p[0] > 245 && p[1] > 245 && p[2] > 245) continue;
+            ++ink;
+            rightmost = std::max(rightmost, x);
+            if (x >= 1260) ++margin;
+        }
+    EXPECT_EQ(margin, 0u) << "something is drawn up to x = " << rightmost;
+    EXPECT_GT(ink, static_cast<size_t>(img.width) * img.height / 50) << "a blank page";
+}
+
+TEST_F(Report, PlotsHaveNoOverlappingTextAndZoomedPanels) {
+    size_t plots = 0;
+    for (const auto& f : fs::directory_iterator(out() / "plots")) {
+        if (f.path().extension() != ".json") continue;
+        ++plots;
+        const std::string j = testing::read_text(f.path());
+        SCOPED_TRACE(f.path().filename().string());
+        EXPECT_NE(j.find("\"overlapping_texts\": []"), std::string::npos) << j;
+    }
+    EXPECT_EQ(plots, 6u) << "a JSON beside every plot";
+    // Ketchup's near-zero panel ends where the profile has fallen (it is a spike at r = 0 and a
+    // flat line over the configured 2 MFP of its red channel, 8.3 mm).
+    const std::string k = testing::read_text(out() / "plots" / "profile_Ketchup.json");
+    const size_t x = k.find("\"near_zero_xlim\": [");
+    ASSERT_NE(x, std::string::npos) << k;
+    const double xmax = std::stod(k.substr(k.find(',', x) + 1));
+    const double range = std::stod(k.substr(k.find("\"linear_range\": ") + 16));
+    EXPECT_GT(range, 8.0);
+    EXPECT_LT(xmax, 0.2 * range) << k;
+    EXPECT_GT(xmax, 0.2) << "still shows the fall, not only the first bins";
+    const std::string html = testing::read_text(report());
+    EXPECT_NE(html.find("out to where every channel has fallen to 2 % of its peak"),
+              std::string::npos);
+    // The convergence panel: markers thinned to at most 40 per channel, one legend.
+    const std::string c = testing::read_text(out() / "plots" / "convergence_Skin1.json");
+    const size_t mk = c.find("\"markers_per_panel\": ");
+    ASSERT_NE(mk, std::string::npos) << c;
+    EXPECT_LE(std::stoi(c.substr(mk + 21)), 120);
+    EXPECT_NE(c.find("\"legend_fontsize\": 10"), std::string::npos) << c;
+}
+
+// scripts/plot.py on planted inputs: the overlap check finds a planted overlap, and an
+// efficiency that falls gets a caption note.
+class PlotScript : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        python_ = runner::find_python();
+        if (python_.empty()) GTEST_SKIP() << "no python3 with matplotlib";
+    }
+    int python(const std::string& code) {
+        dir_.write("t.py", "import sys\nsys.path.insert(0, '" + testing::source_path("scripts") +
+                               "')\nimport plot\n" + code);
+        return std::system(("cd '" + dir_.path().string() + "' && MPLBACKEND=Agg '" + python_ +
+                            "' t.py >out.txt 2>&1")
+                               .c_str());
+    }
+    std::string python_;
+    testing::TempDir dir_;
+};
+
+TEST_F(PlotScript, OverlapCheckFindsAPlantedOverlap) {
+    ASSERT_EQ(python("import matplotlib.pyplot as plt\n"
+                     "fig, ax = plt.subplots(1, 2, figsize=(4, 3))\n"  // no layout: crowded
+                     "ax[1].set_ylabel('a long label ' * 4)\n"
+                     "ax[0].set_xlabel('x label')\n"
+                     "print('planted', plot.overlaps(fig))\n"
+                     "fig, ax = plt.subplots(1, 2, figsize=(8, 3), constrained_layout=True)\n"
+                     "ax[1].set_ylabel('short')\n"
+                     "print('clean', plot.overlaps(fig))\n"),
+              0)
+        << testing::read_text(dir_ / "out.txt");
+    const std::string o = testing::read_text(dir_ / "out.txt");
+    EXPECT_NE(o.find("planted ['"), std::string::npos) << o;
+    EXPECT_NE(o.find("axes 1 y label / axes 0 area"), std::string::npos) << o;
+    EXPECT_NE(o.find("clean []"), std::string::npos) << o;
+}
+
+TEST_F(PlotScript, AFallingEfficiencyGetsACaption) {
+    // Efficiency = 1 / (rel_se^2 t): flat when rel_se falls as 1/sqrt(t); falling when it falls
+    // as t^-1/4 at a steady throughput (the variance per photon rose), or when the batches take
+    // longer and longer (the throughput fell).
+    std::ostringstream flat, falling, slower, snaps;
+    const std::string head =
+        "channel,batches,photons,seconds,Rd,Rd_se,Rd_reference,Rd_reference_se,abs_error,"
+        "rel_error,rel_se,efficiency_per_s\n";
+    flat << head;
+    falling << head;
+    slower << head;
+    for (const char* c : {"R", "G", "B"})
+        for (int b = 2; b <= 256; ++b) {
+            const double t = 0.01 * b, photons = 1000.0 * b;
+            const double se_flat = 0.1 / std::sqrt(b), se_fall = 0.1 / std::pow(b, 0.25);
+            auto row = [&](std::ostringstream& os, double rse, double sec) {
+                os << c << ',' << b << ',' << photons << ',' << sec << ",0.5," << 0.5 * rse
+                   << ",0.5,0.0001,0.001,0.002," << rse << ',' << 1 / (rse * rse * sec) << '\n';
+            };
+            row(flat, se_flat, t);
+            row(falling, se_fall, t);
+            row(slower, se_flat, 0.0001 * b * b);
+        }
+    snaps << "channel,batches,photons,seconds,rRd_rel_l2_error,rRd_rel_l2_reference_floor\n"
+          << "R,4,4000,0.04,0.1,0.01\nR,8,8000,0.08,0.07,0.01\n";
+    dir_.write("flat.csv", flat.str());
+    dir_.write("falling.csv", falling.str());
+    dir_.write("slower.csv", slower.str());
+    dir_.write("snaps.csv", snaps.str());
+    ASSERT_EQ(python("for h in ('flat', 'falling', 'slower'):\n"
+                     "    plot.convergence_plot('.', {'history': h + '.csv', 'snapshots': "
+                     "'snaps.csv', 'title': h, 'out': h})\n"),
+              0)
+        << testing::read_text(dir_ / "out.txt");
+    const std::string fl = testing::read_text(dir_ / "flat.json");
+    const std::string fa = testing::read_text(dir_ / "falling.json");
+    EXPECT_NE(fl.find("\"notes\": []"), std::string::npos) << fl;
+    for (const char* ch : {"channel R", "channel G", "channel B"})
+        EXPECT_NE(fa.find("The efficiency of " + std::string(ch) + " falls"), std::string::npos)
+            << fa;
+    EXPECT_NE(fa.find("The throughput held"), std::string::npos) << fa;
+    const std::string sl = testing::read_text(dir_ / "slower.json");
+    EXPECT_NE(sl.find("The efficiency of channel R falls"), std::string::npos) << sl;
+    EXPECT_NE(sl.find("The throughput fell with it"), std::string::npos) << sl;
+    EXPECT_NE(fa.find("\"overlapping_texts\": []"), std::string::npos) << fa;
+}
+
+// The notes of a plot's JSON reach its caption in report.html, also for a plot from the cache.
+TEST(ReportPlots, CaptionsCarryThePlotNotes) {
+    if (runner::find_python().empty()) GTEST_SKIP() << "no python3 with matplotlib";
+    testing::TempDir dir;
+    dir.write("s.toml", std::string(kSmall) + "\n[outputs.profile_plots]\n");
+    ASSERT_EQ(run_ssslab({"run", "s.toml", "--quick", "-q"}, dir.path()).exit_code, 0);
+    size_t planted = 0;
+    for (const auto& f : fs::recursive_directory_iterator(dir / "results" / "cache" / "plot"))
+        if (f.path().filename() == "plot.json") {
+            std::string j = testing::read_text(f.path());
+            const size_t at = j.find("\"notes\": [");
+            ASSERT_NE(at, std::string::npos) << j;
+            j.insert(at + 10, "\"A planted \\\"note\\\" for the caption.\"");
+            std::ofstream(f.path()) << j;
+            ++planted;
+        }
+    EXPECT_EQ(planted, 2u) << "one plot per material";
+    ASSERT_EQ(run_ssslab({"run", "s.toml", "--quick", "-q"}, dir.path()).exit_code, 0);
+    const std::string html = testing::read_text(dir / "results" / "small" / "report.html");
+    EXPECT_EQ(
+        count(html, "Bands: +-2 standard errors. A planted &quot;note&quot; for the caption."), 2u)
+        << html;
 }
 
 // [outputs.render]: scenes rendered through the artifact graph (cached EXRs, reuse, rays/s and

@@ -116,6 +116,74 @@ std::string lines_from(const std::string& text, int first) {
     return pos == std::string::npos ? std::string() : text.substr(pos);
 }
 
+RgbImage read_png(const std::filesystem::path& path) {
+    const std::string f = read_text(path);
+    auto be32 = [&](size_t at) {
+        return static_cast<uint32_t>(static_cast<unsigned char>(f[at])) << 24 |
+               static_cast<uint32_t>(static_cast<unsigned char>(f[at + 1])) << 16 |
+               static_cast<uint32_t>(static_cast<unsigned char>(f[at + 2])) << 8 |
+               static_cast<uint32_t>(static_cast<unsigned char>(f[at + 3]));
+    };
+    if (f.size() < 33 || f.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0)
+        throw std::runtime_error(path.string() + ": not a PNG file");
+    RgbImage img;
+    int channels = 0;
+    std::string idat;
+    for (size_t at = 8; at + 12 <= f.size();) {
+        const size_t len = be32(at);
+        const std::string type = f.substr(at + 4, 4);
+        if (type == "IHDR") {
+            img.width = static_cast<int>(be32(at + 8));
+            img.height = static_cast<int>(be32(at + 12));
+            const int depth = f[at + 16], colour = f[at + 17], interlace = f[at + 20];
+            channels = colour == 0 ? 1 : colour == 2 ? 3 : colour == 6 ? 4 : 0;
+            if (depth != 8 || channels == 0 || interlace != 0)
+                throw std::runtime_error(path.string() + ": unsupported PNG format");
+        } else if (type == "IDAT") {
+            idat += f.substr(at + 8, len);
+        }
+        at += 12 + len;
+    }
+    const size_t stride = static_cast<size_t>(img.width) * static_cast<size_t>(channels);
+    std::vector<unsigned char> raw((stride + 1) * static_cast<size_t>(img.height));
+    uLongf raw_len = raw.size();
+    if (uncompress(raw.data(), &raw_len, reinterpret_cast<const Bytef*>(idat.data()),
+                   idat.size()) != Z_OK ||
+        raw_len != raw.size())
+        throw std::runtime_error(path.string() + ": corrupt PNG data");
+    // Undo the per-row filters (PNG spec, section 9).
+    std::vector<unsigned char> px(stride * static_cast<size_t>(img.height));
+    const size_t bpp = static_cast<size_t>(channels);
+    for (size_t y = 0; y < static_cast<size_t>(img.height); ++y) {
+        const unsigned char filter = raw[y * (stride + 1)];
+        const unsigned char* in = &raw[y * (stride + 1) + 1];
+        unsigned char* out = &px[y * stride];
+        const unsigned char* up = y > 0 ? &px[(y - 1) * stride] : nullptr;
+        for (size_t i = 0; i < stride; ++i) {
+            const int a = i >= bpp ? out[i - bpp] : 0, b = up ? up[i] : 0,
+                      c = (up && i >= bpp) ? up[i - bpp] : 0;
+            int pred = 0;
+            if (filter == 1)
+                pred = a;
+            else if (filter == 2)
+                pred = b;
+            else if (filter == 3)
+                pred = (a + b) / 2;
+            else if (filter == 4) {
+                const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b),
+                          pc = std::abs(p - c);
+                pred = (pa <= pb && pa <= pc) ? a : pb <= pc ? b : c;
+            }
+            out[i] = static_cast<unsigned char>(in[i] + pred);
+        }
+    }
+    img.rgb.resize(3 * static_cast<size_t>(img.width) * static_cast<size_t>(img.height));
+    for (size_t k = 0; k < static_cast<size_t>(img.width) * static_cast<size_t>(img.height); ++k)
+        for (size_t ch = 0; ch < 3; ++ch)
+            img.rgb[3 * k + ch] = px[k * bpp + (channels == 1 ? 0 : ch)];
+    return img;
+}
+
 double test_scale() {
     if (const char* s = std::getenv("SSSLAB_TEST_SCALE")) return std::max(1e-3, std::atof(s));
     return 1.0;

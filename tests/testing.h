@@ -49,6 +49,19 @@ std::string read_text(const std::filesystem::path& path);
 /// Text from line `first` (1-based) on.
 std::string lines_from(const std::string& text, int first);
 
+/// An 8-bit image read from a PNG file (as 8-bit RGB, whatever the file's colour type).
+struct RgbImage {
+    int width = 0, height = 0;
+    std::vector<unsigned char> rgb;  ///< row-major, 3 bytes a pixel
+    const unsigned char* at(int x, int y) const {
+        return &rgb[3 *
+                    (static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x))];
+    }
+};
+/// Decode a non-interlaced 8-bit greyscale, RGB or RGBA PNG (screenshots of the browser tests);
+/// throws for anything else.
+RgbImage read_png(const std::filesystem::path& path);
+
 /// Factor for Monte Carlo sample counts: 1 by default, SSSLAB_TEST_SCALE for the slow variants.
 double test_scale();
 

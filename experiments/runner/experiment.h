@@ -77,7 +77,8 @@ struct Experiment {
     } profiles;
     struct ProfilePlots {
         bool enabled = false;
-        double linear_range_mfp = 2.0;  ///< the linear panel spans this many (largest) MFPs
+        double linear_range_mfp = 2.0;  ///< the linear panel spans at most this many (largest)
+                                        ///< MFPs (plot.py zooms to where the profile falls)
     } profile_plots;
     struct Convergence {
         bool enabled = false;

@@ -32,6 +32,46 @@ int run_shell(const std::string& cmd) {
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
 }
 
+// The "notes" of a plot's <stem>.json (plot.py): what the figure shows where it departs from
+// the expected, one sentence each, appended to the caption. Only the strings of that one array
+// are read (plot.py writes them with json.dump: escapes \" \\ \n and \uXXXX).
+std::vector<std::string> plot_notes(const std::string& json) {
+    std::vector<std::string> notes;
+    size_t at = json.find("\"notes\"");
+    if (at == std::string::npos || (at = json.find('[', at)) == std::string::npos) return notes;
+    std::string cur;
+    bool in = false;
+    for (size_t i = at + 1; i < json.size(); ++i) {
+        const char c = json[i];
+        if (!in) {
+            if (c == ']') break;
+            if (c == '"') in = true, cur.clear();
+        } else if (c == '\\' && i + 1 < json.size()) {
+            const char n = json[++i];
+            if (n == 'n')
+                cur += ' ';
+            else if (n == 'u')
+                cur += '?', i += 4;  // plot.py writes ASCII notes; keep the text readable
+            else
+                cur += n;
+        } else if (c == '"') {
+            in = false, notes.push_back(cur);
+        } else {
+            cur += c;
+        }
+    }
+    return notes;
+}
+
+PlotResult with_notes(PlotResult p, const fs::path& dir) {
+    for (PlotFile& f : p.plots) {
+        const fs::path j = dir / (f.stem + ".json");
+        if (!fs::exists(j)) continue;
+        for (const std::string& n : plot_notes(read_file(j))) f.caption += " " + n;
+    }
+    return p;
+}
+
 }  // namespace
 
 std::string json_string(const std::string& s) {
@@ -85,7 +125,9 @@ PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const Artifac
                << ", \"out\": " << json_string(stem) << "}";
             add(js.str(), {csv});
             std::ostringstream caption;
-            caption << m.label << ": R_d(r) near zero on a linear scale (the first "
+            caption << m.label
+                    << ": R_d(r) near zero on a linear scale, out to where every channel has "
+                       "fallen to 2 % of its peak (at most the first "
                     << e.profile_plots.linear_range_mfp
                     << " mean free paths of the least attenuating channel), over the whole grid "
                        "on a log scale (as Freude 2014 Fig. 6.1), and 2 pi r R_d(r), whose area "
@@ -159,11 +201,12 @@ PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const Artifac
             missing.push_back(k);
             continue;
         }
-        for (const char* ext : {".png", ".svg"})
-            fs::copy_file(*hit / (std::string("plot") + ext), dir / (out.plots[k].stem + ext),
-                          fs::copy_options::overwrite_existing);
+        for (const char* ext : {".png", ".svg", ".json"})
+            if (fs::exists(*hit / (std::string("plot") + ext)))
+                fs::copy_file(*hit / (std::string("plot") + ext), dir / (out.plots[k].stem + ext),
+                              fs::copy_options::overwrite_existing);
     }
-    if (missing.empty()) return out;
+    if (missing.empty()) return with_notes(out, dir);
 
     const std::string python = find_python();
     if (python.empty()) {
@@ -198,13 +241,14 @@ PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const Artifac
             cache.store("plot", items[k].key,
                         {{"plot.png", read_file(dir / (stem + ".png"))},
                          {"plot.svg", read_file(dir / (stem + ".svg"))},
+                         {"plot.json", read_file(dir / (stem + ".json"))},
                          {"manifest.toml", "[plot]\nspec = " + json_string(items[k].json) + "\n"}});
         }
     }
     fs::remove(script, ec);
     fs::remove(spec_file, ec);
     fs::remove(log, ec);
-    return out;
+    return with_notes(out, dir);
 }
 
 }  // namespace ssslab::runner

@@ -5,6 +5,7 @@
 #include "experiments/runner/kernel_study.h"
 #include "experiments/runner/runner.h"
 
+#include <algorithm>
 #include <array>
 #include <cstdlib>
 #include <map>
@@ -65,6 +66,20 @@ pre { background: #f7f7f7; padding: 0.8em; overflow-x: auto; font-size: 0.82em; 
 code { font-size: 0.95em; }
 img.panel { width: 180px; image-rendering: pixelated; border: 1px solid #ddd; }
 table.panels td { border: none; font-size: 0.8em; vertical-align: top; }
+nav#contents { background: #f7f7f7; border: 1px solid #ddd; padding: 0.5em 1em; font-size: 0.9em;
+               margin-top: 1em; }
+nav#contents > ol { columns: 2; }
+nav#contents ol { margin: 0.2em 0; padding-left: 1.6em; }
+nav#contents li { break-inside: avoid; }
+div.wide { max-width: 100%; overflow-x: auto; }
+table.prov { font-size: 0.8em; }
+table.prov td { white-space: nowrap; }
+table.prov td.w { white-space: normal; overflow-wrap: anywhere; }
+div.metrics { display: flex; flex-wrap: wrap; gap: 0 1.6em; align-items: flex-start; }
+table.metrics caption { text-align: left; padding-bottom: 0.2em; }
+table.metrics caption span { color: #666; }
+div.metrics details { flex-basis: 100%; margin: 0.4em 0; }
+th.R { color: #d62728; } th.G { color: #2ca02c; } th.B { color: #1f77b4; }
 )CSS";
 
 // Marks the page once every image has loaded (or failed): the headless-browser test reads it.
@@ -167,7 +182,7 @@ void channel_table(std::ostringstream& os, const std::string& csv,
             if (c < row.size()) sums[key][e] += std::strtod(row[c].c_str(), nullptr);
         }
     }
-    os << "<p><b>" << title << "</b></p>\n<table>\n<tr>";
+    os << "<p><b>" << title << "</b></p>\n<div class=\"wide\"><table>\n<tr>";
     for (const char* k : keys) os << "<th class=\"l\">" << esc(k) << "</th>";
     os << "<th>R</th><th>G</th><th>B</th>";
     for (const char* e : extra_sum) os << "<th>" << esc(e) << " (sum RGB)</th>";
@@ -179,7 +194,7 @@ void channel_table(std::ostringstream& os, const std::string& csv,
         for (double x : sums[key]) os << "<td>" << num(x, 3) << "</td>";
         os << "</tr>\n";
     }
-    os << "</table>\n";
+    os << "</table></div>\n";
 }
 
 }  // namespace
@@ -188,7 +203,7 @@ void channel_table(std::ostringstream& os, const std::string& csv,
 void csv_table(std::ostringstream& os, const std::string& csv, const char* title) {
     const auto rows = parse_csv(csv);
     if (rows.size() < 2) return;
-    os << "<p><b>" << title << "</b></p>\n<table>\n<tr>";
+    os << "<p><b>" << title << "</b></p>\n<div class=\"wide\"><table>\n<tr>";
     for (const auto& h : rows[0]) os << "<th>" << esc(h) << "</th>";
     os << "</tr>\n";
     for (size_t i = 1; i < rows.size(); ++i) {
@@ -201,7 +216,7 @@ void csv_table(std::ostringstream& os, const std::string& csv, const char* title
         }
         os << "</tr>\n";
     }
-    os << "</table>\n";
+    os << "</table></div>\n";
 }
 
 namespace {
@@ -307,6 +322,194 @@ std::string with_error(double value, double se) {
     return buf;
 }
 
+namespace {
+
+// The metrics as small tables instead of one flat list: a name "<row>.<R|G|B>.<quantity>" (the
+// row a material, a scene or a study entry) goes into its quantity's table, in the row's line
+// and the channel's column. Names without a channel, "<row>.<quantity>": a quantity whose rows
+// all end in one of a few variants ("<entry>.full", "<entry>.taps17") gets a table with a
+// column per variant (where that makes fewer rows); the others (a material's grid: nr, dr) share
+// one table with a column per quantity. Tables of more than 40 rows are folded. Every value keeps
+// its name as its title.
+void metrics_tables(std::ostringstream& os, const std::vector<Metric>& ms) {
+    struct Table {
+        std::string caption;  // the quantity ("" for the shared table)
+        std::vector<std::string> columns, rows;
+        std::map<std::string, std::map<std::string, const Metric*>> cells;  // row -> column -> m
+        bool channels = false;
+        void add(const std::string& row, const std::string& col, const Metric* m) {
+            if (!cells.count(row)) rows.push_back(row);
+            if (std::find(columns.begin(), columns.end(), col) == columns.end())
+                columns.push_back(col);
+            cells[row][col] = m;
+        }
+    };
+    std::vector<Table> tables;
+    auto table = [&](const std::string& caption, bool channels) -> Table& {
+        for (Table& t : tables)
+            if (t.caption == caption && t.channels == channels) return t;
+        tables.push_back({caption, {}, {}, {}, channels});
+        if (channels) tables.back().columns = {"R", "G", "B"};
+        return tables.back();
+    };
+    // Channel-less metrics by quantity: (row, metric) in order.
+    std::vector<std::pair<std::string, std::vector<std::pair<std::string, const Metric*>>>> plain;
+    for (const Metric& m : ms) {
+        std::vector<std::string> part;
+        std::stringstream in(m.name);
+        for (std::string x; std::getline(in, x, '.');) part.push_back(x);
+        size_t ch = 1;
+        while (ch + 1 < part.size() && part[ch] != "R" && part[ch] != "G" && part[ch] != "B") ++ch;
+        auto join = [&](size_t from, size_t to) {
+            std::string o;
+            for (size_t i = from; i < to; ++i) o += (i > from ? "." : "") + part[i];
+            return o;
+        };
+        if (part.size() >= 3 && ch + 1 < part.size()) {
+            table(join(ch + 1, part.size()), true).add(join(0, ch), part[ch], &m);
+            continue;
+        }
+        const std::string q = part.size() < 2 ? m.name : part.back();
+        const std::string row = part.size() < 2 ? "" : join(0, part.size() - 1);
+        auto it =
+            std::find_if(plain.begin(), plain.end(), [&](const auto& x) { return x.first == q; });
+        if (it == plain.end()) it = plain.insert(plain.end(), {q, {}});
+        it->second.emplace_back(row, &m);
+    }
+    for (const auto& [q, entries] : plain) {
+        std::vector<std::string> variants, heads;
+        bool split = true;
+        for (const auto& [row, m] : entries) {
+            const size_t dot = row.rfind('.');
+            if (dot == std::string::npos) {
+                split = false;
+                break;
+            }
+            const std::string v = row.substr(dot + 1), h = row.substr(0, dot);
+            if (std::find(variants.begin(), variants.end(), v) == variants.end())
+                variants.push_back(v);
+            if (std::find(heads.begin(), heads.end(), h) == heads.end()) heads.push_back(h);
+        }
+        if (split && variants.size() >= 2 && variants.size() <= 6 &&
+            heads.size() < entries.size()) {
+            Table& t = table(q, false);
+            for (const auto& [row, m] : entries) {
+                const size_t dot = row.rfind('.');
+                t.add(row.substr(0, dot), row.substr(dot + 1), m);
+            }
+        } else {
+            Table& t = table("", false);
+            for (const auto& [row, m] : entries) t.add(row, q, m);
+        }
+    }
+    auto value = [](const Metric* m) {
+        if (!m) return std::string("<td></td>");
+        return "<td title=\"" + esc(m->name) + "\">" +
+               (m->stochastic ? with_error(m->value, m->se) : num(m->value, 10)) + "</td>";
+    };
+    auto kind = [](const std::vector<const Metric*>& v) {
+        std::vector<std::string> kinds;
+        for (const Metric* m : v) {
+            std::string k =
+                m->stochastic ? "&plusmn; standard error" : "rel. tol. " + num(m->tolerance);
+            if (std::find(kinds.begin(), kinds.end(), k) == kinds.end()) kinds.push_back(k);
+        }
+        std::string o;
+        for (const auto& k : kinds) o += (o.empty() ? "" : ", ") + k;
+        return o;
+    };
+    auto unit_of = [](const std::vector<const Metric*>& v) {
+        const std::string u = v.empty() ? "" : v.front()->unit;
+        return u.empty() || u == "1" ? std::string() : " [" + esc(u) + "]";
+    };
+    // The shared table first (a material's grid), then the tables in order of appearance.
+    std::stable_partition(tables.begin(), tables.end(),
+                          [](const Table& t) { return t.caption.empty(); });
+    os << "<div class=\"metrics\">\n";
+    for (const Table& t : tables) {
+        std::vector<const Metric*> all;
+        for (const auto& [row, cols] : t.cells)
+            for (const auto& [col, m] : cols) all.push_back(m);
+        const bool fold = t.rows.size() > 40;
+        if (fold)
+            os << "<details><summary><b>" << esc(t.caption.empty() ? "per material" : t.caption)
+               << "</b>: " << all.size() << " values in " << t.rows.size() << " rows</summary>\n";
+        os << "<table class=\"metrics\"><caption>";
+        if (t.caption.empty())
+            os << "<b>per material</b>";
+        else
+            os << "<b>" << esc(t.caption) << "</b>" << unit_of(all) << " <span>(" << kind(all)
+               << ")</span>";
+        os << "</caption>\n<tr><th class=\"l\"></th>";
+        for (const auto& col : t.columns) {
+            if (t.channels) {
+                os << "<th class=\"" << col << "\">" << col << "</th>";
+                continue;
+            }
+            std::vector<const Metric*> c;
+            for (const auto& row : t.rows)
+                if (t.cells.at(row).count(col)) c.push_back(t.cells.at(row).at(col));
+            os << "<th title=\"" << kind(c) << "\">" << esc(col)
+               << (t.caption.empty() ? unit_of(c) : "") << "</th>";
+        }
+        os << "</tr>\n";
+        for (const auto& row : t.rows) {
+            os << "<tr><td class=\"l\">" << esc(row) << "</td>";
+            for (const auto& col : t.columns) {
+                const auto& r = t.cells.at(row);
+                os << value(r.count(col) ? r.at(col) : nullptr);
+            }
+            os << "</tr>\n";
+        }
+        os << "</table>\n" << (fold ? "</details>\n" : "");
+    }
+    os << "</div>\n";
+}
+
+// A table of contents of the page's sections: every <h2 id> of `body`, with its <h3 id>s.
+std::string contents(const std::string& body) {
+    struct Entry {
+        std::string id, title;
+        std::vector<std::pair<std::string, std::string>> subs;
+    };
+    std::vector<Entry> toc;
+    for (size_t at = body.find("<h"); at != std::string::npos; at = body.find("<h", at + 1)) {
+        const bool h2 = body.compare(at, 8, "<h2 id=\"") == 0;
+        if (!h2 && body.compare(at, 8, "<h3 id=\"") != 0) continue;
+        const size_t id0 = at + 8, id1 = body.find('"', id0);
+        const size_t t0 = body.find('>', id1) + 1, t1 = body.find(h2 ? "</h2>" : "</h3>", t0);
+        if (id1 == std::string::npos || t1 == std::string::npos) break;
+        std::string title;  // the heading's text without its tags
+        bool tag = false;
+        for (size_t i = t0; i < t1; ++i) {
+            if (body[i] == '<') tag = true;
+            if (!tag) title += body[i];
+            if (body[i] == '>') tag = false;
+        }
+        const std::string id = body.substr(id0, id1 - id0);
+        if (h2)
+            toc.push_back({id, title, {}});
+        else if (!toc.empty())
+            toc.back().subs.emplace_back(id, title);
+    }
+    std::ostringstream os;
+    os << "<nav id=\"contents\"><b>Contents</b>\n<ol>\n";
+    for (const Entry& e : toc) {
+        os << "<li><a href=\"#" << e.id << "\">" << e.title << "</a>";
+        if (!e.subs.empty()) {
+            os << "<ol>";
+            for (const auto& [id, title] : e.subs)
+                os << "<li><a href=\"#" << id << "\">" << title << "</a></li>";
+            os << "</ol>";
+        }
+        os << "</li>\n";
+    }
+    os << "</ol></nav>\n";
+    return os.str();
+}
+
+}  // namespace
+
 std::string render_report(const ExperimentRun& r, const ReportContent& c) {
     const Experiment& e = r.exp;
     std::ostringstream os;
@@ -321,6 +524,8 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
        << "</code> &middot; " << esc(utc_now()) << " &middot; " << num(r.seconds, 3)
        << " s &middot; " << r.computed << " artifacts computed, " << r.reused
        << " reused from the cache</p>\n";
+    const std::string head = os.str();
+    os.str("");
 
     os << "<h2 id=\"description\">Description</h2>\n";
     std::istringstream desc(e.description);
@@ -403,43 +608,83 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
           "their standard errors, deterministic ones with the stated relative tolerance. "
           "R<sub>d</sub> within k MFP is the reflectance through the bins inside k mean free "
           "paths; its standard error is the quadrature sum over the bins, an upper bound. "
-          "Table: <a href=\"metrics.csv\">metrics.csv</a>.</p>\n<table>\n<tr><th class=\"l\">"
-          "metric</th><th>value</th><th>unit</th><th class=\"l\">kind</th></tr>\n";
-    for (const auto& m : r.metrics)
-        os << "<tr><td class=\"l\">" << esc(m.name) << "</td><td>"
-           << (m.stochastic ? with_error(m.value, m.se) : num(m.value, 10)) << "</td><td>"
-           << esc(m.unit) << "</td><td class=\"l\">"
-           << (m.stochastic ? "stochastic" : "deterministic, rel. tol. " + num(m.tolerance))
-           << "</td></tr>\n";
-    os << "</table>\n";
+          "One table per quantity, a row per material (or scene, or study entry) and a column "
+          "per channel; hover a value for the metric's name. Table: <a href=\"metrics.csv\">"
+          "metrics.csv</a>.</p>\n";
+    metrics_tables(os, r.metrics);
 
+    // Provenance: columns with one value in every row (engine, budget, stop reason, revision,
+    // usually) are said once above the table, so that the table fits the page.
+    struct Column {
+        const char* head;
+        bool left, code;
+        std::string (*get)(const ChannelNode&);
+    };
+    const std::vector<Column> cols = {
+        {"engine", true, false,
+         [](const ChannelNode& n) {
+             return n.provenance.engine + " " + n.provenance.engine_version;
+         }},
+        {"budget", true, false, [](const ChannelNode& n) { return n.provenance.budget; }},
+        {"stopped by", true, false, [](const ChannelNode& n) { return n.provenance.stop_reason; }},
+        {"revision", true, true, [](const ChannelNode& n) { return n.provenance.revision; }},
+    };
+    std::vector<bool> varies(cols.size(), false);
+    for (size_t k = 0; k < cols.size(); ++k)
+        for (const auto& n : r.nodes)
+            if (cols[k].get(n) != cols[k].get(r.nodes.front())) varies[k] = true;
     os << "<h2 id=\"provenance\">Artifacts and provenance</h2>\n<p>Every number above comes from "
           "one of these MCML runs, cached under <code>results/cache/mcml-channel/&lt;key&gt;/"
           "</code> with the key the hash of everything that determines it (medium, grid, "
-          "budget, seed, engine version). Table: <a href=\"artifacts.csv\">artifacts.csv</a>.</p>"
-          "\n<table>\n<tr><th class=\"l\">key</th><th class=\"l\">material</th><th>ch</th>"
-          "<th class=\"l\">role</th><th class=\"l\">engine</th><th class=\"l\">budget</th>"
-          "<th>photons</th><th>batches</th><th>seed</th><th>time [s]</th>"
-          "<th class=\"l\">stopped by</th><th class=\"l\">revision</th><th class=\"l\">date</th>"
-          "<th class=\"l\">this run</th></tr>\n";
+          "budget, seed, engine version). Table: <a href=\"artifacts.csv\">artifacts.csv</a>.";
+    if (!r.nodes.empty()) {
+        std::string same;
+        for (size_t k = 0; k < cols.size(); ++k)
+            if (!varies[k]) {
+                const std::string v = esc(cols[k].get(r.nodes.front()));
+                same += std::string(same.empty() ? "" : ", ") + cols[k].head + " " +
+                        (cols[k].code ? "<code>" + v + "</code>" : v);
+            }
+        if (!same.empty()) os << " The same for every run: " << same << ".";
+    }
+    os << "</p>\n<div class=\"wide\"><table class=\"prov\">\n<tr><th class=\"l\">key</th>"
+          "<th class=\"l\">material</th><th>ch</th><th class=\"l\">role</th>";
+    for (size_t k = 0; k < cols.size(); ++k)
+        if (varies[k] && k < 2) os << "<th class=\"l\">" << cols[k].head << "</th>";
+    os << "<th>photons</th><th>batches</th><th>seed</th><th>time [s]</th>";
+    for (size_t k = 2; k < cols.size(); ++k)
+        if (varies[k]) os << "<th class=\"l\">" << cols[k].head << "</th>";
+    os << "<th class=\"l\">date (UTC)</th><th class=\"l\">this run</th></tr>\n";
     for (const auto& n : r.nodes) {
         const Provenance& p = n.provenance;
+        auto cell = [&](size_t k) {
+            if (!varies[k]) return;
+            const std::string v = esc(cols[k].get(n));
+            os << "<td class=\"l w\">" << (cols[k].code ? "<code>" + v + "</code>" : v) << "</td>";
+        };
+        std::string date = p.date_utc;  // 2026-12-01T18:35:32Z -> 2026-12-01 18:35:32
+        if (date.size() == 20 && date[10] == 'T' && date[19] == 'Z')
+            date = date.substr(0, 10) + " " + date.substr(11, 8);
         os << "<tr id=\"a-" << n.key.substr(0, 16) << "\"><td class=\"l\"><code>"
-           << n.key.substr(0, 16) << "</code></td><td class=\"l\">" << esc(n.material)
+           << n.key.substr(0, 16) << "</code></td><td class=\"l w\">" << esc(n.material)
            << "</td><td>" << kChannelNames[n.channel] << "</td><td class=\"l\">" << n.role
-           << "</td><td class=\"l\">" << esc(p.engine + " " + p.engine_version)
-           << "</td><td class=\"l\">" << esc(p.budget) << "</td><td>" << p.photons << "</td><td>"
-           << p.batches << "</td><td>" << p.seed << "</td><td>" << num(p.seconds, 4)
-           << "</td><td class=\"l\">" << esc(p.stop_reason) << "</td><td class=\"l\"><code>"
-           << esc(p.revision) << "</code></td><td class=\"l\">" << esc(p.date_utc)
-           << "</td><td class=\"l\">" << (p.computed_now ? "computed" : "reused") << "</td></tr>\n";
+           << "</td>";
+        cell(0);
+        cell(1);
+        os << "<td>" << p.photons << "</td><td>" << p.batches << "</td><td>" << p.seed
+           << "</td><td>" << num(p.seconds, 4) << "</td>";
+        cell(2);
+        cell(3);
+        os << "<td class=\"l w\">" << esc(date) << "</td><td class=\"l\">"
+           << (p.computed_now ? "computed" : "reused") << "</td></tr>\n";
     }
-    os << "</table>\n";
+    os << "</table></div>\n";
     os << "<h2 id=\"configuration\">Resolved configuration</h2>\n<p>Every default filled in "
           "(<a href=\"experiment.toml\">experiment.toml</a>).</p>\n<pre>"
        << esc(e.doc->resolved_toml()) << "</pre>\n";
     os << kImageCheck << "</body>\n</html>\n";
-    return os.str();
+    const std::string body = os.str();
+    return head + contents(body) + body;
 }
 
 }  // namespace ssslab::runner
