@@ -399,6 +399,9 @@ TEST(Scene, CommandValidatesAndExportsOrWritesNothing) {
     EXPECT_EQ(torus.triangles.size(), 48u * 24u * 2u);
     // scene.json for other renderers: coefficients per world unit, the lights in scene units.
     const std::string json = testing::read_text(dir / "out" / "test" / "scene.json");
+    // ... with what produced it.
+    for (const char* k : {"\"source\"", "\"content_key\"", "\"git_revision\"", "\"command_line\""})
+        EXPECT_NE(json.find(k), std::string::npos) << k << "\n" << json;
     auto numbers_after = [&](const std::string& from, const std::string& key) {
         std::vector<double> v;
         size_t at = json.find(key, json.find(from));

@@ -12,7 +12,9 @@
 #include "approx/kernel2d.h"
 #include "approx/model_spec.h"
 #include "core/atomic_file.h"
+#include "core/config.h"
 #include "core/material.h"
+#include "core/provenance.h"
 #include "experiments/cli/bench_volpath.h"
 #include "experiments/cli/commands.h"
 #include "experiments/cli/common.h"
@@ -410,8 +412,15 @@ int run_kernel_bench(const BenchArgs& a, int repeat) {
                         << (err ? num(*err) : "") << ',' << (it ? num(*it) : "") << '\n';
                 }
             }
-        write_file_atomic(a.csv, csv.str());
-        std::printf("wrote %s\n", a.csv.c_str());
+        auto doc = ConfigDocument::empty("bench.toml");
+        doc->add_resolved_section("provenance", provenance(command_line()));
+        OutputTransaction tx;
+        tx.stage(a.csv, csv.str());
+        tx.stage(a.csv + ".toml", "# ssslab bench --kernels: provenance of " + a.csv +
+                                      " (timings depend on the machine: see host_threads)\n" +
+                                      doc->resolved_toml());
+        tx.commit();
+        std::printf("wrote %s (+ .toml)\n", a.csv.c_str());
     }
     return 0;
 }

@@ -3,6 +3,8 @@
 // and materials in world units, for another renderer to rebuild the scene (scripts/cycles_render.py
 // does so in Blender's Cycles for the side-by-side of README "Ground truth against Cycles").
 #include "core/atomic_file.h"
+#include "core/hash.h"
+#include "core/provenance.h"
 #include "core/scene.h"
 #include "experiments/cli/commands.h"
 #include "experiments/cli/common.h"
@@ -110,7 +112,15 @@ std::string scene_json(const Scene& s) {
           << ", \"material\": " << json_string(s.materials[static_cast<size_t>(sh.material)].name)
           << "}";
     }
-    o << "\n  ]\n}\n";
+    // What produced the export: the scene file, its content key, ssslab's provenance.
+    ContentKey key("scene");
+    add_to_key(key, s);
+    o << "\n  ],\n  \"source\": " << json_string(s.path)
+      << ",\n  \"content_key\": " << json_string(key.hex()) << ",\n  \"provenance\": {";
+    const auto pv = provenance(command_line());
+    for (std::size_t i = 0; i < pv.size(); ++i)
+        o << (i ? ", " : "") << json_string(pv[i].first) << ": " << json_string(pv[i].second);
+    o << "}\n}\n";
     return o.str();
 }
 
