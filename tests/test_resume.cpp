@@ -23,11 +23,13 @@
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -371,7 +373,7 @@ struct Spawned {
 // Starts `ssslab args` in `cwd` with a progress line on stderr, waits for the first progress
 // line (a batch is done), sends SIGINT and waits for the exit.
 Spawned run_and_interrupt(const std::vector<std::string>& args, const fs::path& cwd,
-                          bool interrupt = true) {
+                          bool interrupt = true, const std::string& progress_unit = " spp") {
     const std::string bin = testing::ssslab_binary();
     const fs::path err_file = cwd / "stderr.txt";
     std::vector<std::string> argv_s = {bin};
@@ -399,7 +401,7 @@ Spawned run_and_interrupt(const std::vector<std::string>& args, const fs::path& 
     if (rc != 0) return out;
     const auto t0 = std::chrono::steady_clock::now();
     while (interrupt && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60)) {
-        if (testing::read_text(err_file).find(" spp") != std::string::npos) break;
+        if (testing::read_text(err_file).find(progress_unit) != std::string::npos) break;
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
     if (interrupt) ::kill(pid, SIGINT);
@@ -497,6 +499,70 @@ TEST(ResumeRenderCommand, RefusesAnEditedSceneResumesAnUnchangedOneAndWritesItsP
     EXPECT_EQ(afresh.err.find("resuming"), std::string::npos) << afresh.err;
     EXPECT_NE(testing::read_text(dir / "m.exr.toml").find("resumed_from_spp = 0"),
               std::string::npos);
+}
+
+TEST(ResumeCommands, McmlProfileAndSphereRefuseAnEditedInputAndStartAfreshWithFresh) {
+    struct Case {
+        const char* command;
+        std::vector<std::string> args;  // with a budget that cannot finish before the signal
+        const char* unit;               // what the progress line counts
+        const char* file;               // the input edited between interrupt and resume
+        std::string before, after;
+        std::vector<const char*> named;  // the refusal names these
+        const char* checkpoint;
+    };
+    const std::string mci = testing::read_text(testing::data_path("mcml-1.2.2/b_giov_n15.mci"));
+    const std::vector<Case> cases = {
+        {"mcml",
+         {"mcml", "b.mci", "--photons", "2000000000", "--batch", "5000", "--threads", "2"},
+         " photons",
+         "b.mci",
+         mci,
+         std::regex_replace(mci, std::regex("1.5     10      90 "), "1.5     10      95 "),
+         {"layer1.mus: was 90, now 95"},
+         "b_giov_n15.mco.ckpt"},
+        {"profile",
+         {"profile", "--config", "c.toml", "--photons", "2000000000", "--batch", "5000",
+          "--threads", "2", "--out", "p.csv"},
+         " photons",
+         "c.toml",
+         "[material]\npreset = \"Skin1\"\n",
+         "[material]\npreset = \"Marble\"\n",
+         {"layer1.mua: was", "p.csv.R.ckpt"},
+         "p.csv.R.ckpt"},
+        {"sphere",
+         {"sphere", "--config", "c.toml", "--photons", "2000000000", "--batch", "5000", "--threads",
+          "2", "--out", "s"},
+         " paths",
+         "c.toml",
+         "[material]\npreset = \"Skin1\"\n",
+         "[material]\nsigma_a_per_mm = 0.01\nsigma_s_per_mm = 1\ng = 0\neta = 1.3\n",
+         {"medium.sigma_a_per_cm: was", "s.R.ckpt"},
+         "s.R.ckpt"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.command);
+        testing::TempDir dir;
+        dir.write(c.file, c.before);
+        const auto cut = run_and_interrupt(c.args, dir.path(), true, c.unit);
+        ASSERT_EQ(cut.exit_code, 130) << cut.err;
+        ASSERT_TRUE(fs::exists(dir / c.checkpoint)) << cut.err;
+        dir.write(c.file, c.after);
+        const auto refused = testing::run_ssslab(c.args, dir.path());
+        EXPECT_EQ(refused.exit_code, 2) << refused.err;
+        for (const char* n : c.named)
+            EXPECT_NE(refused.err.find(n), std::string::npos) << refused.err;
+        EXPECT_NE(refused.err.find("--fresh"), std::string::npos) << refused.err;
+        // --fresh with a small budget: starts afresh and finishes.
+        std::vector<std::string> fresh = c.args;
+        fresh[std::find(fresh.begin(), fresh.end(), std::string("--photons")) - fresh.begin() + 1] =
+            "20000";
+        fresh.push_back("--fresh");
+        const auto afresh = testing::run_ssslab(fresh, dir.path());
+        EXPECT_EQ(afresh.exit_code, 0) << afresh.err;
+        EXPECT_EQ(afresh.err.find("resuming"), std::string::npos) << afresh.err;
+        EXPECT_FALSE(fs::exists(dir / c.checkpoint));
+    }
 }
 
 }  // namespace

@@ -332,6 +332,34 @@ TEST(Runner, KilledRunResumesToTheUninterruptedResultBitForBit) {
     EXPECT_NE(artifacts.find(",resumed"), std::string::npos) << artifacts;
 }
 
+TEST(Runner, AnEditedConfigAfterAnInterruptNeverResumesTheOldRuns) {
+    // Issue 12: interrupt, edit one material's absorption, run again: the edited material's
+    // runs start afresh under their new keys (the old checkpoints are another artifact's), the
+    // others resume, and the results equal an uninterrupted run of the edited config bit for bit.
+    const std::string big = replace(kSmall, "photons = 20000", "photons = 500000");
+    const std::string edited =
+        replace(big, "sigma_a_per_mm = [0.1, 0.2, 0.3]", "sigma_a_per_mm = [0.1, 0.2, 0.45]");
+    ASSERT_NE(big, edited);
+    testing::TempDir whole, parts;
+    whole.write("big.toml", edited);
+    parts.write("big.toml", big);
+    const auto full = run_ssslab({"run", "big.toml", "-q"}, whole.path());
+    ASSERT_EQ(full.exit_code, 0) << full.err;
+    ::setenv("SSSLAB_CHECKPOINT_SECONDS", "0.1", 1);
+    const int interrupted = run_and_kill({"run", "big.toml", "-q"}, parts.path(), 700, SIGINT);
+    ::unsetenv("SSSLAB_CHECKPOINT_SECONDS");
+    ASSERT_EQ(interrupted, 130) << "the run finished before the interruption";
+    parts.write("big.toml", edited);
+    const auto resumed = run_ssslab({"run", "big.toml"}, parts.path());
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    for (const char* f :
+         {"profiles/Skin1.csv", "profiles/Slab.csv", "summary.csv", "metrics.csv"}) {
+        const std::string a = testing::read_text(whole / "results" / "small" / f);
+        ASSERT_GT(a.size(), 100u) << f;
+        EXPECT_EQ(a, testing::read_text(parts / "results" / "small" / f)) << f;
+    }
+}
+
 TEST(Runner, CheckCatchesAPlantedRegressionAndPassesAnUnchangedRerun) {
     testing::TempDir dir;
     const std::string base = replace(kSmall, "quick_factor = 0.1", "quick_factor = 0.5");
