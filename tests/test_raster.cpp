@@ -5,6 +5,7 @@
 
 #include "core/mesh.h"
 #include "core/scene.h"
+#include "volpath/render.h"
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -641,6 +642,54 @@ TEST(Raster, DeterministicForAnyThreadCountAndTileSize) {
     for (int s = 0; s < 4; ++s)
         EXPECT_GT(std::count(one.shape.begin(), one.shape.end(), s), 100) << "shape " << s;
     EXPECT_FALSE(check_mesh(scene.shapes[0].mesh).closed());
+}
+
+// Across engines: volpath's "depth" layer (the first hit's t averaged over uniformly jittered
+// samples in each pixel, with its batch-means standard error) against the rasterizer's
+// box-filtered depth at 16 x 16 samples. Pixels whose 3 x 3 neighbourhood sees one convex shape
+// or the plane (depth continuous over the pixel) are compared by z = (volpath - raster) / SE.
+// With SEs from 16 batch means z follows Student's t with 15 degrees of freedom: E[z^2] = 15/13
+// and Var[z^2] = 3 * 15^2 / (13 * 11) - (15/13)^2; the mean of z^2 over N pixels must lie within
+// 5 of its standard deviations. A camera off by a fraction of a pixel gives z of tens.
+TEST(Raster, DepthAgreesWithVolpathsDepthLayer) {
+    const Scene scene = parse_scene(kManyShapes, "many.toml", ".");
+    const int W = 40, H = 30;
+    volpath::RenderOptions vo;
+    vo.budget.samples = 48;  // 16 batches of three
+    vo.width = W;
+    vo.height = H;
+    const volpath::RenderResult r = volpath::render(scene, vo);
+    ASSERT_EQ(r.width, W);
+    RasterOptions o;
+    o.supersample = 16;
+    const RasterFrame f = rasterize(scene, o, W, H);
+    const int s = f.supersample;
+    double sum_z2 = 0;
+    int n = 0;
+    for (int y = 1; y + 1 < H; ++y)
+        for (int x = 1; x + 1 < W; ++x) {
+            const std::int32_t shape = f.shape[f.sample_index(x * s, y * s)];
+            if (shape < 0 || shape == 3) continue;  // nothing, or the torus (self-occluding)
+            bool one_shape = true;
+            for (int sy = (y - 1) * s; sy < (y + 2) * s && one_shape; ++sy)
+                for (int sx = (x - 1) * s; sx < (x + 2) * s && one_shape; ++sx)
+                    one_shape = f.shape[f.sample_index(sx, sy)] == shape;
+            if (!one_shape) continue;
+            const std::size_t k = (static_cast<std::size_t>(y) * W + static_cast<std::size_t>(x)) *
+                                      volpath::RenderLayout::kPerPixel +
+                                  volpath::RenderLayout::kDepth;
+            const double se = r.run.se[k];
+            ASSERT_GT(se, 0) << x << "," << y;
+            const double z = (r.run.mean[k] - f.depth[f.pixel_index(x, y)]) / se;
+            sum_z2 += z * z;
+            ++n;
+        }
+    const double mean_z2 = sum_z2 / n, expect = 15.0 / 13;
+    const double sd = std::sqrt((3.0 * 225 / (13 * 11) - expect * expect) / n);
+    std::printf("volpath depth: %d pixels, mean z^2 %.3f (expected %.3f +- %.3f)\n", n, mean_z2,
+                expect, sd);
+    EXPECT_GT(n, 300);
+    EXPECT_LT(std::abs(mean_z2 - expect), 5 * sd);
 }
 
 // An open plane seen from below is drawn (no culling of open meshes).
