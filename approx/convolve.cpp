@@ -14,6 +14,7 @@
 #include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace ssslab::approx {
@@ -238,8 +239,9 @@ void convolve_cols_add(const std::vector<double>& in, std::vector<double>& out, 
     });
 }
 
-// Integer hash of (x, y, pass, tap) to a uniform value in [-1, 1].
-double jitter_hash(int x, int y, int pass, int tap) {
+}  // namespace
+
+double jitter_hash(int x, int y, int pass, int tap, unsigned seed) {
     auto mix = [](uint32_t v) {
         v ^= v >> 16;
         v *= 0x7feb352dU;
@@ -248,13 +250,25 @@ double jitter_hash(int x, int y, int pass, int tap) {
         v ^= v >> 16;
         return v;
     };
-    uint32_t v = mix(static_cast<uint32_t>(x) * 0x9e3779b1U + 0x632be5abU);
+    uint32_t v = mix(static_cast<uint32_t>(x) * 0x9e3779b1U + 0x632be5abU +
+                     static_cast<uint32_t>(seed) * 0x27d4eb2fU);
     v = mix(v ^ (static_cast<uint32_t>(y) * 0x85ebca77U));
     v = mix(v ^ (static_cast<uint32_t>(pass) * 0xc2b2ae3dU + static_cast<uint32_t>(tap)));
     return (v >> 8) * (2.0 / 16777216.0) - 1.0;
 }
 
-}  // namespace
+TapJitterRange tap_jitter_range(const TapKernel& taps, double jitter) {
+    if (!(jitter >= 0)) throw std::invalid_argument("tap_jitter_range: jitter must be >= 0");
+    const std::vector<double>& off = taps.offset_mm;
+    TapJitterRange r;
+    for (size_t i = 0; i < off.size(); ++i) {
+        const double l = i > 0 ? 0.5 * (off[i] - off[i - 1]) : -1;
+        const double rr = i + 1 < off.size() ? 0.5 * (off[i + 1] - off[i]) : -1;
+        r.left_mm.push_back(jitter * (l >= 0 ? l : std::max(rr, 0.0)));
+        r.right_mm.push_back(jitter * (rr >= 0 ? rr : std::max(l, 0.0)));
+    }
+    return r;
+}
 
 std::vector<double> resample_1d(const std::vector<double>& half, double h_mm, double pixel_mm,
                                 int fold) {
@@ -358,33 +372,47 @@ ImageRGB convolve_separable(const ImageRGB& e, const std::array<const SeparableK
 
 TapKernel make_taps(const std::array<const SeparableKernel*, 3>& a, int count,
                     double support_mass) {
+    for (int ch = 0; ch < 3; ++ch) {
+        if (!a[ch]) throw std::invalid_argument("make_taps: null kernel");
+        if (a[ch]->rank() != 1 || a[ch]->terms[0].sign < 0)
+            throw std::invalid_argument("make_taps: the kernel must be one positive rank-1 term");
+    }
+    return make_term_taps(a, 0, count, support_mass);
+}
+
+TapKernel make_term_taps(const std::array<const SeparableKernel*, 3>& a, int term, int count,
+                         double support_mass) {
     if (count < 3 || count % 2 == 0)
         throw std::invalid_argument("make_taps: the tap count must be odd and >= 3");
     if (!(support_mass > 0 && support_mass <= 1))
         throw std::invalid_argument("make_taps: support_mass must be in (0, 1]");
     for (int ch = 0; ch < 3; ++ch) {
         if (!a[ch]) throw std::invalid_argument("make_taps: null kernel");
-        if (a[ch]->rank() != 1 || a[ch]->terms[0].sign < 0)
-            throw std::invalid_argument("make_taps: the kernel must be one positive rank-1 term");
+        if (term < 0 || term >= a[ch]->rank())
+            throw std::invalid_argument("make_taps: term " + std::to_string(term) +
+                                        " beyond the kernel's rank " +
+                                        std::to_string(a[ch]->rank()));
         if (!(a[ch]->h_mm > 0)) throw std::invalid_argument("make_taps: kernel h_mm <= 0");
     }
+    const size_t tk = static_cast<size_t>(term);
     // The range R: the radius at which the cumulative 1D mass (cells taken as uniform) reaches
     // support_mass of the whole, for the widest channel.
     double range = 0;
     for (int ch = 0; ch < 3; ++ch) {
-        const std::vector<double>& half = a[ch]->terms[0].a;
+        const std::vector<double>& half = a[ch]->terms[tk].a;
         const double h = a[ch]->h_mm;
         double total = 0;
-        for (double v : half) total += v;
+        for (double v : half) total += std::fabs(v);
         const double target = support_mass * total;
         double cum = 0, rc = static_cast<double>(half.size()) * h;
         for (size_t i = 0; i < half.size(); ++i) {
-            if (half[i] > 0 && cum + half[i] >= target) {
-                const double f = std::clamp((target - cum) / half[i], 0.0, 1.0);
+            const double m = std::fabs(half[i]);
+            if (m > 0 && cum + m >= target) {
+                const double f = std::clamp((target - cum) / m, 0.0, 1.0);
                 rc = (static_cast<double>(i) + f) * h;
                 break;
             }
-            cum += half[i];
+            cum += m;
         }
         range = std::max(range, rc);
     }
@@ -406,7 +434,7 @@ TapKernel make_taps(const std::array<const SeparableKernel*, 3>& a, int count,
         bound[static_cast<size_t>(i)] = 0.5 * (taps.offset_mm[static_cast<size_t>(i - 1)] +
                                                taps.offset_mm[static_cast<size_t>(i)]);
     for (int ch = 0; ch < 3; ++ch) {
-        const std::vector<double>& half = a[ch]->terms[0].a;
+        const std::vector<double>& half = a[ch]->terms[tk].a;
         const double h = a[ch]->h_mm;
         // Cumulative mass from 0 to x >= 0 of the piecewise-constant kernel, odd in x.
         std::vector<double> cum(half.size() + 1, 0.0);
@@ -442,17 +470,7 @@ ImageRGB convolve_taps(const ImageRGB& e, const TapKernel& taps, double jitter) 
     if (!(jitter >= 0)) throw std::invalid_argument("convolve_taps: jitter must be >= 0");
     const int w = e.width, h = e.height;
     const double p = e.pixel_mm;
-    // Offsets in pixels, and how far each tap may move towards either neighbour: to the cell's
-    // boundary (the midpoint) on that side; the outer cells are taken as mirror images of their
-    // inner half.
-    std::vector<double> off(static_cast<size_t>(count)), left(off.size()), right(off.size());
-    for (size_t i = 0; i < off.size(); ++i) off[i] = taps.offset_mm[i] / p;
-    for (size_t i = 0; i < off.size(); ++i) {
-        const double l = i > 0 ? 0.5 * (off[i] - off[i - 1]) : -1;
-        const double r = i + 1 < off.size() ? 0.5 * (off[i + 1] - off[i]) : -1;
-        left[i] = jitter * (l >= 0 ? l : std::max(r, 0.0));
-        right[i] = jitter * (r >= 0 ? r : std::max(l, 0.0));
-    }
+    const TapJitterRange range = tap_jitter_range(taps, jitter);
 
     // One pass along x (pass 0) or y (pass 1): out(x, y) = sum_i w_i in(pos + offset_i), linear
     // interpolation, positions clamped to the image (clamp-to-edge).
@@ -466,19 +484,13 @@ ImageRGB convolve_taps(const ImageRGB& e, const TapKernel& taps, double jitter) 
                     std::array<double, 3> acc{};
                     for (int i = 0; i < count; ++i) {
                         const size_t si = static_cast<size_t>(i);
-                        double o = off[si];
-                        if (jitter > 0) {
-                            const double xi = jitter_hash(x, y, dir, i);
-                            o += xi * (xi < 0 ? left[si] : right[si]);
-                        }
-                        const double s = std::clamp(pos + o, 0.0, static_cast<double>(len - 1));
-                        const int i0 = std::min(static_cast<int>(s), len - 1);
-                        const int i1 = std::min(i0 + 1, len - 1);
-                        const double t = s - i0;
+                        const double xi = jitter > 0 ? jitter_hash(x, y, dir, i) : 0.0;
+                        const double o = jittered_offset_mm(taps, range, si, xi) / p;
+                        const TapTexels s = tap_texels(pos + o, len);
                         for (int ch = 0; ch < 3; ++ch) {
-                            const double v0 = dir == 0 ? in.at(ch, i0, y) : in.at(ch, x, i0);
-                            const double v1 = dir == 0 ? in.at(ch, i1, y) : in.at(ch, x, i1);
-                            acc[ch] += taps.weight[ch][si] * (v0 + t * (v1 - v0));
+                            const double v0 = dir == 0 ? in.at(ch, s.i0, y) : in.at(ch, x, s.i0);
+                            const double v1 = dir == 0 ? in.at(ch, s.i1, y) : in.at(ch, x, s.i1);
+                            acc[ch] += taps.weight[ch][si] * ((1 - s.t) * v0 + s.t * v1);
                         }
                     }
                     for (int ch = 0; ch < 3; ++ch) out.at(ch, x, y) = acc[ch];

@@ -40,6 +40,13 @@ struct TapKernel {
     double support_mm = 0;                      ///< the range the offsets span
 };
 
+/// Importance-sampled taps of term `term` of a separable kernel (every channel's term `term`; the
+/// channels must have the same rank), its sign left out: the caller applies it (rank N: N tap
+/// kernels, as realtime/sss_pass.h builds them). The range R is taken from |a_term| (an SVD term
+/// past the first changes sign); the weights are the signed masses of a_term over the cells.
+TapKernel make_term_taps(const std::array<const SeparableKernel*, 3>& a, int term, int count,
+                         double support_mass = 0.995);
+
 /// Importance-sampled taps of a rank-1 separable kernel (one term per channel; the kernel's
 /// single term is used) [Freude14 §4.4]: `count` (odd) offsets by the SSSS quadratic mapping
 /// o = R sign(u) u^2, u uniform in [-1, 1], with the range R the radius holding `support_mass` of
@@ -55,5 +62,42 @@ TapKernel make_taps(const std::array<const SeparableKernel*, 3>& a, int count,
 /// half width (stratified jitter from a hash of pixel, pass and tap: deterministic), turning the
 /// banding of few taps into noise [JimenezSupp Figs. S.6, S.7: "33 % jittered" is jitter = 0.33].
 ImageRGB convolve_taps(const ImageRGB& e, const TapKernel& taps, double jitter = 0.0);
+
+// ---- Tap sampling, shared by convolve_taps and realtime's SSS pass (one rule, one place) ------
+
+/// A hash of (x, y, pass, tap, seed) to a uniform value in [-1, 1] (deterministic; seed 0 is the
+/// hash convolve_taps uses).
+double jitter_hash(int x, int y, int pass, int tap, unsigned seed = 0);
+
+/// How far each tap may move towards either neighbour under jitter, in mm: `jitter` times the
+/// distance to its cell's boundary (the midpoint) on that side; the outer cells are taken as
+/// mirror images of their inner half.
+struct TapJitterRange {
+    std::vector<double> left_mm, right_mm;
+};
+TapJitterRange tap_jitter_range(const TapKernel& taps, double jitter);
+
+/// Offset of tap i in mm, moved by xi in [-1, 1] (a jitter_hash) within its range.
+inline double jittered_offset_mm(const TapKernel& taps, const TapJitterRange& r, size_t i,
+                                 double xi) {
+    return taps.offset_mm[i] + xi * (xi < 0 ? r.left_mm[i] : r.right_mm[i]);
+}
+
+/// Linear interpolation at position s (in pixels, along an axis of `len` pixels) with
+/// clamp-to-edge: the value is (1 - t) v[i0] + t v[i1].
+struct TapTexels {
+    int i0 = 0, i1 = 0;
+    double t = 0;
+};
+inline TapTexels tap_texels(double s, int len) {
+    TapTexels r;
+    // Clamped in double first: offsets far beyond the image never reach an int conversion.
+    const double c = s < 0 ? 0.0 : (s > len - 1 ? static_cast<double>(len - 1) : s);
+    r.i0 = static_cast<int>(c);
+    if (r.i0 > len - 1) r.i0 = len - 1;
+    r.i1 = r.i0 + 1 < len ? r.i0 + 1 : len - 1;
+    r.t = c - r.i0;
+    return r;
+}
 
 }  // namespace ssslab::approx
