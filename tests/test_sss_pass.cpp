@@ -1,0 +1,476 @@
+// The separable screen-space SSS pass (realtime/sss_pass.h) [Freude14 §4.4, Algorithm 4.1,
+// Eqs. 4.11, 4.12; JimenezSupp §E, Figs. S.6, S.7]: constant irradiance through every kernel
+// model, agreement with approx::convolve_taps and approx::convolve_separable on a flat G-buffer,
+// follow-surface and rejection at a depth step and a material edge, kernels narrower than a pixel
+// and wider than the image, signed SVD terms, and bit-identical results for 1 and 2 threads.
+#include "approx/convolve.h"
+#include "approx/image.h"
+#include "approx/models.h"
+#include "realtime/sss_pass.h"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace ssslab {
+namespace {
+
+using approx::ImageRGB;
+using approx::Kernel2D;
+using approx::KernelGrid;
+using approx::ModelResult;
+using approx::SeparableKernel;
+using realtime::SssEdgeMode;
+using realtime::SssGBuffer;
+using realtime::SssMaterialKernel;
+using realtime::SssParams;
+
+// The analytic skin-like profile of test_image_space.cpp: exp(-r / l1) / r plus exp(-r / l2) / l2
+// per channel, lengths stretched by `scale`.
+RadialProfile analytic_profile(double dr_mm, int nr, double scale = 1.0) {
+    RadialProfile p;
+    p.name = "analytic";
+    p.dr_cm = dr_mm / 10.0;
+    p.nr = nr;
+    const double l1[3] = {0.15, 0.08, 0.05}, l2[3] = {0.8, 0.4, 0.25};  // mm
+    for (int c = 0; c < 3; ++c) {
+        p.rd_per_cm2[c].resize(static_cast<size_t>(nr));
+        p.se_per_cm2[c].assign(static_cast<size_t>(nr), 0.0);
+        for (int k = 0; k < nr; ++k) {
+            const double r = (k + 0.5) * dr_mm / scale;
+            p.rd_per_cm2[c][static_cast<size_t>(k)] =
+                100.0 * (0.05 * std::exp(-r / l1[c]) / r + 0.5 * std::exp(-r / l2[c]) / l2[c]);
+        }
+        p.rd_total[c] = 0.5;
+    }
+    return p;
+}
+
+// Kernels of extent 1.5 mm (0.01 mm cells, n = 150), the profile at half its length.
+std::vector<Kernel2D> skin_kernels() {
+    const RadialProfile p = analytic_profile(0.01, 150, 0.5);
+    std::vector<Kernel2D> k;
+    for (int c = 0; c < 3; ++c) k.emplace_back(p, c, KernelGrid::from_profile(p));
+    return k;
+}
+
+struct Model {
+    std::string name;
+    std::array<ModelResult, 3> r;
+    std::array<const SeparableKernel*, 3> ptr() const {
+        return {&r[0].kernel, &r[1].kernel, &r[2].kernel};
+    }
+};
+
+// Every model family of approx/models.h, built per channel.
+std::vector<Model> all_models(const std::vector<Kernel2D>& k) {
+    std::vector<Model> m;
+    auto add = [&](const std::string& name, auto&& build) {
+        Model x;
+        x.name = name;
+        for (int c = 0; c < 3; ++c) x.r[c] = build(c);
+        m.push_back(std::move(x));
+    };
+    add("svd1_l1", [&](int c) { return approx::svd_rank_n(k[c], 1, true); });
+    add("svd2", [&](int c) { return approx::svd_rank_n(k[c], 2, false); });
+    add("preintegration", [&](int c) { return approx::preintegration(k[c]); });
+    add("guided_k1", [&](int c) { return approx::guided(k[c], {1.0, 0.0}); });
+    add("manual", [&](int c) { return approx::manual_two_gaussian(k[c], 0.05, 0.3, 0.5); });
+    add("deon2", [&](int c) { return approx::sum_of_gaussians(k[c], 2); });
+    add("ssss_skin", [&](int c) { return approx::ssss_skin_kernel(k[c], c); });
+    return m;
+}
+
+// A camera with tan_half 0.5 and unit_mm 0.05: at view depth z = H a pixel is one world unit,
+// 0.05 mm, so the 1.5 mm kernels span 30 pixels.
+SssParams camera(int w, int h, SssEdgeMode mode) {
+    SssParams p;
+    p.tan_half = 0.5;
+    p.aspect = static_cast<double>(w) / h;
+    p.unit_mm = 0.05;
+    p.mode = mode;
+    return p;
+}
+double pixel_mm(const SssParams& p, int h, double z) {
+    return 2 * p.tan_half * z * p.unit_mm / h;
+}
+
+SssGBuffer from_image(const ImageRGB& e, double z) {
+    SssGBuffer g(e.width, e.height);
+    for (size_t i = 0; i < g.pixels(); ++i) {
+        for (int ch = 0; ch < 3; ++ch) g.irradiance[3 * i + ch] = static_cast<float>(e.c[ch][i]);
+        g.view_z[i] = static_cast<float>(z);
+    }
+    return g;
+}
+
+ImageRGB random_image(int w, int h, double pmm, unsigned seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    ImageRGB img(w, h, pmm);
+    for (auto& ch : img.c)
+        for (double& v : ch) v = static_cast<float>(u(rng));  // representable in the G-buffer
+    return img;
+}
+
+// max |out - ref| over max |ref|, ref an image.
+double rel_diff(const std::vector<float>& out, const ImageRGB& ref) {
+    double m = 0, r = 0;
+    const size_t n = ref.c[0].size();
+    for (size_t i = 0; i < n; ++i)
+        for (int ch = 0; ch < 3; ++ch) {
+            m = std::max(m, std::fabs(out[3 * i + ch] - ref.c[ch][i]));
+            r = std::max(r, std::fabs(ref.c[ch][i]));
+        }
+    return m / r;
+}
+
+double rel_diff(const std::vector<float>& a, const std::vector<float>& b) {
+    double m = 0, r = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        m = std::max(m, std::fabs(static_cast<double>(a[i]) - b[i]));
+        r = std::max(r, std::fabs(static_cast<double>(b[i])));
+    }
+    return m / r;
+}
+
+const SssEdgeMode kModes[3] = {SssEdgeMode::kNone, SssEdgeMode::kFollowSurface,
+                               SssEdgeMode::kReject};
+const char* mode_name(SssEdgeMode m) {
+    return m == SssEdgeMode::kNone ? "none" : m == SssEdgeMode::kReject ? "reject" : "follow";
+}
+
+// ---- 1. Constant irradiance on a flat, camera-facing medium ---------------------------------
+
+TEST(SssPass, ConstantIrradianceThroughEveryModel) {
+    const std::vector<Kernel2D> k = skin_kernels();
+    const int w = 40, h = 32;
+    const double c = 0.37, z = h;
+    for (const Model& m : all_models(k)) {
+        const SssMaterialKernel mk = realtime::make_material_kernel(m.ptr(), 17);
+        // The pass maps c to c sum_k sign_k (sum of term k's tap weights)^2 = c sum A: the taps
+        // hold each term's whole 1D mass.
+        std::array<double, 3> sum{};
+        for (int ch = 0; ch < 3; ++ch) {
+            double s = 0;
+            for (const realtime::SssTerm& t : mk.terms) {
+                double ws = 0;
+                for (double v : t.taps.weight[ch]) ws += v;
+                s += t.sign[ch] * ws * ws;
+            }
+            sum[ch] = s;
+            EXPECT_NEAR(s, m.r[ch].kernel.sum(), 1e-12) << m.name;
+        }
+        std::printf("  %-15s rank %zu  sum of weights (R, G, B) = %.9f %.9f %.9f\n", m.name.c_str(),
+                    mk.terms.size(), sum[0], sum[1], sum[2]);
+        // The energy-conserving models keep a constant exactly.
+        if (m.name != "svd2" && m.name != "deon2" && m.name != "ssss_skin") {
+            for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(sum[ch], 1.0, 1e-9) << m.name;
+        }
+        const ImageRGB e(w, h, 0.05, c);
+        for (SssEdgeMode mode : kModes)
+            for (double jitter : {0.0, 0.33}) {
+                SssParams p = camera(w, h, mode);
+                p.jitter = jitter;
+                const std::vector<float> out = realtime::sss_pass(from_image(e, z), {mk}, p);
+                double worst = 0;
+                for (size_t i = 0; i < out.size(); ++i)
+                    worst = std::max(worst, std::fabs(out[i] / (c * sum[i % 3]) - 1));
+                EXPECT_LT(worst, 1e-6) << m.name << " " << mode_name(mode) << " " << jitter;
+            }
+    }
+}
+
+// ---- 2. Flat G-buffer of constant depth: the pass is convolve_taps / convolve_separable ------
+
+TEST(SssPass, FlatEqualsConvolveTaps) {
+    const std::vector<Kernel2D> k = skin_kernels();
+    std::array<ModelResult, 3> pre;
+    for (int c = 0; c < 3; ++c) pre[c] = approx::preintegration(k[c]);
+    const std::array<const SeparableKernel*, 3> a = {&pre[0].kernel, &pre[1].kernel,
+                                                     &pre[2].kernel};
+    const int w = 40, h = 32;  // not square: the aspect enters the horizontal scale
+    for (double z : {32.0, 20.0}) {
+        const SssParams p0 = camera(w, h, SssEdgeMode::kNone);
+        const ImageRGB e = random_image(w, h, pixel_mm(p0, h, z), 3);
+        for (int count : {9, 17})
+            for (double jitter : {0.0, 0.33}) {
+                const approx::TapKernel taps = approx::make_taps(a, count);
+                const ImageRGB ref = approx::convolve_taps(e, taps, jitter);
+                const SssMaterialKernel mk = realtime::make_material_kernel(a, count);
+                for (SssEdgeMode mode : kModes) {
+                    SssParams p = camera(w, h, mode);
+                    p.jitter = jitter;
+                    const double d = rel_diff(realtime::sss_pass(from_image(e, z), {mk}, p), ref);
+                    std::printf(
+                        "  z %g, %d taps, jitter %.2f, %-6s: max |pass - taps| / max = "
+                        "%.3g\n",
+                        z, count, jitter, mode_name(mode), d);
+                    EXPECT_LT(d, 1e-6);
+                }
+            }
+    }
+}
+
+// Taps at every pixel offset with the resampled kernel's weights: the pass is convolve_separable
+// (a rank-2 SVD with signed terms).
+TEST(SssPass, FullResolutionTapsEqualConvolveSeparable) {
+    const std::vector<Kernel2D> k = skin_kernels();
+    std::array<ModelResult, 3> svd;
+    for (int c = 0; c < 3; ++c) svd[c] = approx::svd_rank_n(k[c], 2, false);
+    const int w = 24, h = 24;  // square: the same fold along both axes
+    const SssParams p = camera(w, h, SssEdgeMode::kNone);
+    const double z = 24, pmm = pixel_mm(p, h, z);
+    const ImageRGB e = random_image(w, h, pmm, 5);
+    SssMaterialKernel mk;
+    for (int t = 0; t < 2; ++t) {
+        realtime::SssTerm term;
+        for (int ch = 0; ch < 3; ++ch) {
+            const SeparableKernel& s = svd[ch].kernel;
+            const std::vector<double> kx = approx::resample_1d(s.terms[t].a, s.h_mm, pmm, w - 1);
+            const int r = static_cast<int>(kx.size() / 2);
+            if (ch == 0)
+                for (int d = -r; d <= r; ++d) term.taps.offset_mm.push_back(d * pmm);
+            term.taps.weight[ch] = kx;
+            term.sign[ch] = s.terms[t].sign;
+            ASSERT_EQ(kx.size(), term.taps.offset_mm.size());
+        }
+        term.taps.support_mm = term.taps.offset_mm.back();
+        mk.terms.push_back(term);
+    }
+    const ImageRGB ref =
+        approx::convolve_separable(e, {&svd[0].kernel, &svd[1].kernel, &svd[2].kernel});
+    const double d = rel_diff(realtime::sss_pass(from_image(e, z), {mk}, p), ref);
+    std::printf("  max |pass - convolve_separable| / max = %.3g (signs %g %g %g)\n", d,
+                mk.terms[1].sign[0], mk.terms[1].sign[1], mk.terms[1].sign[2]);
+    EXPECT_LT(d, 1e-6);
+}
+
+// ---- 3. Depth step and material edge ---------------------------------------------------------
+
+// Left half lit (1), right half dark; returns the light that reached the right half.
+double right_half_energy(const std::vector<float>& out, int w, int h) {
+    double s = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = w / 2; x < w; ++x)
+            for (int ch = 0; ch < 3; ++ch) s += out[3 * (static_cast<size_t>(y) * w + x) + ch];
+    return s;
+}
+
+TEST(SssPass, FollowSurfaceAndRejectStopBleedingAcrossADepthStep) {
+    const std::vector<Kernel2D> k = skin_kernels();
+    std::array<ModelResult, 3> pre;
+    for (int c = 0; c < 3; ++c) pre[c] = approx::preintegration(k[c]);
+    const SssMaterialKernel mk =
+        realtime::make_material_kernel({&pre[0].kernel, &pre[1].kernel, &pre[2].kernel}, 17);
+    const int w = 48, h = 32;
+    const double z = 32, step = 100;  // the right half 100 world units (5 mm) behind
+    SssGBuffer g(w, h), ones(w, h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = static_cast<size_t>(y) * w + x;
+            g.view_z[i] = ones.view_z[i] = static_cast<float>(x < w / 2 ? z : z + step);
+            for (int ch = 0; ch < 3; ++ch) {
+                g.irradiance[3 * i + ch] = x < w / 2 ? 1.0f : 0.0f;
+                ones.irradiance[3 * i + ch] = 1.0f;
+            }
+        }
+    const double lit = 3.0 * (w / 2) * h;
+    std::array<double, 3> bleed{};
+    for (int m = 0; m < 3; ++m) {
+        SssParams p = camera(w, h, kModes[m]);
+        p.jitter = 0.33;
+        p.reject_depth = 1.0;  // 0.05 mm
+        bleed[m] = right_half_energy(realtime::sss_pass(g, {mk}, p), w, h) / lit;
+        std::printf("  %-6s: fraction of the lit half's energy across the step = %.3g\n",
+                    mode_name(kModes[m]), bleed[m]);
+        // With rejection the kept weights are renormalised: a constant stays constant on both
+        // sides of the step.
+        if (kModes[m] == SssEdgeMode::kReject) {
+            const std::vector<float> o = realtime::sss_pass(ones, {mk}, p);
+            for (float v : o) EXPECT_NEAR(v, 1.0, 1e-6);
+        }
+    }
+    EXPECT_GT(bleed[0], 1e-3);             // mode none bleeds
+    EXPECT_LT(bleed[1], 1e-3 * bleed[0]);  // follow-surface: t = 1 across a 100-unit step
+    EXPECT_LT(bleed[2], 1e-3 * bleed[0]);  // reject: every sample across is dropped
+
+    // A material edge at constant depth: rejection drops the other material's samples.
+    SssGBuffer me = g;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = static_cast<size_t>(y) * w + x;
+            me.view_z[i] = static_cast<float>(z);
+            me.material[i] = x < w / 2 ? 0 : 1;
+        }
+    const double none =
+        right_half_energy(realtime::sss_pass(me, {mk, mk}, camera(w, h, SssEdgeMode::kNone)), w, h);
+    const double rej = right_half_energy(
+        realtime::sss_pass(me, {mk, mk}, camera(w, h, SssEdgeMode::kReject)), w, h);
+    std::printf("  material edge: none %.3g, reject %.3g\n", none / lit, rej / lit);
+    EXPECT_GT(none / lit, 1e-3);
+    EXPECT_EQ(rej, 0.0);
+}
+
+// ---- 4. Stiff cases: narrower than a pixel, wider than the image ----------------------------
+
+TEST(SssPass, KernelNarrowerThanAPixelIsTheIdentity) {
+    const std::vector<Kernel2D> k = skin_kernels();
+    std::array<ModelResult, 3> pre;
+    for (int c = 0; c < 3; ++c) pre[c] = approx::preintegration(k[c]);
+    const SssMaterialKernel mk =
+        realtime::make_material_kernel({&pre[0].kernel, &pre[1].kernel, &pre[2].kernel}, 17);
+    const int w = 32, h = 24;
+    // At depth 100 h a pixel is 5 mm: the kernel's support is under 0.3 px.
+    const double z = 100.0 * h;
+    const SssGBuffer g = from_image(random_image(w, h, 1.0, 9), z);
+    for (SssEdgeMode mode : kModes) {
+        SssParams p = camera(w, h, mode);
+        p.jitter = 0.33;
+        const std::vector<float> out = realtime::sss_pass(g, {mk}, p);
+        const double d = rel_diff(out, g.irradiance);
+        std::printf("  %-6s: max |out - in| / max = %.3g\n", mode_name(mode), d);
+        EXPECT_LT(d, 1e-6);
+    }
+}
+
+TEST(SssPass, KernelWiderThanTheImage) {
+    const std::vector<Kernel2D> k = skin_kernels();
+    std::array<ModelResult, 3> pre;
+    for (int c = 0; c < 3; ++c) pre[c] = approx::preintegration(k[c]);
+    const SssMaterialKernel mk =
+        realtime::make_material_kernel({&pre[0].kernel, &pre[1].kernel, &pre[2].kernel}, 17);
+    const int w = 24, h = 20;
+    // At depth h / 50 a pixel is 0.001 mm: the kernel spans 1500 px on a 24 px image.
+    const double z = h / 50.0;
+    for (SssEdgeMode mode : kModes) {
+        SssParams p = camera(w, h, mode);
+        p.jitter = 0.33;
+        const std::vector<float> c =
+            realtime::sss_pass(from_image(ImageRGB(w, h, 1.0, 0.6), z), {mk}, p);
+        for (float v : c) EXPECT_NEAR(v, 0.6, 1e-6) << mode_name(mode);
+        ImageRGB dot(w, h, 1.0, 0.0);
+        for (int ch = 0; ch < 3; ++ch) dot.at(ch, 11, 9) = 1.0;
+        const std::vector<float> o = realtime::sss_pass(from_image(dot, z), {mk}, p);
+        double energy = 0;
+        bool finite = true;
+        for (float v : o) {
+            finite = finite && std::isfinite(v) && v >= -1e-7f;
+            energy += v;
+        }
+        std::printf("  %-6s: impulse energy out / in = %.3g\n", mode_name(mode), energy / 3);
+        EXPECT_TRUE(finite) << mode_name(mode);
+        EXPECT_LE(energy, 3.0 * (1 + 1e-6)) << mode_name(mode);
+    }
+}
+
+// ---- 5. Signed terms: the rank-2 pass is the sum of its single-term passes -------------------
+
+TEST(SssPass, Rank2IsTheSumOfItsTerms) {
+    const std::vector<Kernel2D> k = skin_kernels();
+    std::array<ModelResult, 3> svd;
+    for (int c = 0; c < 3; ++c) svd[c] = approx::svd_rank_n(k[c], 2, false);
+    const SssMaterialKernel both =
+        realtime::make_material_kernel({&svd[0].kernel, &svd[1].kernel, &svd[2].kernel}, 17);
+    ASSERT_EQ(both.terms.size(), 2u);
+    std::printf("  term 2 signs: %g %g %g\n", both.terms[1].sign[0], both.terms[1].sign[1],
+                both.terms[1].sign[2]);
+    const int w = 40, h = 32;
+    SssGBuffer g = from_image(random_image(w, h, 1.0, 11), h);
+    for (int x = w / 2; x < w; ++x)
+        for (int y = 0; y < h; ++y) g.view_z[static_cast<size_t>(y) * w + x] = 1.5f * h;
+    for (SssEdgeMode mode : kModes) {
+        SssParams p = camera(w, h, mode);
+        p.jitter = 0.33;
+        p.reject_depth = 1.0;
+        const std::vector<float> all = realtime::sss_pass(g, {both}, p);
+        const std::vector<float> t0 =
+            realtime::sss_pass(g, {SssMaterialKernel{{both.terms[0]}}}, p);
+        // Without jitter: alone, term 2 would take term 1's jitter (pass indices 2k + dir).
+        SssParams p0 = p;
+        p0.jitter = 0;
+        const std::vector<float> all0 = realtime::sss_pass(g, {both}, p0);
+        const std::vector<float> a0 =
+            realtime::sss_pass(g, {SssMaterialKernel{{both.terms[0]}}}, p0);
+        const std::vector<float> a1 =
+            realtime::sss_pass(g, {SssMaterialKernel{{both.terms[1]}}}, p0);
+        std::vector<float> sum(a0.size());
+        for (size_t i = 0; i < sum.size(); ++i) sum[i] = a0[i] + a1[i];
+        double d = rel_diff(all0, sum);
+        // A negative term (as an SVD term of a negative eigenvalue) is subtracted.
+        SssMaterialKernel neg = both;
+        neg.terms[1].sign = {-1, -1, -1};
+        const std::vector<float> diff = realtime::sss_pass(g, {neg}, p0);
+        for (size_t i = 0; i < sum.size(); ++i) sum[i] = a0[i] - a1[i];
+        d = std::max(d, rel_diff(diff, sum));
+        std::printf("  %-6s: max |both - (term 1 +- term 2)| / max = %.3g\n", mode_name(mode), d);
+        EXPECT_LT(d, 1e-6) << mode_name(mode);
+        EXPECT_GT(rel_diff(all, t0), 1e-4) << mode_name(mode);  // term 2 matters
+    }
+}
+
+// ---- 6. Determinism and pass-through ---------------------------------------------------------
+
+TEST(SssPass, BitIdenticalForOneAndTwoThreadsAndPassThrough) {
+    const std::vector<Kernel2D> k = skin_kernels();
+    std::array<ModelResult, 3> pre, svd;
+    for (int c = 0; c < 3; ++c) {
+        pre[c] = approx::preintegration(k[c]);
+        svd[c] = approx::svd_rank_n(k[c], 2, false);
+    }
+    const std::vector<SssMaterialKernel> mats = {
+        realtime::make_material_kernel({&pre[0].kernel, &pre[1].kernel, &pre[2].kernel}, 17),
+        realtime::make_material_kernel({&svd[0].kernel, &svd[1].kernel, &svd[2].kernel}, 11)};
+    const int w = 53, h = 37;
+    SssGBuffer g = from_image(random_image(w, h, 1.0, 13), 1.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = static_cast<size_t>(y) * w + x;
+            g.view_z[i] = static_cast<float>(30 + 0.3 * x + (x > 30 ? 20 : 0));
+            g.material[i] =
+                (x - 26) * (x - 26) + (y - 18) * (y - 18) < 64 ? -1 : (y < h / 2 ? 0 : 1);
+        }
+    for (SssEdgeMode mode : kModes) {
+        SssParams p = camera(w, h, mode);
+        p.jitter = 0.33;
+        p.seed = 7;
+        std::vector<float> one, two;
+        tbb::task_arena(1).execute([&] { one = realtime::sss_pass(g, mats, p); });
+        tbb::task_arena(2).execute([&] { two = realtime::sss_pass(g, mats, p); });
+        ASSERT_EQ(one.size(), two.size());
+        EXPECT_EQ(std::memcmp(one.data(), two.data(), one.size() * sizeof(float)), 0)
+            << mode_name(mode);
+        size_t through = 0, changed = 0;
+        for (size_t i = 0; i < g.pixels(); ++i)
+            for (int ch = 0; ch < 3; ++ch) {
+                if (g.material[i] < 0) {
+                    EXPECT_EQ(one[3 * i + ch], g.irradiance[3 * i + ch]);
+                    ++through;
+                } else if (one[3 * i + ch] != g.irradiance[3 * i + ch]) {
+                    ++changed;
+                }
+            }
+        EXPECT_GT(through, 0u);
+        EXPECT_GT(changed, g.pixels());  // the medium is blurred
+    }
+    // Bad input is refused.
+    SssGBuffer bad = g;
+    bad.material[0] = 2;
+    EXPECT_THROW(realtime::sss_pass(bad, mats, camera(w, h, SssEdgeMode::kNone)),
+                 std::invalid_argument);
+    bad = g;
+    bad.view_z[static_cast<size_t>(w) + 1] = 0;
+    bad.material[static_cast<size_t>(w) + 1] = 0;
+    EXPECT_THROW(realtime::sss_pass(bad, mats, camera(w, h, SssEdgeMode::kNone)),
+                 std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace ssslab
