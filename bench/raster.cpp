@@ -7,7 +7,7 @@
 
 #include <vector>
 
-namespace ssslab {
+namespace ssslab::realtime {
 namespace {
 
 void BM_RasterizeFrame(benchmark::State& state) {
@@ -39,6 +39,6 @@ void BM_RasterizeFrame(benchmark::State& state) {
 BENCHMARK(BM_RasterizeFrame)->Args({512, 1})->Args({512, 4})->Unit(benchmark::kMillisecond);
 
 }  // namespace
-}  // namespace ssslab
+}  // namespace ssslab::realtime
 
 BENCHMARK_MAIN();

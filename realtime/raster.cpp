@@ -18,7 +18,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace ssslab {
+namespace ssslab::realtime {
 
 namespace {
 
@@ -380,4 +380,4 @@ RasterFrame rasterize(const Scene& scene, const RasterOptions& o, int width, int
     return rasterize(camera, meshes, o);
 }
 
-}  // namespace ssslab
+}  // namespace ssslab::realtime

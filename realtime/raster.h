@@ -26,7 +26,7 @@
 #include <span>
 #include <vector>
 
-namespace ssslab {
+namespace ssslab::realtime {
 
 /// A vertex in clip space: x / w and y / w run over [-1, 1] across the image (y up), w is the
 /// view depth (distance along the camera's forward axis, world units).
@@ -123,4 +123,4 @@ RasterFrame rasterize(const Scene& scene, const RasterOptions& options = {}, int
 /// Fixed point of the snapped raster coordinates: 8 fractional bits (1/256 pixel).
 inline constexpr int kSubpixelBits = 8;
 
-}  // namespace ssslab
+}  // namespace ssslab::realtime

@@ -18,7 +18,7 @@
 #include <random>
 #include <vector>
 
-namespace ssslab {
+namespace ssslab::realtime {
 namespace {
 
 using Tri = std::array<std::uint32_t, 3>;
@@ -715,4 +715,4 @@ TEST(Raster, RefusesSizesOutOfRange) {
 }
 
 }  // namespace
-}  // namespace ssslab
+}  // namespace ssslab::realtime
