@@ -8,7 +8,11 @@
 #include <chrono>
 #include <csignal>
 #include <filesystem>
+#include <set>
+#include <sstream>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include <spawn.h>
 #include <sys/wait.h>
@@ -155,6 +159,53 @@ TEST(Cli, ProfileWritesCsvWithResolvedConfigurationBesideIt) {
          {"preset = 'Skin1'", "seed = 1", "photons = 3000", "rule = ", "[result_R]", "Rd_se",
           "stop_reason = 'photons'", "[provenance]", "git_revision", "command_line"})
         EXPECT_NE(rec.find(key), std::string::npos) << key << " in\n" << rec;
+}
+
+TEST(Cli, BenchRealtimeWritesPassTimesPerSceneAndThreadCount) {
+    testing::TempDir dir;
+    const std::string scenes = testing::source_path("experiments/scenes");
+    const auto r = run_ssslab(
+        {"bench", "--realtime", "--quick", "--threads", "2", "--scenes", scenes, "--csv", "b.csv"},
+        dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("floor_ms"), std::string::npos) << r.out;
+    EXPECT_EQ(dir.files(), (std::vector<std::string>{"b.csv", "b.csv.toml"}));
+    EXPECT_NE(testing::read_text(dir / "b.csv.toml").find("[provenance]"), std::string::npos);
+    std::istringstream csv(testing::read_text(dir / "b.csv"));
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line, "scene,width,height,threads,pass,ms,floor_ms");
+    std::set<std::string> seen;
+    while (std::getline(csv, line)) {
+        std::vector<std::string> f;
+        std::istringstream in(line);
+        for (std::string x; std::getline(in, x, ',');) f.push_back(x);
+        if (line.back() == ',') f.push_back("");
+        ASSERT_EQ(f.size(), 7u) << line;
+        EXPECT_EQ(f[1], "480");
+        EXPECT_EQ(f[2], "270");
+        EXPECT_GT(std::stod(f[5]), 0.0) << line;
+        if (f[4] == "sss") {
+            ASSERT_FALSE(f[6].empty()) << line;
+            EXPECT_GT(std::stod(f[6]), 0.0) << line;
+        } else {
+            EXPECT_TRUE(f[6].empty()) << line;
+        }
+        seen.insert(f[0] + "/" + f[3] + "/" + f[4]);
+    }
+    for (const char* scene : {"apple", "ketchup", "marble", "skin", "wholemilk"})
+        for (const char* threads : {"1", "2"})
+            for (const char* pass : {"raster", "sss"})
+                EXPECT_TRUE(seen.count(std::string(scene) + "/" + threads + "/" + pass))
+                    << scene << " " << threads << " " << pass;
+
+    for (const std::vector<std::string>& bad :
+         {std::vector<std::string>{"bench", "--realtime", "--size", "0x10"},
+          {"bench", "--realtime", "--size", "64x"},
+          {"bench", "--size", "64"}}) {
+        const auto b = run_ssslab(bad, dir.path());
+        EXPECT_EQ(b.exit_code, 2) << bad.back() << ": " << b.err;
+    }
 }
 
 TEST(Cli, McmlDefaultModeIsIndependentOfThreads) {

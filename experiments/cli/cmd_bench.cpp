@@ -82,8 +82,10 @@ struct BenchArgs {
     bool kernels = false;
     bool volpath = false;
     bool render = false;
+    bool realtime = false;
     std::string scenes = "experiments/scenes";
-    int size = 256, spp = 16;
+    std::string size;  ///< "N" or "WxH"; empty: the mode's default
+    int spp = 16;
     std::int64_t photons = 100'000;  ///< per channel, for the ground-truth profiles
     std::string csv;
 };
@@ -152,12 +154,6 @@ int run_bench(const BenchArgs& a) {
 }
 
 // ---- Kernel build times (--kernels) ------------------------------------------------------------
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) {
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 /// The models timed, in column order, with their short column headers.
 struct TimedModel {
@@ -425,6 +421,19 @@ int run_kernel_bench(const BenchArgs& a, int repeat) {
     return 0;
 }
 
+/// "N" (N x N) or "WxH", sides in [1, 16384]; false for anything else.
+bool parse_size(const std::string& s, int& w, int& h) {
+    const auto side = [](const std::string& t, int& v) {
+        if (t.empty() || t.size() > 5 || t.find_first_not_of("0123456789") != std::string::npos)
+            return false;
+        v = std::stoi(t);
+        return v >= 1 && v <= 16384;
+    };
+    const size_t x = s.find('x');
+    if (x == std::string::npos) return side(s, w) && side(s, h);
+    return side(s.substr(0, x), w) && side(s.substr(x + 1), h);
+}
+
 }  // namespace
 
 void register_bench(CLI::App& app, std::function<int()>& action) {
@@ -454,12 +463,27 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
         "Instead: the scene renderer on the built-in scenes (rays/s, extrapolated time to 1 % "
         "per pixel); with --scenes, --size, --spp, --case");
     render->excludes(kernels)->excludes(volpath);
-    sub->add_option("--scenes", a->scenes,
-                    "With --render: the scene folder (default experiments/scenes)")
-        ->needs(render);
-    sub->add_option("--size", a->size, "With --render: image width and height (default 256)")
-        ->check(integer_in(1, 8192))
-        ->needs(render);
+    CLI::Option* realtime = sub->add_flag(
+        "--realtime", a->realtime,
+        "Instead: the real-time renderer's passes (rasterizer, SSS pass, both) on the built-in "
+        "scenes, 1 thread and all, the SSS pass against a streaming memory floor; with "
+        "--scenes, --size, --case, --repeat, --csv");
+    realtime->excludes(kernels)->excludes(volpath)->excludes(render);
+    CLI::Option* scenes = sub->add_option(
+        "--scenes", a->scenes,
+        "With --render or --realtime: the scene folder (default experiments/scenes)");
+    CLI::Option* size =
+        sub->add_option("--size", a->size,
+                        "With --render: image width and height N (default 256); with "
+                        "--realtime: WxH (default 1920x1080; --quick: 480x270)")
+            ->check(CLI::Validator(
+                [](std::string& v) {
+                    int w = 0, h = 0;
+                    return parse_size(v, w, h)
+                               ? std::string()
+                               : "must be N or WxH with sides in 1..16384, got " + v;
+                },
+                "N|WxH"));
     sub->add_option("--spp", a->spp, "With --render: samples per pixel (default 16)")
         ->check(integer_in(1, 1'000'000))
         ->needs(render);
@@ -475,17 +499,35 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
                     "(default 100000)")
         ->check(integer_in(1, 1'000'000'000'000))
         ->needs(kernels);
-    sub->add_option("--csv", a->csv,
-                    "With --kernels: also write the times in long format (material, channel, "
-                    "model, grid_n, h_mm, build_s, constraint_error, iterations) to this file")
-        ->needs(kernels);
-    sub->callback([a, repeat, &action] {
+    CLI::Option* csv = sub->add_option(
+        "--csv", a->csv,
+        "With --kernels: also write the times in long format (material, channel, model, grid_n, "
+        "h_mm, build_s, constraint_error, iterations) to this file; with --realtime: scene, "
+        "width, height, threads, pass, ms, floor_ms");
+    sub->callback([a, repeat, scenes, size, csv, &action] {
+        if (!a->render && !a->realtime && (scenes->count() > 0 || size->count() > 0))
+            throw CLI::ValidationError(scenes->count() > 0 ? "--scenes" : "--size",
+                                       "needs --render or --realtime");
+        if (!a->kernels && !a->realtime && csv->count() > 0)
+            throw CLI::ValidationError("--csv", "needs --kernels or --realtime");
+        int w = 0, h = 0;
+        if (a->render && !a->size.empty() && (!parse_size(a->size, w, h) || w != h))
+            throw CLI::ValidationError("--size", "with --render: one number N, got " + a->size);
         action = [a, explicit_repeat = repeat->count() > 0] {
+            const int all = a->threads > 0 ? a->threads : tbb::info::default_concurrency();
             if (a->kernels) return run_kernel_bench(*a, explicit_repeat ? a->repeat : 1);
-            if (a->render)
-                return run_render_bench(
-                    a->threads > 0 ? a->threads : tbb::info::default_concurrency(), a->quick,
-                    a->scenes, a->size, a->spp, a->only);
+            if (a->realtime) {
+                int width = a->quick ? 480 : 1920, height = a->quick ? 270 : 1080;
+                if (!a->size.empty()) parse_size(a->size, width, height);
+                return run_realtime_bench(all, a->quick, a->scenes, width, height,
+                                          explicit_repeat ? a->repeat : (a->quick ? 1 : 3), a->only,
+                                          a->csv);
+            }
+            if (a->render) {
+                int side = 256, same = 256;
+                if (!a->size.empty()) parse_size(a->size, side, same);
+                return run_render_bench(all, a->quick, a->scenes, side, a->spp, a->only);
+            }
             if (a->volpath)
                 return run_volpath_bench(
                     a->threads > 0 ? a->threads : tbb::info::default_concurrency(), a->quick,

@@ -17,8 +17,7 @@ namespace ssslab::cli {
 
 namespace fs = std::filesystem;
 
-int run_render_bench(int threads, bool quick, const std::string& scenes_dir, int size, int spp,
-                     const std::string& only) {
+std::vector<fs::path> list_scenes(const std::string& scenes_dir, const std::string& only) {
     if (!fs::is_directory(scenes_dir))
         throw InputError(
             {"<command line>", 0, 0}, "--scenes",
@@ -29,6 +28,12 @@ int run_render_bench(int threads, bool quick, const std::string& scenes_dir, int
             (only.empty() || e.path().stem().string().find(only) != std::string::npos))
             files.push_back(e.path());
     std::sort(files.begin(), files.end());
+    return files;
+}
+
+int run_render_bench(int threads, bool quick, const std::string& scenes_dir, int size, int spp,
+                     const std::string& only) {
+    const std::vector<fs::path> files = list_scenes(scenes_dir, only);
     if (quick) {
         size = std::min(size, 64);  // at least 16 batches: standard errors need them
         spp = std::max(16, std::min(spp, 16));
