@@ -359,15 +359,14 @@ std::string ConfigTable::choice(std::string_view key, std::string fallback,
     for (auto c : choices)
         if (c == v) return v;
     std::string list;
-    std::string best;
-    int best_d = 1 << 30;
+    std::vector<std::string> names;
     for (auto c : choices) {
         list += (list.empty() ? "" : ", ") + std::string("\"") + std::string(c) + "\"";
-        const int d = edit_distance(v, std::string(c));
-        if (d < best_d) best_d = d, best = c;
+        names.emplace_back(c);
     }
     std::string msg = "expected one of " + list + ", got \"" + v + "\"";
-    if (best_d <= 2) msg += " (did you mean \"" + best + "\"?)";
+    const std::string best = nearest_name(v, names, 2);
+    if (!best.empty()) msg += " (did you mean \"" + best + "\"?)";
     fail(key, msg);
 }
 
@@ -514,14 +513,8 @@ void check_unused(const ConfigDocument& doc, const toml::table& t, const std::st
             std::string msg = "unknown key";
             const auto a = asked.find(path);
             if (a != asked.end()) {
-                std::string best;
-                int best_d = 1 << 30;
-                for (const auto& cand : a->second) {
-                    const int d = edit_distance(key, cand);
-                    if (d < best_d) best_d = d, best = cand;
-                }
-                if (!best.empty() && best_d <= std::max<int>(2, static_cast<int>(key.size()) / 3))
-                    msg += " (did you mean '" + best + "'?)";
+                const std::string best = nearest_name(key, a->second, suggestion_distance(key));
+                if (!best.empty()) msg += " (did you mean '" + best + "'?)";
                 std::string list;
                 for (const auto& cand : a->second) list += (list.empty() ? "" : ", ") + cand;
                 msg += "; valid keys here: " + list;

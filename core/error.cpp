@@ -135,4 +135,19 @@ int edit_distance(const std::string& a, const std::string& b) {
     return prev[b.size()];
 }
 
+std::string nearest_name(const std::string& name, const std::vector<std::string>& candidates,
+                         int max_distance) {
+    std::string best;
+    int best_d = max_distance + 1;
+    for (const std::string& c : candidates) {
+        const int d = edit_distance(name, c);
+        if (d < best_d) best_d = d, best = c;
+    }
+    return best;
+}
+
+int suggestion_distance(const std::string& name) {
+    return std::max<int>(2, static_cast<int>(name.size()) / 3);
+}
+
 }  // namespace ssslab

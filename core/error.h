@@ -4,6 +4,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace ssslab {
 
@@ -51,5 +52,12 @@ std::string read_source_line(const std::string& file, int line);
 
 /// Levenshtein distance, for "did you mean" suggestions.
 int edit_distance(const std::string& a, const std::string& b);
+
+/// The candidate nearest to `name` by edit_distance (the first of equally near ones) if it is
+/// at most `max_distance` edits away, else "": the one "did you mean" lookup.
+std::string nearest_name(const std::string& name, const std::vector<std::string>& candidates,
+                         int max_distance);
+/// How far a suggestion for a name may be: 2 edits, or a third of a longer name's length.
+int suggestion_distance(const std::string& name);
 
 }  // namespace ssslab

@@ -171,16 +171,15 @@ SceneShape read_shape(ConfigTable& t, const std::string& base_dir,
     const std::string mat = t.string("material");
     auto it = materials.find(mat);
     if (it == materials.end()) {
-        std::string list, best;
-        int best_d = 1 << 30;
+        std::string list;
+        std::vector<std::string> names;
         for (const auto& [k, v] : materials) {
             list += (list.empty() ? "" : ", ") + k;
-            const int d = edit_distance(mat, k);
-            if (d < best_d) best_d = d, best = k;
+            names.push_back(k);
         }
         std::string msg = "unknown material \"" + mat + "\"";
-        if (!best.empty() && best_d <= std::max<int>(2, static_cast<int>(mat.size()) / 3))
-            msg += " (did you mean \"" + best + "\"?)";
+        const std::string best = nearest_name(mat, names, suggestion_distance(mat));
+        if (!best.empty()) msg += " (did you mean \"" + best + "\"?)";
         t.fail("material", msg + "; the scene's materials: " + list);
     }
     s.material = it->second;

@@ -200,12 +200,7 @@ CLI::Validator one_of(std::vector<std::string> choices) {
         [choices, list](std::string& s) -> std::string {
             if (std::find(choices.begin(), choices.end(), s) != choices.end()) return {};
             std::string msg = "must be one of " + list + ", got " + shown(s);
-            std::string best;
-            int best_d = 3;
-            for (const auto& c : choices) {
-                const int d = edit_distance(s, c);
-                if (d < best_d) best_d = d, best = c;
-            }
+            const std::string best = nearest_name(s, choices, 2);
             if (!best.empty()) msg += " (did you mean '" + best + "'?)";
             return msg;
         },
