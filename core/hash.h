@@ -4,6 +4,8 @@
 // the 17th digit does not go unnoticed. XXH3-128 (libxxhash) is the hash.
 #pragma once
 
+#include "core/vec3.h"
+
 #include <array>
 #include <cstdint>
 #include <string>
@@ -31,6 +33,9 @@ class ContentKey {
         return add(name, value ? "true" : "false");
     }
     ContentKey& add(std::string_view name, const std::array<double, 3>& value);
+    ContentKey& add(std::string_view name, const Vec3& value) {
+        return add(name, std::array<double, 3>{value.x, value.y, value.z});
+    }
     ContentKey& add(std::string_view name, const std::vector<double>& value);
 
     /// The canonical text (for --dry-run --verbose and for debugging a key).

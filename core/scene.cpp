@@ -300,17 +300,11 @@ bool Scene::delta_light_through_smooth_boundary() const {
     return false;
 }
 
-namespace {
-void add_vec(ContentKey& k, const std::string& name, const Vec3& v) {
-    k.add(name, std::array<double, 3>{v.x, v.y, v.z});
-}
-}  // namespace
-
 void add_to_key(ContentKey& k, const Scene& s) {
     k.add("scene.name", s.name).add("scene.unit_mm", s.unit_mm);
-    add_vec(k, "camera.position", s.camera.position);
-    add_vec(k, "camera.target", s.camera.target);
-    add_vec(k, "camera.up", s.camera.up);
+    k.add("camera.position", s.camera.position);
+    k.add("camera.target", s.camera.target);
+    k.add("camera.up", s.camera.up);
     k.add("camera.fov_y_deg", s.camera.fov_y_deg)
         .add("camera.width", s.camera.width)
         .add("camera.height", s.camera.height);
@@ -318,9 +312,9 @@ void add_to_key(ContentKey& k, const Scene& s) {
         const SceneLight& l = s.lights[i];
         const std::string p = "lights[" + std::to_string(i) + "].";
         k.add(p + "type", to_string(l.type)).add(p + "color", l.color);
-        add_vec(k, p + "direction", l.direction);
+        k.add(p + "direction", l.direction);
         k.add(p + "angular_radius_deg", l.angular_radius_deg);
-        add_vec(k, p + "position", l.position);
+        k.add(p + "position", l.position);
         k.add(p + "radius", l.radius);
     }
     for (std::size_t i = 0; i < s.materials.size(); ++i) {
@@ -356,7 +350,7 @@ void add_to_key(ContentKey& k, const Scene& s) {
             .add(p + "triangles", static_cast<std::uint64_t>(sh.mesh.triangles.size()))
             .add(p + "exact_sphere", sh.exact_sphere);
         if (sh.exact_sphere) {
-            add_vec(k, p + "center", sh.center);
+            k.add(p + "center", sh.center);
             k.add(p + "radius", sh.radius);
         }
     }

@@ -254,7 +254,6 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
 
 std::string fingerprint(const SphereScene& sc, const SphereOptions& o, std::int64_t batch,
                         int run) {
-    auto vec = [](const Vec3& v) { return std::array<double, 3>{v.x, v.y, v.z}; };
     ContentKey k("sphere-checkpoint");
     k.add("engine", kEngineVersion)
         .add("mode", to_string(o.mode))
@@ -265,9 +264,9 @@ std::string fingerprint(const SphereScene& sc, const SphereOptions& o, std::int6
         .add("long_path_survival", o.long_path_survival)
         .add("image", o.image)
         .add("radius_cm", sc.radius_cm)
-        .add("to_light", vec(sc.to_light))
-        .add("to_camera", vec(sc.to_camera))
-        .add("up", vec(sc.up))
+        .add("to_light", sc.to_light)
+        .add("to_camera", sc.to_camera)
+        .add("up", sc.up)
         .add("frame.width", sc.width)
         .add("frame.height", sc.height)
         .add("frame.scale", sc.frame_scale)
