@@ -118,27 +118,31 @@ class BatchAccumulator {
 };
 
 /// The own error of an image-like estimate of n elements (pixel channels): the relative RMS
-/// standard error sqrt(sum SE^2 / sum v^2) of the whole, and the median over the elements with
+/// standard error sqrt(sum SE^2 / sum v^2) of the whole, the median over the elements with
 /// v > 0 and SE > 0 of SE / v (what "the image has converged to 1 %" means to a user: half the
-/// pixels that see anything are within 1 %). value(i) and error(i) give element i.
+/// pixels that see anything are within 1 %), and the relative standard error of the elements'
+/// mean (their errors taken as independent). value(i) and error(i) give element i.
 struct RelativeError {
     double rms = 0;           ///< sqrt(sum SE^2 / sum v^2); 0 if all v are 0
     double median = 0;        ///< median of SE / v; 0 if no element has v > 0 and SE > 0
+    double mean = 0;          ///< sqrt(sum SE^2) / |sum v|; 0 if sum v is 0
     std::size_t counted = 0;  ///< elements in the median
 };
 template <class Value, class Error>
 RelativeError relative_error(std::size_t n, const Value& value, const Error& error) {
     RelativeError r;
-    double s2 = 0, v2 = 0;
+    double s2 = 0, v2 = 0, sum = 0;
     std::vector<double> rel;
     rel.reserve(n);
     for (std::size_t i = 0; i < n; ++i) {
         const double v = value(i), e = error(i);
         s2 += e * e;
         v2 += v * v;
+        sum += v;
         if (v > 0 && e > 0) rel.push_back(e / v);
     }
     r.rms = v2 > 0 ? std::sqrt(s2 / v2) : 0.0;
+    r.mean = sum != 0 ? std::sqrt(s2) / std::abs(sum) : 0.0;
     r.counted = rel.size();
     if (!rel.empty()) {
         const auto mid = rel.begin() + static_cast<std::ptrdiff_t>(rel.size() / 2);

@@ -320,16 +320,16 @@ TEST(Render, ARelativeErrorBudgetMeasuresTheMedianPixelUnlessAskedForTheImageMea
     o.budget.samples = 30000;  // a cap that is never reached
     const RenderResult pixel = render(s, o);
     EXPECT_EQ(pixel.run.reason, BatchStop::kRelError);
-    const RelativeError pe = pixel_rel_error(pixel.run.mean, pixel.run.se);
+    const RelativeError pe = radiance_rel_error(pixel.run.mean, pixel.run.se);
     EXPECT_LE(pe.median, 0.05);
     EXPECT_GT(pe.counted, 100u);
     o.error_measure = RenderErrorMeasure::kImageMean;
     const RenderResult mean = render(s, o);
     EXPECT_EQ(mean.run.reason, BatchStop::kRelError);
-    EXPECT_LE(image_mean_rel_se(mean.run.mean, mean.run.se), 0.05);
+    EXPECT_LE(radiance_rel_error(mean.run.mean, mean.run.se).mean, 0.05);
     // The image mean reaches 5 % long before its pixels do.
     EXPECT_LT(mean.spp * 4, pixel.spp);
-    EXPECT_GT(pixel_rel_error(mean.run.mean, mean.run.se).median, 0.1);
+    EXPECT_GT(radiance_rel_error(mean.run.mean, mean.run.se).median, 0.1);
 }
 
 TEST(Render, DeltaLightOnASmoothMediumIsRefusedAtTheLight) {

@@ -98,6 +98,8 @@ struct RenderResult {
     std::uint64_t spp = 0;
     std::uint64_t rays = 0;  ///< ray queries (intersections and shadow rays)
     bool interrupted = false;
+    /// hash_hex of render_fingerprint: what the checkpoint was keyed by (set when checkpointing).
+    std::string content_key;
 };
 
 /// Checks what the renderer supports beyond Scene's own validation: throws InputError (located
@@ -107,10 +109,12 @@ void check_renderable(const Scene& scene);
 RenderResult render(const Scene& scene, const RenderOptions& options);
 
 /// The render's own error measures of its radiance (per-element means and standard errors in
-/// RenderLayout, e.g. RenderResult::run.mean/se): the relative standard error of the image mean
-/// and the per-pixel relative errors.
-double image_mean_rel_se(const std::vector<double>& mean, const std::vector<double>& se);
-RelativeError pixel_rel_error(const std::vector<double>& mean, const std::vector<double>& se);
+/// RenderLayout, e.g. RenderResult::run.mean/se): the per-pixel relative errors (their median)
+/// and the relative standard error of the image mean (RelativeError::mean).
+RelativeError radiance_rel_error(const std::vector<double>& mean, const std::vector<double>& se);
+/// The same from a rendered image's "radiance" and "radiance.stderr" layers (e.g. one read
+/// back from an EXR).
+RelativeError radiance_rel_error(const LayeredImage& image);
 
 /// What a render's checkpoint is keyed by: the renderer's version, the settings that change the
 /// image (seed, size, roulette, long paths, NEE), and the scene's content (core/scene.h

@@ -50,18 +50,13 @@ int run_render_bench(int threads, bool quick, const std::string& scenes_dir, int
         o.width = o.height = size;
         o.budget.samples = spp;
         const volpath::RenderResult r = volpath::render(s, o);
-        const ImageLayer& L = r.image.layer("radiance");
-        const ImageLayer& E = r.image.layer("radiance.stderr");
-        const auto Lp = L.pixels();
-        const auto Ep = E.pixels();
-        const RelativeError err = relative_error(
-            Lp.size(), [&](std::size_t i) { return Lp[i]; }, [&](std::size_t i) { return Ep[i]; });
+        const RelativeError err = volpath::radiance_rel_error(r.image);
         const double med = err.median;
         const double t1 = r.seconds * (med / 0.01) * (med / 0.01);
         const double paths = static_cast<double>(size) * size * static_cast<double>(r.spp);
         std::printf("%-10s %9.2f %12.2f %12.3g %10.3f %12.3g %14.2e\n", s.name.c_str(), r.seconds,
                     static_cast<double>(r.rays) / r.seconds * 1e-6, paths / r.seconds, med, t1,
-                    volpath::image_mean_rel_se(r.run.mean, r.run.se));
+                    err.mean);
     }
     std::printf(
         "t_1%%_pixel: the extrapolated time until the median pixel's relative standard error of "

@@ -7,7 +7,6 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/film_image.h"
-#include "core/hash.h"
 #include "core/progress.h"
 #include "core/provenance.h"
 #include "core/scene.h"
@@ -42,13 +41,13 @@ struct RenderArgs {
 // provenance, and the scene as resolved); the same essentials go into the EXR header.
 std::string render_toml(const RenderArgs& a, const Scene& scene, const volpath::RenderOptions& o,
                         const volpath::RenderResult& r, std::uint64_t resumed_from,
-                        const std::string& content_key) {
+                        const RelativeError& err) {
     auto doc = ConfigDocument::empty("render.toml");
     ConfigTable root = doc->root();
     ConfigTable in = root.table_or_empty("input");
     in.record("scene_file", fs::absolute(a.scene).lexically_normal().string());
     in.record("scene_name", scene.name);
-    in.record("content_key", content_key);
+    in.record("content_key", r.content_key);
     ConfigTable st = root.table_or_empty("render");
     st.record("engine", std::string(volpath::render_engine_version()));
     st.record("seed", static_cast<std::int64_t>(o.seed));
@@ -69,8 +68,8 @@ std::string render_toml(const RenderArgs& a, const Scene& scene, const volpath::
     res.record("resumed_from_spp", static_cast<std::int64_t>(resumed_from));
     res.record("wall_seconds", r.seconds);
     res.record("rays", static_cast<std::int64_t>(r.rays));
-    res.record("median_pixel_rel_se", volpath::pixel_rel_error(r.run.mean, r.run.se).median);
-    res.record("image_mean_rel_se", volpath::image_mean_rel_se(r.run.mean, r.run.se));
+    res.record("median_pixel_rel_se", err.median);
+    res.record("image_mean_rel_se", err.mean);
     const std::size_t pixels =
         static_cast<std::size_t>(r.width) * static_cast<std::size_t>(r.height);
     for (int c = 0; c < 3; ++c) {
@@ -128,7 +127,6 @@ int run_render(const RenderArgs& a) {
     fs::create_directories(out.parent_path().empty() ? fs::path(".") : out.parent_path());
     o.checkpoint_path = out.string() + ".ckpt";
     o.cancel = install_interrupt_handler();
-    const std::string content_key = hash_hex(volpath::render_fingerprint(scene, o));
     const double total =
         o.budget.samples ? static_cast<double>((*o.budget.samples + 2) / 3 * 3) : 0.0;
     std::unique_ptr<Progress> progress;
@@ -170,12 +168,13 @@ int run_render(const RenderArgs& a) {
             csv += line;
         }
     }
-    const std::string toml = render_toml(a, scene, o, r, resumed_from, content_key);
+    const RelativeError err = volpath::radiance_rel_error(r.run.mean, r.run.se);
+    const std::string toml = render_toml(a, scene, o, r, resumed_from, err);
     auto& md = r.image.metadata();
     md["ssslab.git_revision"] = git_revision();
     md["ssslab.command_line"] = command_line();
     md["ssslab.scene_file"] = a.scene;
-    md["ssslab.content_key"] = content_key;
+    md["ssslab.content_key"] = r.content_key;
     md["ssslab.resumed_from_spp"] = std::to_string(resumed_from);
     md["ssslab.provenance"] = toml;
     // The image, its preview, its provenance (and the convergence table): all or none.
@@ -200,8 +199,7 @@ int run_render(const RenderArgs& a) {
             "image mean rel. SE %.3g %% -> %s (+ .png, .exr.toml)\n",
             scene.name.c_str(), r.width, r.height, static_cast<unsigned long long>(r.spp),
             r.seconds, how.c_str(), static_cast<double>(r.rays) / std::max(1e-9, r.seconds),
-            100.0 * volpath::pixel_rel_error(r.run.mean, r.run.se).median,
-            100.0 * volpath::image_mean_rel_se(r.run.mean, r.run.se), out.string().c_str());
+            100.0 * err.median, 100.0 * err.mean, out.string().c_str());
     }
     return 0;
 }

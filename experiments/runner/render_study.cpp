@@ -172,10 +172,7 @@ double rel_rms(const ImageLayer& a, const ImageLayer& ref) {
 // The image's own relative RMS standard error sqrt(sum SE^2 / sum L^2) and the median pixel's
 // relative SE (over pixel-channels that see anything).
 void own_error(const LayeredImage& im, double& image_rel_se, double& median_rel_se) {
-    const auto L = im.layer("radiance").pixels();
-    const auto E = im.layer("radiance.stderr").pixels();
-    const RelativeError r = relative_error(
-        L.size(), [&](std::size_t i) { return L[i]; }, [&](std::size_t i) { return E[i]; });
+    const RelativeError r = volpath::radiance_rel_error(im);
     image_rel_se = r.rms;
     median_rel_se = r.median;
 }
