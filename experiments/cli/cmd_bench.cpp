@@ -408,14 +408,9 @@ int run_kernel_bench(const BenchArgs& a, int repeat) {
                         << (err ? num(*err) : "") << ',' << (it ? num(*it) : "") << '\n';
                 }
             }
-        auto doc = ConfigDocument::empty("bench.toml");
-        doc->add_resolved_section("provenance", provenance(command_line()));
-        OutputTransaction tx;
-        tx.stage(a.csv, csv.str());
-        tx.stage(a.csv + ".toml", "# ssslab bench --kernels: provenance of " + a.csv +
-                                      " (timings depend on the machine: see host_threads)\n" +
-                                      doc->resolved_toml());
-        tx.commit();
+        write_with_provenance(a.csv, csv.str(),
+                              "ssslab bench --kernels: provenance of " + a.csv +
+                                  " (timings depend on the machine: see host_threads)");
         std::printf("wrote %s (+ .toml)\n", a.csv.c_str());
     }
     return 0;

@@ -195,14 +195,9 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
         for (const Row& r : rows)
             o << r.scene << ',' << width << ',' << height << ',' << r.threads << ',' << r.pass
               << ',' << num(r.ms) << ',' << (r.floor_ms >= 0 ? num(r.floor_ms) : "") << '\n';
-        auto doc = ConfigDocument::empty("bench.toml");
-        doc->add_resolved_section("provenance", provenance(command_line()));
-        OutputTransaction tx;
-        tx.stage(csv, o.str());
-        tx.stage(csv + ".toml", "# ssslab bench --realtime: provenance of " + csv +
-                                    " (timings depend on the machine: see host_threads)\n" +
-                                    doc->resolved_toml());
-        tx.commit();
+        write_with_provenance(csv, o.str(),
+                              "ssslab bench --realtime: provenance of " + csv +
+                                  " (timings depend on the machine: see host_threads)");
         std::printf("wrote %s (+ .toml)\n", csv.c_str());
     }
     return 0;

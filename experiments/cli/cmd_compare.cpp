@@ -103,13 +103,9 @@ int run_compare(const CompareArgs& a) {
             res.record(std::string("dof_") + names[c], static_cast<std::int64_t>(r.dof[c]));
             res.record(std::string("p_") + names[c], r.p[c]);
         }
-        doc->add_resolved_section("provenance", provenance(command_line()));
-        OutputTransaction tx;
-        tx.stage(a.csv, os.str());
-        tx.stage(a.csv + ".toml",
-                 "# ssslab compare: the inputs, settings, result and provenance of " + a.csv +
-                     "\n" + doc->resolved_toml());
-        tx.commit();
+        write_with_provenance(
+            a.csv, os.str(),
+            "ssslab compare: the inputs, settings, result and provenance of " + a.csv, doc);
     }
     return 0;
 }

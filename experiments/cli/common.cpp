@@ -1,6 +1,7 @@
 #include "experiments/cli/common.h"
 
 #include "core/error.h"
+#include "core/provenance.h"
 
 #include <unistd.h>
 #include <algorithm>
@@ -218,6 +219,16 @@ CLI::Validator existing_file(const std::string& what) {
             return {};
         },
         "FILE");
+}
+
+void write_with_provenance(const std::string& path, const std::string& content,
+                           const std::string& comment, std::shared_ptr<ConfigDocument> doc) {
+    if (!doc) doc = ConfigDocument::empty(path + ".toml");
+    doc->add_resolved_section("provenance", provenance(command_line()));
+    OutputTransaction tx;
+    tx.stage(path, content);
+    tx.stage(path + ".toml", "# " + comment + "\n" + doc->resolved_toml());
+    tx.commit();
 }
 
 void add_fresh_option(CLI::App& app, bool& fresh) {

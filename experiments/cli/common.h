@@ -2,6 +2,7 @@
 #pragma once
 
 #include "core/atomic_file.h"
+#include "core/config.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "mcml/engine.h"
@@ -64,6 +65,12 @@ CLI::Validator one_of(std::vector<std::string> choices);
 /// An existing regular file; `what` names it in the message ("scene file 'x.toml' does not
 /// exist"). On a positional argument the message stands alone (main drops the argument's name).
 CLI::Validator existing_file(const std::string& what);
+
+/// Write `content` to `path` and beside it `<path>.toml`: "# <comment>", then `doc` (what the
+/// command recorded of its inputs, settings and results; none: an empty document) with the
+/// provenance section. Both files or neither.
+void write_with_provenance(const std::string& path, const std::string& content,
+                           const std::string& comment, std::shared_ptr<ConfigDocument> doc = {});
 
 /// Add --fresh (resumable commands): ignore a checkpoint of an earlier run and start afresh.
 void add_fresh_option(CLI::App& app, bool& fresh);
