@@ -84,7 +84,10 @@ ProfileRun simulate_profile(const Medium& m, const ProfileGrid& grid, const Prof
         if (!o.checkpoint_prefix.empty())
             eo.checkpoint_path = o.checkpoint_prefix + "." + kChannelNames[c] + ".ckpt";
         if (o.on_batch) eo.on_batch = [&o, c](const ProgressPoint& p) { o.on_batch(c, p); };
-        if (o.on_resume) eo.on_resume = [&o, c](const ProgressPoint& p) { o.on_resume(c, p); };
+        if (o.on_resume)
+            eo.on_resume = [&o, c, path = eo.checkpoint_path](const ProgressPoint& p) {
+                o.on_resume(c, p, path);
+            };
         eo.fresh = o.fresh;
         out.channels[c] = run_default(run, eo);
         if (out.channels[c].reason == StopReason::kInterrupted) {

@@ -53,8 +53,9 @@ struct ProfileOptions {
     bool fresh = false;
     const std::atomic<bool>* cancel = nullptr;
     std::function<void(int channel, const ProgressPoint&)> on_batch;
-    /// Called before a channel continues from its checkpoint, with what the checkpoint holds.
-    std::function<void(int channel, const ProgressPoint&)> on_resume;
+    /// Called before a channel continues from its checkpoint, with what the checkpoint holds and
+    /// the checkpoint's path.
+    std::function<void(int channel, const ProgressPoint&, const std::string& checkpoint)> on_resume;
 };
 
 inline constexpr std::int64_t kFreude14Photons = 10'000'000;

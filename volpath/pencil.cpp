@@ -510,7 +510,9 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
         if (o.on_batch)
             bo.on_batch = [&o, stream](const BatchProgress& p) { o.on_batch(stream, p); };
         if (o.on_resume)
-            bo.on_resume = [&o, stream](const BatchProgress& p) { o.on_resume(stream, p); };
+            bo.on_resume = [&o, stream, path = bo.checkpoint_path](const BatchProgress& p) {
+                o.on_resume(stream, p, path);
+            };
         bo.fresh = o.fresh;
 
         const std::uint64_t seed = o.seed;

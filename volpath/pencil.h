@@ -101,8 +101,9 @@ struct PencilOptions {
     const std::atomic<bool>* cancel = nullptr;
     /// run: 0..2 (channel) in kPerChannel mode, 3 in kHero mode.
     std::function<void(int run, const BatchProgress&)> on_batch;
-    /// Called before a run continues from its checkpoint, with what the checkpoint holds.
-    std::function<void(int run, const BatchProgress&)> on_resume;
+    /// Called before a run continues from its checkpoint, with what the checkpoint holds and
+    /// the checkpoint's path.
+    std::function<void(int run, const BatchProgress&, const std::string& checkpoint)> on_resume;
     bool snapshots = false;
 };
 

@@ -542,7 +542,9 @@ SphereRun simulate_sphere(const SphereScene& scene, const SphereOptions& o) {
         if (o.on_batch)
             bo.on_batch = [&o, stream](const BatchProgress& p) { o.on_batch(stream, p); };
         if (o.on_resume)
-            bo.on_resume = [&o, stream](const BatchProgress& p) { o.on_resume(stream, p); };
+            bo.on_resume = [&o, stream, path = bo.checkpoint_path](const BatchProgress& p) {
+                o.on_resume(stream, p, path);
+            };
         bo.fresh = o.fresh;
 
         const std::uint64_t seed = o.seed;

@@ -131,9 +131,8 @@ int run_volpath_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
     po.on_batch = [&](int run, const BatchProgress& p) {
         progress.batch(run, static_cast<double>(p.samples), p.value, p.se);
     };
-    po.on_resume = [&](int run, const BatchProgress& p) {
-        progress.resume(run, static_cast<double>(p.samples),
-                        out.string() + "." + (run < 3 ? kChannelNames[run] : "hero") + ".ckpt");
+    po.on_resume = [&](int run, const BatchProgress& p, const std::string& checkpoint) {
+        progress.resume(run, static_cast<double>(p.samples), checkpoint);
     };
     const volpath::PencilRun run =
         volpath::simulate_pencil(job.medium, {job.grid.dr_cm, job.grid.nr}, po);
@@ -210,9 +209,8 @@ int run_profile_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
     po.on_batch = [&](int ch, const mcml::ProgressPoint& p) {
         progress.batch(ch, static_cast<double>(p.photons), p.value, p.se);
     };
-    po.on_resume = [&](int ch, const mcml::ProgressPoint& p) {
-        progress.resume(ch, static_cast<double>(p.photons),
-                        out.string() + "." + kChannelNames[ch] + ".ckpt");
+    po.on_resume = [&](int ch, const mcml::ProgressPoint& p, const std::string& checkpoint) {
+        progress.resume(ch, static_cast<double>(p.photons), checkpoint);
     };
     mcml::ProfileRun run = mcml::simulate_profile(job.medium, job.grid, po);
     progress.finish();

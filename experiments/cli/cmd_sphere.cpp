@@ -426,9 +426,8 @@ int run_sphere(const SphereArgs& a) {
     so.on_batch = [&](int run, const BatchProgress& p) {
         progress.batch(run, static_cast<double>(p.samples), p.value, p.se);
     };
-    so.on_resume = [&](int run, const BatchProgress& p) {
-        progress.resume(run, static_cast<double>(p.samples),
-                        prefix + "." + (run < 3 ? kChannelNames[run] : "hero") + ".ckpt");
+    so.on_resume = [&](int run, const BatchProgress& p, const std::string& checkpoint) {
+        progress.resume(run, static_cast<double>(p.samples), checkpoint);
     };
     volpath::SphereRun run = volpath::simulate_sphere(sc, so);
     progress.finish();

@@ -475,7 +475,7 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
         po.snapshots = true;
         po.checkpoint_prefix = cache.checkpoint_prefix(kVolpathKind, n.key).string();
         po.checkpoint_seconds = o.checkpoint_seconds;
-        po.on_resume = [&](int, const BatchProgress& p) {
+        po.on_resume = [&](int, const BatchProgress& p, const std::string&) {
             say_resuming(n, static_cast<double>(p.samples), po.budget.samples, "paths");
         };
         volpath::PencilRun run = volpath::simulate_pencil(n.medium, {n.grid.dr_cm, n.grid.nr}, po);
