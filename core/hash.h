@@ -50,13 +50,14 @@ class ContentKey {
 /// XXH3-128 of arbitrary bytes as 32 hex digits.
 std::string hash_hex(std::string_view bytes);
 
-/// XXH3-128 of a file's content (InputError naming the file if it cannot be read).
+/// XXH3-128 of a file's content (IoError naming the file if it cannot be read).
 std::string file_hash_hex(const std::string& path);
 
 /// What differs between two canonical key texts (ContentKey::text(); other line-oriented
 /// fingerprints work too): up to `max_items` items such as `materials[0].sigma_a_per_cm: was
-/// 1,2,3, now 1,2,4`, `shapes[1].mesh: changed`, `key x: only before`, joined by "; ", then
-/// "and N more". Empty when the texts are equal.
+/// 1, 2, 3, now 1, 2, 4`, `shapes[1].mesh: content changed` (a 32-digit hash),
+/// `x = 3: only in the earlier input`, `y = 1: new`, joined by "; ", then "and N more". Empty
+/// when the texts are equal.
 std::string key_difference(std::string_view before, std::string_view now, int max_items = 4);
 
 }  // namespace ssslab

@@ -1,8 +1,7 @@
 #include "core/material.h"
 
-#include "core/hash.h"
-
 #include "core/config.h"
+#include "core/hash.h"
 
 #include <algorithm>
 #include <cctype>

@@ -106,8 +106,8 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
     std::vector<double> in(3 * n), tmp(3 * n), acc(3 * n, 0.0);
     for (size_t i = 0; i < 3 * n; ++i) in[i] = g.irradiance[i];
 
-    // One 1D pass of term k along dir (0: x, 1: y) from src into dst (medium pixels whose kernel
-    // has term k; the others get `other(i)`).
+    // One 1D pass of term k along dir (0: x, 1: y) over src: store(c, value) for the medium
+    // pixels whose kernel has term k, store(c, nullptr) for the others.
     auto pass = [&](const std::vector<double>& src, size_t k, int dir, auto&& store) {
         const int len = dir == 0 ? w : h;
         tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
