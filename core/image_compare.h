@@ -73,4 +73,31 @@ struct ImageComparison {
 /// `block` pixels (partial blocks at the right and bottom edges included).
 ImageComparison compare_images(const ImageEstimate& a, const ImageEstimate& b, int block);
 
+/// The RMS difference between an image a and a noisy estimate b of what it is compared with,
+/// over n values (pixel channels; the caller picks the pixels), with the noise taken out
+/// [the bias of a squared difference is the variance of the difference]: for independent a_i, b_i
+/// with variances va_i, vb_i,
+///     E[(a_i - b_i)^2] = (E a_i - E b_i)^2 + va_i + vb_i,
+/// so D^2 = mean_i ((a_i - b_i)^2 - va_i - vb_i) is an unbiased estimate of the mean squared
+/// difference of the expectations, whatever the noise: a noisy reference adds no error and
+/// ranks no model. Its standard error assumes Gaussian noise: Var((d + e)^2 - v) = 4 d^2 v +
+/// 2 v^2 per value (v = va + vb; d^2 v estimated by the term times v), the values independent;
+/// with
+/// `dof` > 0 the variances are taken as estimates on that many degrees of freedom (batch
+/// statistics: batches - 1), whose own spread the standard error then includes.
+struct NoiseCorrectedRms {
+    double rms = 0;        ///< sqrt(max(0, D^2)): the noise-corrected RMS difference
+    double rms_se = 0;     ///< its standard error (delta method; at D = 0: sqrt(SE(D^2)))
+    double ms = 0;         ///< D^2 (may be negative when the difference is within the noise)
+    double ms_se = 0;      ///< standard error of D^2
+    double raw_rms = 0;    ///< sqrt(mean (a - b)^2), the uncorrected RMS
+    double noise_rms = 0;  ///< sqrt(mean (va + vb)): what noise alone adds to raw_rms^2
+    std::size_t n = 0;
+};
+/// `va` and `vb` may be empty (that side has no noise); otherwise all four have n entries
+/// (std::invalid_argument otherwise). Variances, not standard errors.
+NoiseCorrectedRms noise_corrected_rms(const std::vector<double>& a, const std::vector<double>& va,
+                                      const std::vector<double>& b, const std::vector<double>& vb,
+                                      double dof = 0);
+
 }  // namespace ssslab

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 namespace ssslab {
@@ -199,6 +200,92 @@ TEST(CompareCommand, PrintsTheVerdictAndWritesTheBlocks) {
         testing::run_ssslab({"compare", "--a", "b0.exr", "--b", "b1.exr", "b2.exr"}, dir.path());
     EXPECT_EQ(bad.exit_code, 2);
     EXPECT_NE(bad.err.find("b0.exr"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+}  // namespace ssslab
+
+namespace ssslab {
+namespace {
+
+// A model image a and a truth mu differing by a known amount; the reference b is mu plus noise
+// whose variance is estimated from K batches, as the path tracer's is. The corrected D^2 must
+// average to the true mean squared difference over many independent references, its standard
+// error must match the spread of D^2, and the raw RMS must be biased by the noise.
+TEST(NoiseCorrectedRms, UnbiasedAgainstANoisyReferenceOnASyntheticCase) {
+    constexpr int kPixels = 2000, kBatches = 8, kTrials = 300;
+    std::mt19937_64 rng(20261201);
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    std::vector<double> mu(kPixels), a(kPixels), sigma(kPixels);
+    double true_ms = 0;
+    for (int i = 0; i < kPixels; ++i) {
+        mu[static_cast<size_t>(i)] = 1.0 + 0.5 * std::sin(0.01 * i);
+        const double d = 0.02 * std::cos(0.003 * i);  // the model's error, ~0.014 RMS
+        a[static_cast<size_t>(i)] = mu[static_cast<size_t>(i)] + d;
+        sigma[static_cast<size_t>(i)] = 0.05 * (1.0 + 0.5 * std::cos(0.02 * i));  // per batch
+        true_ms += d * d;
+    }
+    true_ms /= kPixels;
+    double sum = 0, sum2 = 0, se_sum = 0, raw_sum = 0;
+    for (int t = 0; t < kTrials; ++t) {
+        std::vector<double> b(kPixels), vb(kPixels);
+        for (int i = 0; i < kPixels; ++i) {
+            double m = 0, q = 0;
+            for (int k = 0; k < kBatches; ++k) {
+                const double x =
+                    mu[static_cast<size_t>(i)] + sigma[static_cast<size_t>(i)] * gauss(rng);
+                m += x;
+                q += x * x;
+            }
+            m /= kBatches;
+            const double s2 = (q - kBatches * m * m) / (kBatches - 1);  // per-batch variance
+            b[static_cast<size_t>(i)] = m;
+            vb[static_cast<size_t>(i)] = s2 / kBatches;  // variance of the mean
+        }
+        const NoiseCorrectedRms r = noise_corrected_rms(a, {}, b, vb, kBatches - 1);
+        sum += r.ms;
+        sum2 += r.ms * r.ms;
+        se_sum += r.ms_se;
+        raw_sum += r.raw_rms * r.raw_rms;
+    }
+    const double mean = sum / kTrials;
+    const double spread = std::sqrt((sum2 - kTrials * mean * mean) / (kTrials - 1));
+    const double z = (mean - true_ms) / (spread / std::sqrt(kTrials));
+    std::printf("D^2: mean %.4g over %d references, true %.4g (z %.2f); SE/spread %.3f; raw %.4g\n",
+                mean, kTrials, true_ms, z, se_sum / kTrials / spread, raw_sum / kTrials);
+    EXPECT_LT(std::abs(z), 4.0) << "mean D^2 " << mean << " vs true " << true_ms;
+    // The reported SE is the spread of D^2 from one reference (to 10 %; the variances are
+    // themselves estimated from 8 batches).
+    EXPECT_NEAR(se_sum / kTrials / spread, 1.0, 0.1);
+    // Uncorrected, the noise (variance of the mean ~4e-4) dominates the true 2e-4.
+    EXPECT_GT(raw_sum / kTrials, 2.0 * true_ms);
+    // A model that is better in truth stays better: half the error.
+    std::vector<double> a2(kPixels);
+    for (int i = 0; i < kPixels; ++i)
+        a2[static_cast<size_t>(i)] = mu[static_cast<size_t>(i)] +
+                                     0.5 * (a[static_cast<size_t>(i)] - mu[static_cast<size_t>(i)]);
+    std::vector<double> b(kPixels), vb(kPixels, 0.0);
+    for (int i = 0; i < kPixels; ++i) {
+        b[static_cast<size_t>(i)] = mu[static_cast<size_t>(i)] + sigma[static_cast<size_t>(i)] /
+                                                                     std::sqrt(kBatches) *
+                                                                     gauss(rng);
+        vb[static_cast<size_t>(i)] =
+            sigma[static_cast<size_t>(i)] * sigma[static_cast<size_t>(i)] / kBatches;
+    }
+    const NoiseCorrectedRms r1 = noise_corrected_rms(a, {}, b, vb);
+    const NoiseCorrectedRms r2 = noise_corrected_rms(a2, {}, b, vb);
+    EXPECT_NEAR(r1.rms, std::sqrt(true_ms), 4 * r1.rms_se);
+    EXPECT_NEAR(r2.rms, 0.5 * std::sqrt(true_ms), 4 * r2.rms_se);
+    EXPECT_LT(r2.rms, r1.rms);
+}
+
+TEST(NoiseCorrectedRms, ExactInputsGiveTheRmsAndMisuseIsRefused) {
+    const NoiseCorrectedRms r = noise_corrected_rms({1, 2, 3}, {}, {1, 2, 5}, {});
+    EXPECT_DOUBLE_EQ(r.rms, std::sqrt(4.0 / 3.0));
+    EXPECT_DOUBLE_EQ(r.raw_rms, r.rms);
+    EXPECT_EQ(r.ms_se, 0.0);
+    EXPECT_THROW(noise_corrected_rms({1, 2}, {}, {1}, {}), std::invalid_argument);
+    EXPECT_THROW(noise_corrected_rms({1, 2}, {0.1}, {1, 2}, {}), std::invalid_argument);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@ void register_sphere(CLI::App& app, std::function<int()>& action);
 void register_materials(CLI::App& app, std::function<int()>& action);
 void register_scene(CLI::App& app, std::function<int()>& action);
 void register_render(CLI::App& app, std::function<int()>& action);
+void register_raster(CLI::App& app, std::function<int()>& action);
 void register_compare(CLI::App& app, std::function<int()>& action);
 void register_bench(CLI::App& app, std::function<int()>& action);
 void register_run(CLI::App& app, std::function<int()>& action);

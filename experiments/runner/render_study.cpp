@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -181,6 +182,30 @@ double t_1pct(double seconds, double e) {
     return seconds * (e / 0.01) * (e / 0.01);
 }
 
+// The node's image from the cache, rendered first if the cache lacks it; nullopt if
+// interrupted (its checkpoint is kept).
+std::optional<Rendered> render_node(RenderNode& n, const RenderStudyContext& ctx,
+                                    const ArtifactCache& cache) {
+    const ContentKey k = render_key(n);
+    n.key = k.hex();
+    n.key_text = k.text();
+    if (auto dir = cache.find(kKind, n.key)) return load(*dir);
+    if (!ctx.quiet) {
+        std::printf("  rendering %s (%s, %d x %d, %s) ...\n", n.scene.name.c_str(), n.role.c_str(),
+                    n.options.width, n.options.height,
+                    n.options.budget.samples
+                        ? (std::to_string(*n.options.budget.samples) + " spp").c_str()
+                        : (fmt(*n.options.budget.seconds) + " s").c_str());
+        std::fflush(stdout);
+    }
+    bool interrupted = false;
+    compute(n, ctx, cache, interrupted);
+    if (interrupted) return std::nullopt;
+    Rendered r = load(*cache.find(kKind, n.key));
+    r.computed_now = true;
+    return r;
+}
+
 }  // namespace
 
 RenderStudySpec read_render_study(ConfigTable& t, const std::string& config_dir) {
@@ -269,31 +294,13 @@ RenderStudyResult run_render_study(const RenderStudySpec& spec, const RenderStud
         if (spec.reference_factor > 0) nodes.push_back(&ref);
         std::vector<Rendered> done;
         for (RenderNode* n : nodes) {
-            const ContentKey k = render_key(*n);
-            n->key = k.hex();
-            n->key_text = k.text();
-            if (auto dir = cache.find(kKind, n->key)) {
-                done.push_back(load(*dir));
-                ++res.reused;
-                continue;
-            }
-            if (!ctx.quiet) {
-                std::printf("  rendering %s (%s, %d x %d, %s) ...\n", scene.name.c_str(),
-                            n->role.c_str(), w, h,
-                            n->options.budget.samples
-                                ? (std::to_string(*n->options.budget.samples) + " spp").c_str()
-                                : (fmt(*n->options.budget.seconds) + " s").c_str());
-                std::fflush(stdout);
-            }
-            bool interrupted = false;
-            compute(*n, ctx, cache, interrupted);
-            if (interrupted) {
+            std::optional<Rendered> got = render_node(*n, ctx, cache);
+            if (!got) {
                 res.interrupted = true;
                 return res;
             }
-            done.push_back(load(*cache.find(kKind, n->key)));
-            done.back().computed_now = true;
-            ++res.computed;
+            (got->computed_now ? res.computed : res.reused) += 1;
+            done.push_back(std::move(*got));
         }
         const Rendered& R = done[0];
         // Outputs: the main image without its snapshot layers, a preview, the tables.
@@ -390,6 +397,35 @@ RenderStudyResult run_render_study(const RenderStudySpec& spec, const RenderStud
          << table_rows << "</table>\n<p>All columns in <code>render/summary.csv</code>.</p>\n";
     res.html = html.str();
     return res;
+}
+
+std::optional<CachedRender> cached_render(const Scene& scene, const std::string& role, int width,
+                                          int height, const SampleBudget& budget,
+                                          const RenderStudyContext& ctx,
+                                          const ArtifactCache& cache) {
+    RenderNode n;
+    n.scene_path = scene.path;
+    n.role = role;
+    n.scene = scene;
+    n.options.width = width;
+    n.options.height = height;
+    n.options.budget = budget;
+    n.options.seed = derive_render_seed(ctx.seed, scene.name, role);
+    std::optional<Rendered> r = render_node(n, ctx, cache);
+    if (!r) return std::nullopt;
+    CachedRender out;
+    out.image = LayeredImage(r->image.width(), r->image.height());
+    for (const ImageLayer& l : r->image.layers())
+        if (l.name().rfind("snapshot_", 0) != 0)
+            out.image.add_layer(l.name(), l.channel_names(),
+                                std::vector<float>(l.pixels().begin(), l.pixels().end()));
+    out.image.metadata() = r->image.metadata();
+    out.image.metadata().erase("ssslab.snapshots");
+    out.seconds = r->seconds;
+    out.spp = r->spp;
+    out.key = n.key;
+    out.computed_now = r->computed_now;
+    return out;
 }
 
 }  // namespace ssslab::runner

@@ -27,10 +27,13 @@
 
 #include "core/batch_runner.h"
 #include "core/config.h"
+#include "core/film_image.h"
+#include "core/scene.h"
 #include "experiments/runner/cache.h"
 
 #include <atomic>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -72,5 +75,21 @@ struct RenderStudyResult {
 RenderStudyResult run_render_study(const RenderStudySpec& spec, const RenderStudyContext& ctx,
                                    const ArtifactCache& cache, const std::filesystem::path& stage,
                                    std::vector<Metric>& metrics);
+
+/// A path-traced image of a scene through the cache: the render of `role` (which, with the
+/// context's seed and the scene's name, derives its seed, as the render study's "main" and
+/// "reference"), at width x height with `budget`, loaded if cached and rendered (checkpointing,
+/// resumable) if not. The image has the layers of volpath/render.h; nullopt if interrupted.
+struct CachedRender {
+    LayeredImage image{1, 1};
+    double seconds = 0;
+    std::uint64_t spp = 0;
+    std::string key;
+    bool computed_now = false;
+};
+std::optional<CachedRender> cached_render(const Scene& scene, const std::string& role, int width,
+                                          int height, const SampleBudget& budget,
+                                          const RenderStudyContext& ctx,
+                                          const ArtifactCache& cache);
 
 }  // namespace ssslab::runner

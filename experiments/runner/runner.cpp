@@ -430,23 +430,8 @@ void print_plan(const ExperimentRun& r, std::ostream& os, bool verbose) {
     os << " report\n";
 }
 
-bool execute(ExperimentRun& r, const RunOptions& o) {
-    const auto t0 = std::chrono::steady_clock::now();
+bool compute_nodes(ExperimentRun& r, const RunOptions& o) {
     ArtifactCache cache(o.results_root / "cache");
-    cache.remove_stale_temporaries();
-    {
-        // Staging directories of killed runs (results/<name>.tmp-<pid>, .old-<pid>).
-        std::error_code ec;
-        const std::string prefix = r.exp.name + ".";
-        if (fs::exists(o.results_root, ec))
-            for (const auto& d : fs::directory_iterator(o.results_root, ec)) {
-                const std::string n = d.path().filename().string();
-                if (n.rfind(prefix + "tmp-", 0) == 0 || n.rfind(prefix + "old-", 0) == 0)
-                    if (fs::file_time_type::clock::now() - fs::last_write_time(d.path(), ec) >
-                        std::chrono::minutes(1))
-                        fs::remove_all(d.path(), ec);
-            }
-    }
     std::mutex io;
     std::atomic<bool> interrupted{false};
     // A node continuing from its checkpoint says so before it runs on.
@@ -577,6 +562,27 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
         r.interrupted = true;
         return false;
     }
+    return true;
+}
+
+bool execute(ExperimentRun& r, const RunOptions& o) {
+    const auto t0 = std::chrono::steady_clock::now();
+    ArtifactCache cache(o.results_root / "cache");
+    cache.remove_stale_temporaries();
+    {
+        // Staging directories of killed runs (results/<name>.tmp-<pid>, .old-<pid>).
+        std::error_code ec;
+        const std::string prefix = r.exp.name + ".";
+        if (fs::exists(o.results_root, ec))
+            for (const auto& d : fs::directory_iterator(o.results_root, ec)) {
+                const std::string n = d.path().filename().string();
+                if (n.rfind(prefix + "tmp-", 0) == 0 || n.rfind(prefix + "old-", 0) == 0)
+                    if (fs::file_time_type::clock::now() - fs::last_write_time(d.path(), ec) >
+                        std::chrono::minutes(1))
+                        fs::remove_all(d.path(), ec);
+            }
+    }
+    if (!compute_nodes(r, o)) return false;
     r.metrics = compute_metrics(r);
 
     // Everything for results/<name>/ is written into a staging directory and swapped in at the

@@ -89,6 +89,11 @@ struct ExperimentRun {
 ExperimentRun plan(const Experiment& e, const RunOptions& o);
 /// The plan as a table: what is reused, what will be computed (for --dry-run).
 void print_plan(const ExperimentRun& r, std::ostream& os, bool verbose);
+/// Load the cached nodes and compute the missing ones (in parallel, each checkpointing), writing
+/// nothing but cache entries: what execute does first, and all that a caller who only needs
+/// ground-truth profiles (ssslab raster, the real-time study) asks for. Returns false if
+/// interrupted.
+bool compute_nodes(ExperimentRun& r, const RunOptions& o);
 /// Compute what is missing and write results/<name>/. Returns false if interrupted (checkpoints
 /// are kept; nothing is written).
 bool execute(ExperimentRun& r, const RunOptions& o);

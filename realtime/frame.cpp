@@ -1,0 +1,221 @@
+#include "realtime/frame.h"
+
+#include "approx/kernel2d.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace ssslab::realtime {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+}  // namespace
+
+const char* to_string(SssMethod m) {
+    switch (m) {
+        case SssMethod::kSeparable: return "separable";
+        case SssMethod::kReference: return "reference";
+        case SssMethod::kNone: return "none";
+    }
+    return "?";
+}
+
+FrameMaterial make_frame_material(const RadialProfile& profile, const approx::ModelSpec& model,
+                                  int taps, bool exact) {
+    if (model.name == "manual" && model.flag("fit"))
+        throw std::invalid_argument("model \"" + model.text +
+                                    "\" is fitted to a kernel study's test images; a frame "
+                                    "takes models built from the kernel alone");
+    const approx::KernelGrid grid = approx::KernelGrid::from_profile(profile, 1);
+    std::vector<approx::Kernel2D> k;
+    k.reserve(3);
+    for (int c = 0; c < 3; ++c) k.emplace_back(profile, c, grid);
+    FrameMaterial m;
+    m.name = profile.name;
+    std::array<approx::ModelResult, 3> r;
+    for (int c = 0; c < 3; ++c) {
+        approx::ModelContext ctx;
+        ctx.material = profile.name;
+        ctx.channel = c;
+        r[static_cast<size_t>(c)] = approx::build_model(model, k[static_cast<size_t>(c)], ctx);
+        const double entered = 1.0 - profile.rsp[static_cast<size_t>(c)];
+        m.albedo[static_cast<size_t>(c)] = k[static_cast<size_t>(c)].raw_l1() / entered;
+    }
+    m.kernel = make_material_kernel({&r[0].kernel, &r[1].kernel, &r[2].kernel}, taps);
+    if (exact) m.exact = SssExactKernel::from_kernels({&k[0], &k[1], &k[2]});
+    return m;
+}
+
+RasterizedFrame rasterize_frame(const Scene& scene, const FrameOptions& o) {
+    RasterizedFrame f;
+    const int w = o.width > 0 ? o.width : scene.camera.width;
+    const int h = o.height > 0 ? o.height : scene.camera.height;
+    const auto t0 = Clock::now();
+    f.raster = rasterize(scene, o.raster, w, h);
+    f.ms = ms_since(t0);
+    f.camera = RasterCamera::from_scene(scene.camera, w, h);
+    std::vector<char> seen(scene.materials.size(), 0);
+    for (const std::int32_t s : f.raster.shape)
+        if (s >= 0) seen[static_cast<size_t>(scene.shapes[static_cast<size_t>(s)].material)] = 1;
+    for (size_t m = 0; m < seen.size(); ++m) {
+        if (!seen[m]) continue;
+        f.lit_in_view.push_back(static_cast<int>(m));
+        if (scene.materials[m].kind == SceneMaterial::Kind::kMedium)
+            f.media_in_view.push_back(static_cast<int>(m));
+    }
+    return f;
+}
+
+double FrameResult::total_ms() const {
+    double t = 0;
+    for (const PassTime& p : times) t += p.ms;
+    return t;
+}
+
+FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame,
+                         const std::map<int, FrameMaterial>& materials, const FrameOptions& o,
+                         const std::vector<SlabTransmittance>& slabs) {
+    FrameResult res;
+    res.times.push_back({"raster", frame.ms});
+
+    // Pass 1: shadow maps and the G-buffer.
+    auto t0 = Clock::now();
+    const GBuffer g = shade(scene, frame.camera, frame.raster, o.lighting, slabs, &res.lighting);
+    const double pass1 = ms_since(t0);
+    res.times.push_back({"shadow maps", res.lighting.shadow_ms});
+    res.times.push_back({"lighting", std::max(0.0, pass1 - res.lighting.shadow_ms)});
+
+    // Passes 2-3: one kernel per medium in view, indexed densely.
+    std::vector<int> dense(scene.materials.size(), -1);
+    std::vector<const FrameMaterial*> used;
+    for (const int m : frame.media_in_view) {
+        const auto it = materials.find(m);
+        if (it == materials.end())
+            throw std::invalid_argument("render_frame: no kernel for material \"" +
+                                        scene.materials[static_cast<size_t>(m)].name +
+                                        "\", which is in view");
+        dense[static_cast<size_t>(m)] = static_cast<int>(used.size());
+        used.push_back(&it->second);
+    }
+    const size_t n = g.samples();
+    SssGBuffer sg;
+    sg.width = g.width;
+    sg.height = g.height;
+    sg.irradiance = g.irradiance;
+    sg.view_z = g.view_z;
+    sg.material.assign(n, -1);
+    bool any_medium = false;
+    for (size_t i = 0; i < n; ++i) {
+        const std::int32_t m = g.material[i];
+        if (m < 0) continue;
+        sg.material[i] = dense[static_cast<size_t>(m)];
+        any_medium = any_medium || sg.material[i] >= 0;
+    }
+    SssParams p = o.sss;
+    p.tan_half = frame.camera.tan_half;
+    p.aspect = frame.camera.aspect;
+    p.unit_mm = scene.unit_mm;
+    std::vector<float> scattered, scattered_se;
+    t0 = Clock::now();
+    if (!any_medium || o.method == SssMethod::kNone) {
+        scattered = sg.irradiance;  // nothing to scatter: the pass is not run
+    } else if (o.method == SssMethod::kSeparable) {
+        std::vector<SssMaterialKernel> k;
+        for (const FrameMaterial* fm : used) k.push_back(fm->kernel);
+        scattered = sss_pass(sg, k, p);
+    } else {
+        std::vector<SssExactKernel> k;
+        for (const FrameMaterial* fm : used) {
+            if (!fm->exact)
+                throw std::invalid_argument("render_frame: material \"" + fm->name +
+                                            "\" has no exact kernel for the reference");
+            k.push_back(*fm->exact);
+        }
+        SssReferenceResult r = sss_reference(sg, k, p, o.reference);
+        scattered = std::move(r.irradiance);
+        scattered_se = std::move(r.standard_error);
+        res.sss_exact_pixels = r.exact_pixels;
+        res.sss_sampled_pixels = r.sampled_pixels;
+    }
+    res.times.push_back({"sss", any_medium && o.method != SssMethod::kNone ? ms_since(t0) : 0.0});
+
+    // Pass 4: composite per sample, then the box filter to pixels.
+    t0 = Clock::now();
+    const int s = frame.raster.supersample;
+    const int W = frame.raster.width, H = frame.raster.height;
+    LayeredImage& img = res.image = LayeredImage(W, H);
+    ImageLayer& radiance = img.add_layer("radiance", 3);
+    ImageLayer& subsurface = img.add_layer("subsurface", 3);
+    ImageLayer& specular = img.add_layer("specular", 3);
+    ImageLayer& depth = img.add_layer("depth", 1);
+    ImageLayer& normal = img.add_layer("normal", {"X", "Y", "Z"});
+    ImageLayer& irradiance = img.add_layer("irradiance", 3);
+    ImageLayer& surface = img.add_layer("surface", 3);
+    ImageLayer& translucency = img.add_layer("translucency", 3);
+    ImageLayer& material = img.add_layer("material", 1);
+    ImageLayer* sub_se = scattered_se.empty() ? nullptr : &img.add_layer("subsurface.stderr", 3);
+    const double inv = 1.0 / (static_cast<double>(s) * s);
+    std::vector<int> votes(scene.materials.size() + 1);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            std::array<double, 3> L{}, sub{}, spec{}, irr{}, surf{}, tr{}, nrm{}, var{};
+            std::fill(votes.begin(), votes.end(), 0);
+            for (int j = 0; j < s; ++j)
+                for (int i = 0; i < s; ++i) {
+                    const size_t k = frame.raster.sample_index(x * s + i, y * s + j);
+                    const std::int32_t m = g.material[k];
+                    ++votes[static_cast<size_t>(m + 1)];
+                    const int d = m >= 0 ? dense[static_cast<size_t>(m)] : -1;
+                    for (size_t c = 0; c < 3; ++c) {
+                        double ss = 0;
+                        if (d >= 0) {
+                            const double a = used[static_cast<size_t>(d)]->albedo[c];
+                            const double ew = g.exit_weight[k];
+                            ss = ew * (a * scattered[3 * k + c] + g.translucency[3 * k + c]);
+                            if (!scattered_se.empty()) {
+                                const double e = ew * a * scattered_se[3 * k + c];
+                                var[c] += e * e;
+                            }
+                        }
+                        sub[c] += ss;
+                        spec[c] += g.specular[3 * k + c];
+                        surf[c] += g.surface[3 * k + c];
+                        irr[c] += g.irradiance[3 * k + c];
+                        tr[c] += g.translucency[3 * k + c];
+                        nrm[c] += g.normal[3 * k + c];
+                        L[c] += ss + g.specular[3 * k + c] + g.surface[3 * k + c];
+                    }
+                }
+            for (int c = 0; c < 3; ++c) {
+                const size_t cc = static_cast<size_t>(c);
+                radiance.at(x, y, c) = static_cast<float>(L[cc] * inv);
+                subsurface.at(x, y, c) = static_cast<float>(sub[cc] * inv);
+                specular.at(x, y, c) = static_cast<float>(spec[cc] * inv);
+                irradiance.at(x, y, c) = static_cast<float>(irr[cc] * inv);
+                surface.at(x, y, c) = static_cast<float>(surf[cc] * inv);
+                translucency.at(x, y, c) = static_cast<float>(tr[cc] * inv);
+                normal.at(x, y, c) = static_cast<float>(nrm[cc] * inv);
+                if (sub_se) sub_se->at(x, y, c) = static_cast<float>(std::sqrt(var[cc]) * inv);
+            }
+            depth.at(x, y, 0) = static_cast<float>(frame.raster.depth[frame.raster.pixel_index(x, y)]);
+            const auto best = std::max_element(votes.begin(), votes.end());
+            material.at(x, y, 0) = static_cast<float>(best - votes.begin() - 1);
+        }
+    res.times.push_back({"composite", ms_since(t0)});
+    auto& md = img.metadata();
+    md["ssslab.engine"] = "realtime";
+    md["ssslab.scene"] = scene.name;
+    md["ssslab.sss_method"] = to_string(o.method);
+    md["ssslab.supersample"] = std::to_string(s);
+    return res;
+}
+
+}  // namespace ssslab::realtime
