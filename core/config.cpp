@@ -387,6 +387,22 @@ std::vector<std::string> ConfigTable::string_list(std::string_view key) {
     return out;
 }
 
+std::optional<std::vector<double>> ConfigTable::optional_number_list(std::string_view key,
+                                                                    Range range) {
+    mark(key);
+    const toml::node* n = find(key);
+    if (!n) return std::nullopt;
+    if (!n->is_array()) fail_at(n, key, "expected an array of numbers, got " + type_name(*n));
+    std::vector<double> out;
+    toml::array resolved;
+    for (const toml::node& item : *n->as_array()) {
+        out.push_back(to_number(key, item, range));
+        resolved.push_back(out.back());
+    }
+    resolved_->insert_or_assign(key, std::move(resolved));
+    return out;
+}
+
 std::optional<std::array<double, 3>> ConfigTable::optional_rgb(std::string_view key, Range range) {
     mark(key);
     const toml::node* n = find(key);

@@ -73,6 +73,9 @@ class ConfigTable {
     std::vector<std::string> string_list(std::string_view key);
     /// An optional array of strings (the key is known to "did you mean" even when absent).
     std::optional<std::vector<std::string>> optional_string_list(std::string_view key);
+    /// An optional array of numbers, each in `range` (a bad item is located at itself).
+    std::optional<std::vector<double>> optional_number_list(std::string_view key,
+                                                            Range range = Range::any());
     /// An optional string.
     std::optional<std::string> optional_string(std::string_view key);
     std::optional<double> optional_number(std::string_view key, Range range = Range::any());

@@ -79,6 +79,16 @@ struct FrameOptions {
     SssReferenceOptions reference;
 };
 
+/// Edge parameters in a scene's units: follow-surface strength 3.6 per mm of depth difference
+/// (the separable-sss demo's C SSS_w = 300 x 0.012, its scene unit read as a mm) and rejection
+/// beyond 1 mm of depth difference, as world units of the scene.
+inline double default_follow_strength(const Scene& s) {
+    return 3.6 * s.unit_mm;
+}
+inline double default_reject_depth(const Scene& s) {
+    return 1.0 / s.unit_mm;
+}
+
 /// A rasterized frame, before the materials are known: callers look at media_in_view to build
 /// only the kernels the frame needs.
 struct RasterizedFrame {

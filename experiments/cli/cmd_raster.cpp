@@ -132,9 +132,10 @@ int run_raster(const RasterArgs& a) {
     o.sss.mode = a.edge == "reject" ? realtime::SssEdgeMode::kReject
                  : a.edge == "none" ? realtime::SssEdgeMode::kNone
                                     : realtime::SssEdgeMode::kFollowSurface;
-    // Defaults in the scene's units: Eq. 4.12's demo strength is per its unit (see SssParams).
-    o.sss.follow_strength = a.follow_strength >= 0 ? a.follow_strength : 3.6 * scene.unit_mm;
-    o.sss.reject_depth = a.reject_depth >= 0 ? a.reject_depth : 1.0 / scene.unit_mm;
+    o.sss.follow_strength =
+        a.follow_strength >= 0 ? a.follow_strength : realtime::default_follow_strength(scene);
+    o.sss.reject_depth =
+        a.reject_depth >= 0 ? a.reject_depth : realtime::default_reject_depth(scene);
     o.sss.jitter = a.jitter;
     o.reference.samples = a.reference_samples;
     o.reference.seed = a.common.seed.value_or(1);

@@ -170,20 +170,24 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
     }
     if (auto t = outs.table("render"))
         e.render = read_render_study(*t, std::filesystem::path(e.source).parent_path().string());
+    if (auto t = outs.table("realtime"))
+        e.realtime =
+            read_realtime_study(*t, std::filesystem::path(e.source).parent_path().string());
     const bool material_outputs = e.profiles.enabled || e.profile_plots.enabled ||
                                   e.convergence.enabled || !e.kernel_studies.empty() ||
                                   e.crossval.enabled || e.pencil.enabled || e.efficiency.enabled;
-    if (!material_outputs && !e.render.enabled)
+    if (!material_outputs && !e.render.enabled && !e.realtime.enabled)
         outs.fail("profiles",
                   "no outputs: give at least one of [outputs.profiles], "
                   "[outputs.profile_plots], [outputs.convergence], [[outputs.kernels]], "
-                  "[outputs.crossval], [outputs.pencil], [outputs.efficiency], [outputs.render]");
+                  "[outputs.crossval], [outputs.pencil], [outputs.efficiency], [outputs.render], "
+                  "[outputs.realtime]");
     if (material_outputs && e.materials.empty())
         mats.fail("presets", "no materials: give presets = [...] or [[materials.custom]] tables");
     if (!material_outputs && !e.materials.empty())
         mats.fail("presets",
-                  "no output of this experiment reads materials ([outputs.render] takes them from "
-                  "its scenes): remove [materials]");
+                  "no output of this experiment reads materials ([outputs.render] and "
+                  "[outputs.realtime] take them from their scenes): remove [materials]");
     root.finish();
     return e;
 }

@@ -25,6 +25,9 @@
 //                            (experiments/runner/kernel_study.h)
 //   [outputs.render]         ground-truth images of scene files with rays/s and time to 1 %
 //                            (experiments/runner/render_study.h); needs no [materials]
+//   [outputs.realtime]       the real-time renderer's frames of scene files scored against the
+//                            screen-space reference and the path tracer, Freude14 Table 6.4
+//                            (experiments/runner/realtime_study.h); needs no [materials]
 // Every error names file:line:column and the key.
 #pragma once
 
@@ -33,6 +36,7 @@
 #include "core/material.h"
 #include "core/profile.h"
 #include "experiments/runner/kernel_study.h"
+#include "experiments/runner/realtime_study.h"
 #include "experiments/runner/render_study.h"
 #include "mcml/engine.h"
 #include "mcml/profile.h"
@@ -104,6 +108,7 @@ struct Experiment {
 
     std::vector<KernelStudySpec> kernel_studies;  ///< [[outputs.kernels]]
     RenderStudySpec render;                       ///< [outputs.render]
+    RealtimeStudySpec realtime;                   ///< [outputs.realtime]
 
     std::shared_ptr<ConfigDocument> doc;  ///< parsed config; holds the resolved configuration
 };

@@ -602,6 +602,7 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
         for (const auto& so : c.studies) study_section(os, so, c.plots);
     }
     os << c.render_html;
+    os << c.realtime_html;
 
     os << "<h2 id=\"metrics\">Metrics</h2>\n<p>What <code>ssslab check</code> compares with the "
           "baselines in <code>results/baselines/</code>: stochastic metrics by z-score with "

@@ -28,7 +28,8 @@ struct ReportContent {
     PlotResult plots;
     std::vector<StudyOutput> studies;
     const std::map<std::string, std::string>* engine_files = nullptr;  ///< engines.h tables
-    std::string render_html;  ///< [outputs.render] (render_study.h)
+    std::string render_html;    ///< [outputs.render] (render_study.h)
+    std::string realtime_html;  ///< [outputs.realtime] (realtime_study.h)
 };
 
 std::string render_report(const ExperimentRun& r, const ReportContent& c);

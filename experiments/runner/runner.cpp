@@ -427,6 +427,10 @@ void print_plan(const ExperimentRun& r, std::ostream& os, bool verbose) {
     if (r.exp.convergence.enabled) os << " convergence";
     if (r.exp.render.enabled)
         os << " render (" << r.exp.render.scenes.size() << " scenes, rendered or reused when run)";
+    if (r.exp.realtime.enabled)
+        os << " realtime (" << r.exp.realtime.scenes.size() << " scenes, "
+           << r.exp.realtime.models.size() << " models; profiles and renders reused or computed "
+           << "when run)";
     os << " report\n";
 }
 
@@ -706,6 +710,25 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
         r.computed += rr.computed;
         r.reused += rr.reused;
         report.render_html = std::move(rr.html);
+    }
+    if (r.exp.realtime.enabled) {
+        RenderStudyContext ctx;
+        ctx.seed = r.exp.seed;
+        ctx.quick = r.quick;
+        ctx.threads = o.threads;
+        ctx.quiet = o.quiet;
+        ctx.checkpoint_seconds = o.checkpoint_seconds;
+        ctx.cancel = o.cancel;
+        RealtimeStudyResult rr =
+            run_realtime_study(r.exp.realtime, ctx, cache, o.results_root, stage, r.metrics);
+        if (rr.interrupted) {
+            fs::remove_all(stage, ec);
+            r.interrupted = true;
+            return false;
+        }
+        r.computed += rr.computed;
+        r.reused += rr.reused;
+        report.realtime_html = std::move(rr.html);
     }
     write_file_atomic(stage / "metrics.csv", metrics_csv(r.metrics));
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

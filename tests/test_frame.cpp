@@ -1,0 +1,295 @@
+// The real-time frame (realtime/frame.h): the passes wired together, the composite against the
+// G-buffer it is made of, the SSS pass left out where it has nothing to do, kernels only for the
+// media in view, the separable pass against the 2D reference on a separable kernel, determinism,
+// and `ssslab raster`.
+#include "approx/model_spec.h"
+#include "core/film_image.h"
+#include "core/profile.h"
+#include "core/scene.h"
+#include "realtime/frame.h"
+#include "testing.h"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <filesystem>
+
+namespace ssslab {
+namespace {
+
+namespace fs = std::filesystem;
+using realtime::FrameMaterial;
+using realtime::FrameOptions;
+using realtime::SssMethod;
+
+// A medium sphere on a diffuse floor under a sphere light and a dim environment, in mm.
+constexpr const char* kScene = R"(
+[scene]
+name = "ball"
+[camera]
+position = [0, 8, 40]
+target = [0, 4, 0]
+fov_y_deg = 30
+width = 48
+height = 40
+[[lights]]
+type = "sphere"
+position = [20, 40, 20]
+radius = 3
+radiance = [40, 40, 40]
+[[lights]]
+type = "environment"
+radiance = [0.05, 0.05, 0.05]
+[[materials]]
+name = "jelly"
+preset = "Skin1"
+roughness = 0.3
+[[materials]]
+name = "floor"
+type = "diffuse"
+albedo = [0.5, 0.5, 0.5]
+[[shapes]]
+type = "sphere"
+radius = 4
+subdivisions = 4
+translate = [0, 4, 0]
+material = "jelly"
+[[shapes]]
+type = "plane"
+size_x = 100
+size_z = 100
+material = "floor"
+)";
+
+Scene scene_of(const std::string& text) {
+    return parse_scene(text, "ball.toml", ".");
+}
+
+// A radial profile R(r) = A exp(-r^2 / (2 s^2)) per channel (widths s_mm), on `nr` bins of
+// `dr_mm`: a 2D Gaussian, which is separable, so a rank-1 SVD of it is exact.
+RadialProfile gaussian_profile(std::array<double, 3> s_mm, double dr_mm, int nr) {
+    RadialProfile p;
+    p.name = "gauss";
+    p.dr_cm = dr_mm / 10;
+    p.nr = nr;
+    for (int c = 0; c < 3; ++c) {
+        const double s = s_mm[static_cast<size_t>(c)] / 10;  // cm
+        for (int i = 0; i < nr; ++i) {
+            const double r = (i + 0.5) * p.dr_cm;
+            p.rd_per_cm2[static_cast<size_t>(c)].push_back(0.5 * std::exp(-r * r / (2 * s * s)) /
+                                                           (2 * M_PI * s * s));
+            p.se_per_cm2[static_cast<size_t>(c)].push_back(0);
+        }
+        p.rd_total[static_cast<size_t>(c)] = 0.5;
+        p.rsp[static_cast<size_t>(c)] = 0.02;
+    }
+    return p;
+}
+
+std::map<int, FrameMaterial> materials_for(const Scene& s, const realtime::RasterizedFrame& f,
+                                           const RadialProfile& p, const std::string& model,
+                                           int taps, bool exact) {
+    std::map<int, FrameMaterial> m;
+    for (int i : f.media_in_view)
+        m[i] = realtime::make_frame_material(p, approx::parse_model(model), taps, exact);
+    (void)s;
+    return m;
+}
+
+const float* layer(const LayeredImage& im, const std::string& name) {
+    return im.layer(name).pixels().data();
+}
+
+TEST(Frame, WithoutMediaTheSssPassDoesNotRun) {
+    std::string text = kScene;
+    text.replace(text.find("preset = \"Skin1\"\nroughness = 0.3"),
+                 std::string("preset = \"Skin1\"\nroughness = 0.3").size(),
+                 "type = \"diffuse\"\nalbedo = [0.8, 0.2, 0.1]");
+    const Scene s = scene_of(text);
+    FrameOptions o;
+    const realtime::RasterizedFrame f = realtime::rasterize_frame(s, o);
+    EXPECT_TRUE(f.media_in_view.empty());
+    EXPECT_EQ(f.lit_in_view.size(), 2u);
+    const realtime::FrameResult r = realtime::render_frame(s, f, {}, o);
+    for (const auto& p : r.times)
+        if (p.pass == "sss") EXPECT_EQ(p.ms, 0.0);
+    const size_t n = 3u * 48u * 40u;
+    double lit = 0;
+    for (size_t i = 0; i < n; ++i) {
+        EXPECT_EQ(layer(r.image, "subsurface")[i], 0.0f);
+        EXPECT_FLOAT_EQ(layer(r.image, "radiance")[i],
+                        layer(r.image, "surface")[i] + layer(r.image, "specular")[i]);
+        lit += layer(r.image, "radiance")[i];
+    }
+    EXPECT_GT(lit, 0.0);
+}
+
+// The composite holds the G-buffer's terms together as the header says: with a kernel far
+// narrower than a pixel the pass is the identity, so subsurface = exit_weight (albedo E +
+// translucency) per sample, computed here from realtime::shade's own G-buffer.
+TEST(Frame, CompositeIsTheGBufferTermsAndANarrowKernelIsTheIdentity) {
+    const Scene s = scene_of(kScene);
+    FrameOptions o;
+    const realtime::RasterizedFrame f = realtime::rasterize_frame(s, o);
+    ASSERT_EQ(f.media_in_view, std::vector<int>{0});
+    const RadialProfile p = gaussian_profile({1e-4, 1e-4, 1e-4}, 1e-5, 200);  // 0.1 um wide
+    const auto mats = materials_for(s, f, p, "svd:rank=1", 17, false);
+    const realtime::FrameResult sep = realtime::render_frame(s, f, mats, o);
+    o.method = SssMethod::kNone;
+    const realtime::FrameResult none = realtime::render_frame(s, f, mats, o);
+    const realtime::GBuffer g = realtime::shade(s, f.camera, f.raster, o.lighting);
+    const std::array<double, 3> a = mats.at(0).albedo;
+    size_t medium = 0;
+    for (size_t i = 0; i < g.samples(); ++i)
+        for (size_t c = 0; c < 3; ++c) {
+            const double expect =
+                g.material[i] == 0
+                    ? g.exit_weight[i] * (a[c] * g.irradiance[3 * i + c] + g.translucency[3 * i + c])
+                    : 0.0;
+            EXPECT_NEAR(layer(none.image, "subsurface")[3 * i + c], expect, 1e-6 * (1 + expect));
+            EXPECT_EQ(layer(sep.image, "subsurface")[3 * i + c],
+                      layer(none.image, "subsurface")[3 * i + c]);
+            medium += g.material[i] == 0 && c == 0;
+        }
+    EXPECT_GT(medium, 50u);
+    // The albedo: the grid's share of R_d over 1 - R_sp (here all of 0.5 within the grid).
+    EXPECT_NEAR(a[0], 0.5 / 0.98, 1e-3);
+}
+
+// On a Gaussian profile, which is separable, the separable pass with many taps and the exact 2D
+// reference agree up to the taps' sampling; a wrong kernel scale in either would not.
+TEST(Frame, SeparablePassMatchesTheReferenceOnASeparableKernel) {
+    const Scene s = scene_of(kScene);
+    FrameOptions o;
+    o.width = 64;
+    o.height = 56;
+    o.sss.mode = realtime::SssEdgeMode::kNone;
+    o.reference.method = realtime::SssReferenceOptions::Method::kExact;
+    const realtime::RasterizedFrame f = realtime::rasterize_frame(s, o);
+    const RadialProfile p = gaussian_profile({0.8, 0.5, 0.3}, 0.01, 400);
+    const auto mats = materials_for(s, f, p, "svd:rank=1", 201, true);
+    const realtime::FrameResult sep = realtime::render_frame(s, f, mats, o);
+    o.method = SssMethod::kReference;
+    const realtime::FrameResult ref = realtime::render_frame(s, f, mats, o);
+    o.method = SssMethod::kNone;
+    const realtime::FrameResult none = realtime::render_frame(s, f, mats, o);
+    double d2 = 0, r2 = 0, blur2 = 0;
+    const ImageLayer& mat = ref.image.layer("material");
+    for (int y = 0; y < 56; ++y)
+        for (int x = 0; x < 64; ++x) {
+            if (mat.at(x, y) != 0) continue;
+            for (int c = 0; c < 3; ++c) {
+                const double a = sep.image.layer("subsurface").at(x, y, c);
+                const double b = ref.image.layer("subsurface").at(x, y, c);
+                const double n = none.image.layer("subsurface").at(x, y, c);
+                d2 += (a - b) * (a - b);
+                r2 += b * b;
+                blur2 += (n - b) * (n - b);
+            }
+        }
+    ASSERT_GT(r2, 0);
+    std::printf("separable vs reference: %.3g %% RMS; no pass vs reference: %.3g %%\n",
+                100 * std::sqrt(d2 / r2), 100 * std::sqrt(blur2 / r2));
+    EXPECT_LT(std::sqrt(d2 / r2), 0.02);
+    // The pass does something here: without it the difference is far larger.
+    EXPECT_GT(std::sqrt(blur2 / r2), 5 * std::sqrt(d2 / r2));
+}
+
+TEST(Frame, KernelsOnlyForMediaInViewAndAMissingOneIsNamed) {
+    std::string text = kScene;
+    // A second medium behind the camera.
+    text += R"(
+[[materials]]
+name = "hidden"
+preset = "Marble"
+roughness = 0.3
+[[shapes]]
+type = "sphere"
+radius = 2
+subdivisions = 2
+translate = [0, 4, 80]
+material = "hidden"
+)";
+    const Scene s = scene_of(text);
+    FrameOptions o;
+    const realtime::RasterizedFrame f = realtime::rasterize_frame(s, o);
+    EXPECT_EQ(f.media_in_view, std::vector<int>{0});
+    try {
+        realtime::render_frame(s, f, {}, o);
+        FAIL() << "no kernel for an visible medium must be refused";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("jelly"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Frame, BitIdenticalForOneAndTwoThreadsWithSupersampling) {
+    const Scene s = scene_of(kScene);
+    FrameOptions o;
+    o.raster.supersample = 2;
+    o.sss.jitter = 0.33;
+    const RadialProfile p = gaussian_profile({0.8, 0.5, 0.3}, 0.01, 400);
+    LayeredImage im[2] = {LayeredImage(1, 1), LayeredImage(1, 1)};
+    for (int t = 1; t <= 2; ++t) {
+        tbb::task_arena arena(t);
+        arena.execute([&] {
+            const realtime::RasterizedFrame f = realtime::rasterize_frame(s, o);
+            im[t - 1] =
+                realtime::render_frame(s, f, materials_for(s, f, p, "preintegration", 17, false), o)
+                    .image;
+        });
+    }
+    ASSERT_EQ(im[0].layers().size(), im[1].layers().size());
+    for (const ImageLayer& l : im[0].layers()) {
+        const ImageLayer& m = im[1].layer(l.name());
+        for (size_t i = 0; i < l.pixels().size(); ++i)
+            ASSERT_EQ(l.pixels()[i], m.pixels()[i]) << l.name() << " " << i;
+    }
+    // Volpath's layer names, plus the real-time renderer's own.
+    for (const char* n : {"radiance", "subsurface", "specular", "depth", "normal", "irradiance",
+                          "material", "surface", "translucency"})
+        EXPECT_TRUE(im[0].has_layer(n)) << n;
+}
+
+TEST(RasterCommand, WritesTheLayersThePassTimesAndRefusesBadInput) {
+    testing::TempDir dir;
+    const fs::path scene = dir.write("ball.toml", kScene);
+    const auto r = testing::run_ssslab({"raster", scene.string(), "--photons", "2000", "--cache",
+                                        (dir / "res").string(), "--out",
+                                        (dir / "ball.exr").string(), "--no-translucency"},
+                                       dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    for (const char* pass : {"raster", "shadow maps", "lighting", "sss", "composite", "frame"})
+        EXPECT_NE(r.out.find(pass), std::string::npos) << pass << "\n" << r.out;
+    const LayeredImage im = read_exr((dir / "ball.exr").string());
+    for (const char* n : {"radiance", "subsurface", "specular", "depth", "normal", "irradiance",
+                          "material"})
+        EXPECT_TRUE(im.has_layer(n)) << n;
+    EXPECT_EQ(im.metadata().at("ssslab.model"), "svd:rank=1");
+    EXPECT_TRUE(fs::exists(dir / "ball.png"));
+    EXPECT_TRUE(fs::exists(dir / "ball.exr.toml"));
+    // The profile is cached: a second run with another model computes no MCML run.
+    const auto again = testing::run_ssslab(
+        {"raster", scene.string(), "--photons", "2000", "--cache", (dir / "res").string(),
+         "--out", (dir / "b2.exr").string(), "--no-translucency", "--model", "deon:n=2"},
+        dir.path());
+    ASSERT_EQ(again.exit_code, 0) << again.err;
+    EXPECT_NE(again.out.find("0 MCML runs computed"), std::string::npos) << again.out;
+
+    // Bad input: exit 2, a message naming the option, no output.
+    const auto bad = testing::run_ssslab(
+        {"raster", scene.string(), "--model", "svd:rnak=2", "--out", (dir / "x.exr").string()},
+        dir.path());
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_NE(bad.err.find("--model"), std::string::npos) << bad.err;
+    const auto fit = testing::run_ssslab({"raster", scene.string(), "--model",
+                                          "manual:fit=edge", "--out", (dir / "x.exr").string()},
+                                         dir.path());
+    EXPECT_EQ(fit.exit_code, 2);
+    EXPECT_NE(fit.err.find("kernel study"), std::string::npos) << fit.err;
+    EXPECT_FALSE(fs::exists(dir / "x.exr"));
+    EXPECT_FALSE(fs::exists(dir / "x.png"));
+}
+
+}  // namespace
+}  // namespace ssslab
