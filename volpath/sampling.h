@@ -17,15 +17,7 @@ namespace ssslab::volpath {
 inline constexpr double kPi = std::numbers::pi;
 inline constexpr double kInv4Pi = 0.25 / std::numbers::pi;
 
-/// An orthonormal basis (s, t, n) around a unit vector n, continuous except on a measure-zero
-/// set (Duff et al., "Building an orthonormal basis, revisited", JCGT 2017).
-inline void basis(const Vec3& n, Vec3& s, Vec3& t) {
-    const double sign = std::copysign(1.0, n.z);
-    const double a = -1.0 / (sign + n.z);
-    const double b = n.x * n.y * a;
-    s = {1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x};
-    t = {b, sign + n.y * n.y * a, -n.y};
-}
+using ssslab::basis;  // core/vec3.h, shared with realtime/
 
 /// The direction with cosine `mu` to `w` and azimuth `phi` about it (w a unit vector).
 inline Vec3 rotate(const Vec3& w, double mu, double phi) {
