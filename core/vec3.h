@@ -36,4 +36,14 @@ inline bool all_finite(const Vec3& a) {
     return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z);
 }
 
+/// An orthonormal basis (s, t, n) around a unit vector n, continuous except on a measure-zero
+/// set (Duff et al., "Building an orthonormal basis, revisited", JCGT 2017).
+inline void basis(const Vec3& n, Vec3& s, Vec3& t) {
+    const double sign = std::copysign(1.0, n.z);
+    const double a = -1.0 / (sign + n.z);
+    const double b = n.x * n.y * a;
+    s = {1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x};
+    t = {b, sign + n.y * n.y * a, -n.y};
+}
+
 }  // namespace ssslab

@@ -80,6 +80,7 @@ struct Viewport {
     int ws, hs;    // sample grid
     double guard;  // |x / w|, |y / w| <= guard keeps snapped coordinates in range
     bool cull;
+    bool ortho;  // RasterOptions::orthographic: no perspective divide, linear attributes
 };
 
 // Clip, project, snap and set up one triangle; appends 0 to 6 setup triangles (a fan over the
@@ -99,8 +100,8 @@ void setup_triangle(const RasterMesh& m, std::uint32_t t, std::int32_t shape, do
     for (int k = 0; k < 3; ++k) {
         const ClipV& v = buf_a[k];
         if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.w)) return;
-        inside = inside && v.w >= near && std::abs(v.x) <= vp.guard * v.w &&
-                 std::abs(v.y) <= vp.guard * v.w;
+        const double gw = vp.ortho ? vp.guard : vp.guard * v.w;
+        inside = inside && v.w >= near && std::abs(v.x) <= gw && std::abs(v.y) <= gw;
     }
     ClipV* cur = buf_a;
     if (!inside) {
@@ -110,11 +111,13 @@ void setup_triangle(const RasterMesh& m, std::uint32_t t, std::int32_t shape, do
             n = clip_polygon(cur, n, nxt, dist);
             std::swap(cur, nxt);
         };
+        const bool ortho = vp.ortho;
+        auto gw = [g, ortho](const ClipV& v) { return ortho ? g : g * v.w; };
         step([near](const ClipV& v) { return v.w - near; });
-        if (n >= 3) step([g](const ClipV& v) { return g * v.w - v.x; });
-        if (n >= 3) step([g](const ClipV& v) { return g * v.w + v.x; });
-        if (n >= 3) step([g](const ClipV& v) { return g * v.w - v.y; });
-        if (n >= 3) step([g](const ClipV& v) { return g * v.w + v.y; });
+        if (n >= 3) step([gw](const ClipV& v) { return gw(v) - v.x; });
+        if (n >= 3) step([gw](const ClipV& v) { return gw(v) + v.x; });
+        if (n >= 3) step([gw](const ClipV& v) { return gw(v) - v.y; });
+        if (n >= 3) step([gw](const ClipV& v) { return gw(v) + v.y; });
         if (n < 3) return;
     }
     // Perspective divide and viewport (sample units, y down), then snap.
@@ -122,12 +125,13 @@ void setup_triangle(const RasterMesh& m, std::uint32_t t, std::int32_t shape, do
     std::int64_t fx[16], fy[16];
     for (int k = 0; k < n; ++k) {
         const ClipV& v = cur[k];
-        const double iw = 1.0 / v.w;
+        // Orthographic: the attributes (w, b1, b2) themselves are linear on screen.
+        const double iw = vp.ortho ? 1.0 : 1.0 / v.w;
         sx[k] = (v.x * iw + 1.0) * (0.5 * vp.ws);
         sy[k] = (1.0 - v.y * iw) * (0.5 * vp.hs);
         fx[k] = std::llround(sx[k] * static_cast<double>(kOne));
         fy[k] = std::llround(sy[k] * static_cast<double>(kOne));
-        q[k] = iw;
+        q[k] = vp.ortho ? v.w : iw;
         qb1[k] = v.b1 * iw;
         qb2[k] = v.b2 * iw;
     }
@@ -190,7 +194,7 @@ void setup_triangle(const RasterMesh& m, std::uint32_t t, std::int32_t shape, do
 }
 
 // Draw one setup triangle into the part of a tile [tx0, tx1] x [ty0, ty1] it overlaps.
-void draw(const SetupTriangle& s, int tx0, int ty0, int tx1, int ty1, bool depth_test,
+void draw(const SetupTriangle& s, int tx0, int ty0, int tx1, int ty1, bool depth_test, bool ortho,
           RasterFrame& f) {
     const int x0 = std::max(s.x0, tx0), x1 = std::min(s.x1, tx1);
     const int y0 = std::max(s.y0, ty0), y1 = std::min(s.y1, ty1);
@@ -219,13 +223,14 @@ void draw(const SetupTriangle& s, int tx0, int ty0, int tx1, int ty1, bool depth
                 ++f.fragments[i];
                 const double ex = (x + 0.5) - s.ox, ey = py - s.oy;
                 const double q = s.a[0] + s.ddx[0] * ex + s.ddy[0] * ey;
-                const double z = 1.0 / q;
+                const double z = ortho ? q : 1.0 / q;
                 if (!depth_test || z < f.view_z[i]) {
+                    const double m = ortho ? 1.0 : z;
                     f.view_z[i] = z;
                     f.shape[i] = s.shape;
                     f.triangle[i] = s.triangle;
-                    f.barycentric[i] = {(s.a[1] + s.ddx[1] * ex + s.ddy[1] * ey) * z,
-                                        (s.a[2] + s.ddx[2] * ex + s.ddy[2] * ey) * z};
+                    f.barycentric[i] = {(s.a[1] + s.ddx[1] * ex + s.ddy[1] * ey) * m,
+                                        (s.a[2] + s.ddx[2] * ex + s.ddy[2] * ey) * m};
                 }
             }
             for (std::size_t k = 0; k < 3; ++k) e[k] += step_x[k];
@@ -317,7 +322,7 @@ RasterFrame rasterize(const RasterCamera& camera, std::span<const RasterMesh> me
     tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t bi) {
         const Block& b = blocks[bi];
         const RasterMesh& m = meshes[b.mesh];
-        const Viewport vp{ws, hs, guard, m.cull_back_faces};
+        const Viewport vp{ws, hs, guard, m.cull_back_faces, o.orthographic};
         for (std::size_t t = b.begin; t < b.end; ++t)
             setup_triangle(m, static_cast<std::uint32_t>(t), static_cast<std::int32_t>(b.mesh),
                            o.near, vp, setup[bi]);
@@ -342,7 +347,8 @@ RasterFrame rasterize(const RasterCamera& camera, std::span<const RasterMesh> me
         const int ty = static_cast<int>(bi / static_cast<std::size_t>(ntx));
         const int x0 = tx * ts, y0 = ty * ts;
         const int x1 = std::min(x0 + ts, ws) - 1, y1 = std::min(y0 + ts, hs) - 1;
-        for (const SetupTriangle* s : bins[bi]) draw(*s, x0, y0, x1, y1, o.depth_test, f);
+        for (const SetupTriangle* s : bins[bi])
+            draw(*s, x0, y0, x1, y1, o.depth_test, o.orthographic, f);
     });
 
     // Ray distances per sample, box-filtered pixels.
@@ -359,7 +365,8 @@ RasterFrame rasterize(const RasterCamera& camera, std::span<const RasterMesh> me
                     const std::size_t k = f.sample_index(sx, sy);
                     if (f.shape[k] < 0) continue;
                     const double px = (sx + 0.5) / ss, py = (sy + 0.5) / ss;
-                    f.ray_t[k] = f.view_z[k] * camera.ray_length_per_depth(px, py);
+                    f.ray_t[k] = o.orthographic ? f.view_z[k]
+                                                : f.view_z[k] * camera.ray_length_per_depth(px, py);
                     ++covered;
                     sum_t += f.ray_t[k];
                 }

@@ -73,6 +73,11 @@ struct RasterOptions {
     double near = 1e-3;       ///< near plane [world units]: geometry closer is clipped away
     bool depth_test = true;   ///< false: the last triangle drawn at a sample wins
     bool cull_closed = true;  ///< rasterize(Scene): cull back faces of closed meshes
+    /// An orthographic projection (the shadow maps of directional lights): vertices' x and y
+    /// are [-1, 1] across the image already (not divided by w) and w is the depth along the
+    /// view axis; depth and barycentrics interpolate linearly, ray_t = view_z. The near plane
+    /// clips w < near as before; the guard band is |x|, |y| <= its bound.
+    bool orthographic = false;
 };
 
 /// What a rasterization produced, as plain arrays (row-major, y down). Per sample arrays have

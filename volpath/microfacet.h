@@ -11,6 +11,7 @@
 // the roughness grows (a few percent at alpha = 0.3, ~10-20 % at alpha = 1).
 #pragma once
 
+#include "core/dielectric.h"
 #include "core/vec3.h"
 #include "volpath/sampling.h"
 
@@ -20,40 +21,19 @@
 
 namespace ssslab::volpath {
 
-enum class TransportMode { kRadiance, kImportance };
+// The model itself (D, Lambda, G1, G, f) is core/dielectric.h's, shared with realtime/; the
+// names stay here so that volpath's code reads as before.
+using dielectric::TransportMode;
 
 namespace ggx {
 
-inline double cos2_theta(const Vec3& w) {
-    return w.z * w.z;
-}
-inline double tan2_theta(const Vec3& w) {
-    const double c2 = cos2_theta(w);
-    return std::max(0.0, 1.0 - c2) / c2;
-}
+using dielectric::ggx::cos2_theta;
+using dielectric::ggx::D;
+using dielectric::ggx::G;
+using dielectric::ggx::G1;
+using dielectric::ggx::lambda;
+using dielectric::ggx::tan2_theta;
 
-/// D(m): microfacet normals per unit projected area, isotropic roughness alpha;
-/// integral of D(m) cos(theta_m) over the hemisphere is 1.
-inline double D(const Vec3& m, double alpha) {
-    const double t2 = tan2_theta(m);
-    if (!std::isfinite(t2)) return 0;
-    const double c4 = cos2_theta(m) * cos2_theta(m);
-    const double e = 1 + t2 / (alpha * alpha);
-    return 1.0 / (kPi * alpha * alpha * c4 * e * e);
-}
-/// Smith's Lambda for GGX.
-inline double lambda(const Vec3& w, double alpha) {
-    const double t2 = tan2_theta(w);
-    if (!std::isfinite(t2)) return 0;
-    return 0.5 * (std::sqrt(1 + alpha * alpha * t2) - 1);
-}
-inline double G1(const Vec3& w, double alpha) {
-    return 1.0 / (1.0 + lambda(w, alpha));
-}
-/// Height-correlated masking-shadowing.
-inline double G(const Vec3& wo, const Vec3& wi, double alpha) {
-    return 1.0 / (1.0 + lambda(wo, alpha) + lambda(wi, alpha));
-}
 /// Density of the visible normals from w: G1(w) max(0, w.m) D(m) / |cos theta_w|.
 inline double D_visible(const Vec3& w, const Vec3& m, double alpha) {
     return G1(w, alpha) / std::abs(w.z) * D(m, alpha) * std::abs(dot(w, m));
@@ -77,11 +57,7 @@ inline Vec3 sample_visible_normal(const Vec3& w, double alpha, double u1, double
 
 }  // namespace ggx
 
-/// Fresnel reflectance for a cosine of either sign against the normal of the side the light
-/// comes from (negative: from below, where the relative index is 1 / eta).
-inline double fresnel_signed(double cos_i, double eta) {
-    return cos_i >= 0 ? fresnel_dielectric(cos_i, eta) : fresnel_dielectric(-cos_i, 1.0 / eta);
-}
+using dielectric::fresnel_signed;
 
 struct BsdfSample {
     Vec3 wi;
@@ -90,46 +66,9 @@ struct BsdfSample {
     bool reflection = false;
 };
 
-/// The pair (wo, wi) seen by the microfacet that connects them: the generalized half vector
-/// wm (on the +z side) of Walter et al. (eq. 16), etap = 1 for reflection, else the relative
-/// index from wo's side. Empty when a direction is tangent, the pair is degenerate, or the
-/// microfacet would face away from either direction.
-struct MicrofacetPair {
-    Vec3 wm;
-    double etap = 1;
-    bool reflect = false;
-};
-inline std::optional<MicrofacetPair> microfacet_pair(const Vec3& wo, const Vec3& wi, double eta) {
-    const double co = wo.z, ci = wi.z;
-    if (co == 0 || ci == 0) return std::nullopt;
-    MicrofacetPair p;
-    p.reflect = co * ci > 0;
-    p.etap = p.reflect ? 1.0 : (co > 0 ? eta : 1.0 / eta);
-    Vec3 wm = wi * p.etap + wo;
-    if (!(dot(wm, wm) > 0)) return std::nullopt;
-    wm = normalize(wm);
-    if (wm.z < 0) wm = -wm;
-    if (dot(wm, wi) * ci < 0 || dot(wm, wo) * co < 0) return std::nullopt;  // back-facing
-    p.wm = wm;
-    return p;
-}
-
-/// f(wo, wi) of the rough dielectric (alpha > 0).
-inline double rough_dielectric_f(const Vec3& wo, const Vec3& wi, double eta, double alpha,
-                                 TransportMode mode) {
-    const auto mp = microfacet_pair(wo, wi, eta);
-    if (!mp) return 0;
-    const Vec3& wm = mp->wm;
-    const double F = fresnel_signed(dot(wo, wm), eta);
-    if (mp->reflect)
-        return ggx::D(wm, alpha) * ggx::G(wo, wi, alpha) * F / std::abs(4 * wi.z * wo.z);
-    const double d = dot(wi, wm) + dot(wo, wm) / mp->etap;
-    const double denom = d * d * wi.z * wo.z;
-    double ft = ggx::D(wm, alpha) * (1 - F) * ggx::G(wo, wi, alpha) *
-                std::abs(dot(wi, wm) * dot(wo, wm) / denom);
-    if (mode == TransportMode::kRadiance) ft /= mp->etap * mp->etap;
-    return ft;
-}
+using dielectric::microfacet_pair;
+using dielectric::MicrofacetPair;
+using dielectric::rough_dielectric_f;
 
 /// The density sample_rough_dielectric draws wi with, for wo.
 inline double rough_dielectric_pdf(const Vec3& wo, const Vec3& wi, double eta, double alpha) {

@@ -484,6 +484,7 @@ struct Renderer {
                     return rays;
                 }
             }
+            if (opt.max_depth > 0 && depth >= opt.max_depth) return rays;
             const Vec3 p = o + d * hit.t;
             const int mi = shape_medium[hit.shape];
             Vec3 n = hit.normal;
@@ -666,6 +667,8 @@ std::string render_fingerprint(const Scene& scene, const RenderOptions& o) {
         .add("long_path_events", o.long_path_events)
         .add("index_matched_nee", o.index_matched_nee)
         .add("samples_per_batch", 3);
+    // Only when set, so that the keys of existing checkpoints stay what they were.
+    if (o.max_depth != 0) k.add("max_depth", o.max_depth);
     add_to_key(k, scene);
     return k.text();
 }

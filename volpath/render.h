@@ -61,6 +61,12 @@ struct RenderOptions {
     /// Camera path vertices before Russian roulette may end a path (then survival
     /// max(beta) clamped to [0.05, 1]).
     int roulette_depth = 5;
+    /// Surface vertices a camera path may have (boundary crossings count, medium events do
+    /// not): the path ends where it would meet geometry once more, after the emission its last
+    /// ray sees (sphere lights, environment, the sun's disc) is counted. 0: unlimited; 1: direct
+    /// lighting only (NEE and BSDF sampling at the first hit, MIS-weighted as always), the
+    /// reference of the real-time renderer's lighting pass (tests/test_lighting.cpp).
+    int max_depth = 0;
     /// Long-path roulette inside media [Bitterli13 §3.2], as in the pencil engine.
     std::int64_t long_path_events = 100000;
     /// NEE inside index-matched homogeneous media and shadow rays through their boundaries.
@@ -117,9 +123,9 @@ RelativeError radiance_rel_error(const std::vector<double>& mean, const std::vec
 RelativeError radiance_rel_error(const LayeredImage& image);
 
 /// What a render's checkpoint is keyed by: the renderer's version, the settings that change the
-/// image (seed, size, roulette, long paths, NEE), and the scene's content (core/scene.h
-/// add_to_key: resolved values, meshes, grid files), as a ContentKey's text. Not the budget: a
-/// resumed run may be given more samples.
+/// image (seed, size, roulette, long paths, NEE, max_depth when not 0), and the scene's content
+/// (core/scene.h add_to_key: resolved values, meshes, grid files), as a ContentKey's text. Not the
+/// budget: a resumed run may be given more samples.
 std::string render_fingerprint(const Scene& scene, const RenderOptions& options);
 
 /// One point of error against time: the radiance after `spp` samples per pixel (a snapshot or

@@ -1,9 +1,11 @@
 // The volumetric path tracer's own sampling and optics: vectors, Henyey-Greenstein phase
-// function, exact dielectric Fresnel reflectance and refraction. Written independently of
+// function, refraction (the Fresnel reflectance itself is core/dielectric.h's, shared with
+// realtime/). Written independently of
 // mcml/transport.h (design.md: the two engines are independent witnesses), with different
 // formulas where a choice exists (HG inversion, direction frames).
 #pragma once
 
+#include "core/dielectric.h"
 #include "core/vec3.h"
 
 #include <algorithm>
@@ -15,15 +17,7 @@ namespace ssslab::volpath {
 inline constexpr double kPi = std::numbers::pi;
 inline constexpr double kInv4Pi = 0.25 / std::numbers::pi;
 
-/// An orthonormal basis (s, t, n) around a unit vector n, continuous except on a measure-zero
-/// set (Duff et al., "Building an orthonormal basis, revisited", JCGT 2017).
-inline void basis(const Vec3& n, Vec3& s, Vec3& t) {
-    const double sign = std::copysign(1.0, n.z);
-    const double a = -1.0 / (sign + n.z);
-    const double b = n.x * n.y * a;
-    s = {1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x};
-    t = {b, sign + n.y * n.y * a, -n.y};
-}
+using ssslab::basis;  // core/vec3.h, shared with realtime/
 
 /// The direction with cosine `mu` to `w` and azimuth `phi` about it (w a unit vector).
 inline Vec3 rotate(const Vec3& w, double mu, double phi) {
@@ -52,26 +46,8 @@ inline double sample_hg(double g, double xi) {
     return std::clamp(num / (d * d), -1.0, 1.0);
 }
 
-/// Unpolarised Fresnel reflectance of a smooth dielectric interface for light arriving with
-/// cosine cos_i >= 0 to the normal, eta = n_transmitted / n_incident (any positive ratio; 1 gives
-/// exactly 0). Total internal reflection gives 1. Also returns the cosine of the refracted ray.
-inline double fresnel_dielectric(double cos_i, double eta, double& cos_t) {
-    cos_i = std::min(cos_i, 1.0);
-    const double sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if (sin2_t >= 1.0) {
-        cos_t = 0.0;
-        return 1.0;
-    }
-    cos_t = std::sqrt(1.0 - sin2_t);
-    if (eta == 1.0) return 0.0;
-    const double rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    const double rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    return 0.5 * (rs * rs + rp * rp);
-}
-inline double fresnel_dielectric(double cos_i, double eta) {
-    double cos_t;
-    return fresnel_dielectric(cos_i, eta, cos_t);
-}
+/// Exact dielectric Fresnel reflectance: one copy for both renderers (core/dielectric.h).
+using dielectric::fresnel_dielectric;
 
 /// Direction refracted through an interface with unit normal n on the incident side
 /// (dot(d, n) < 0), for the cosine cos_t from fresnel_dielectric and eta = n_t / n_i.

@@ -1,0 +1,613 @@
+// Pass 1 of the real-time renderer (see lighting.h). Sources:
+//   [Walter et al. 2007] "Microfacet models for refraction through rough surfaces", EGSR: the
+//     rough dielectric (core/dielectric.h), its Jacobian d(w_m)/d(w_i) (Eqs. 14 and 17).
+//   [Williams 1978] "Casting curved shadows on curved surfaces": shadow maps.
+//   [Jimenez et al. 2010] "Real-time realistic skin translucency", IEEE CG&A: thickness from
+//     the shadow map, transmittance of the thin part seen from behind.
+//   [Swinbank and Purser 2006] Fibonacci grids: the stratified directions and points.
+#include "realtime/lighting.h"
+
+#include "core/dielectric.h"
+#include "realtime/shadow_map.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <stdexcept>
+#include <utility>
+
+namespace ssslab::realtime {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+using RGB = std::array<double, 3>;
+
+// Fibonacci lattice point i of n: (i + 1/2) / n and the fractional golden-ratio turn.
+double fib_u(int i, int n) {
+    return (i + 0.5) / n;
+}
+double fib_v(int i) {
+    const double g = 0.5 * (std::sqrt(5.0) - 1);  // 1 / golden ratio
+    const double x = i * g;
+    return x - std::floor(x);
+}
+
+// Direction at cosine c to axis and azimuth 2 pi v.
+Vec3 around(const Vec3& axis, double c, double v) {
+    Vec3 s, t;
+    basis(axis, s, t);
+    const double sn = std::sqrt(std::max(0.0, 1 - c * c)), phi = 2 * kPi * v;
+    return normalize(s * (sn * std::cos(phi)) + t * (sn * std::sin(phi)) + axis * c);
+}
+
+// Nearest t > 0 where o + t d meets the sphere; inf if none.
+double hit_sphere(const Vec3& o, const Vec3& d, const Vec3& c, double r) {
+    const Vec3 oc = o - c;
+    const double b = dot(oc, d), cc = dot(oc, oc) - r * r;
+    const double disc = b * b - cc;
+    if (disc < 0) return kInf;
+    const double s = std::sqrt(disc);
+    if (-b - s > 0) return -b - s;
+    if (-b + s > 0) return -b + s;
+    return kInf;
+}
+
+// One shadow-mapped light sample: a direction (orthographic map) or a point (perspective).
+struct LightSample {
+    bool directional = true;
+    Vec3 w{};     // directional: unit vector towards the light
+    Vec3 pos{};   // point
+    RGB value{};  // directional: irradiance at normal incidence; point: intensity [per sr]
+    // Sphere-light patch: intensity value * max(0, lobe . w) towards w (Lambertian emitter).
+    bool lobe = false;
+    Vec3 lobe_n{};
+    bool thickness_view = false;  // its map gives GBuffer::thickness
+    bool lights = true;           // false: a thickness view only
+};
+
+enum class Kind : std::uint8_t { kNone, kDiffuse, kMedium };
+
+struct Receiver {
+    Vec3 p, n;  // position, outward facet normal
+    Vec3 ns;    // shading normal: diffuse towards the camera, medium the outward one
+    Vec3 wo;    // towards the camera
+    Kind kind = Kind::kNone;
+    int shape = -1, material = -1;
+};
+
+}  // namespace
+
+std::array<double, 3> SlabTransmittance::at(double d) const {
+    std::array<double, 3> r{};
+    const std::size_t n = std::min(thickness_mm.size(), transmittance.size());
+    if (n == 0) return r;
+    if (!(d > thickness_mm[0])) return transmittance[0];
+    if (d >= thickness_mm[n - 1]) return transmittance[n - 1];
+    const std::size_t k = static_cast<std::size_t>(
+        std::upper_bound(thickness_mm.begin(), thickness_mm.begin() + static_cast<long>(n), d) -
+        thickness_mm.begin());
+    const double d0 = thickness_mm[k - 1], d1 = thickness_mm[k];
+    const double t = (d - d0) / (d1 - d0);
+    for (std::size_t c = 0; c < 3; ++c) {
+        const double a = transmittance[k - 1][c], b = transmittance[k][c];
+        r[c] = a > 0 && b > 0 ? std::exp(std::log(a) + t * (std::log(b) - std::log(a)))
+                              : a + t * (b - a);
+    }
+    return r;
+}
+
+double BoundaryTransmittance::ggx(double mu, double eta, double alpha, int q) {
+    using namespace dielectric;
+    if (!(mu > 0)) return 0;
+    mu = std::min(mu, 1.0);
+    const Vec3 wo{std::sqrt(std::max(0.0, 1 - mu * mu)), 0, mu};
+    // Microfacet normals m in the coordinates of the GGX distribution D(m) cos(theta_m) dw_m =
+    // du dphi / (2 pi): tan^2 theta_m = alpha^2 u / (1 - u); midpoint rule in u and in phi over
+    // [0, pi] (the lobe is symmetric about the plane of incidence). Then
+    // T = integral f(wo, wi) |cos theta_i| dw_i = integral f |cos theta_i| / |dw_m/dw_i| dw_m,
+    // with wi the refraction of wo through m.
+    double sum = 0;
+    for (int a = 0; a < q; ++a) {
+        const double u = (a + 0.5) / q;
+        const double t2 = alpha * alpha * u / (1 - u);
+        const double ct = 1 / std::sqrt(1 + t2), st = std::sqrt(t2) * ct;
+        for (int b = 0; b < q; ++b) {
+            const double phi = kPi * (b + 0.5) / q;
+            const Vec3 m{st * std::cos(phi), st * std::sin(phi), ct};
+            const double h = dot(wo, m);
+            if (!(h > 0)) continue;
+            double cos_t = 0;
+            const double F = fresnel_dielectric(h, eta, cos_t);
+            if (F >= 1) continue;
+            const Vec3 wi = normalize(-wo * (1 / eta) + m * (h / eta - cos_t));
+            if (!(wi.z < 0)) continue;
+            const double f = rough_dielectric_f(wo, wi, eta, alpha, TransportMode::kImportance);
+            const double dd = dot(wi, m) + h / eta;
+            const double dwm_dwi = std::abs(dot(wi, m)) / (dd * dd);
+            const double dens = ggx::D(m, alpha) * ct;  // per unit solid angle of m, du dphi/2pi
+            if (!(dens > 0) || !(dwm_dwi > 0)) continue;
+            sum += f * std::abs(wi.z) / (dwm_dwi * dens);
+        }
+    }
+    // integral over (u, phi in [0, 2 pi)) of g du dphi / (2 pi), phi folded: 2 * pi / q / (2 pi).
+    return sum / (static_cast<double>(q) * q);
+}
+
+BoundaryTransmittance::BoundaryTransmittance(double eta, double alpha, int cosines, int q)
+    : eta_(eta), alpha_(eta == 1.0 ? 0.0 : alpha) {
+    if (!(eta > 0) || !(alpha >= 0) || cosines < 2 || q < 1)
+        throw std::invalid_argument("BoundaryTransmittance: eta, alpha or table size out of range");
+    if (alpha_ == 0) {
+        // c = 2 integral (1 - F) mu dmu, Gauss-Legendre would do; a fine midpoint rule keeps it
+        // simple and to ~1e-9 (the integrand's only kink is the critical angle when eta < 1).
+        const int n = 1 << 16;
+        double s = 0;
+        for (int k = 0; k < n; ++k) {
+            const double mu = (k + 0.5) / n;
+            s += (1 - dielectric::fresnel_dielectric(mu, eta)) * mu;
+        }
+        c_ = 2 * s / n;
+        return;
+    }
+    table_.resize(static_cast<std::size_t>(cosines));
+    tbb::parallel_for(0, cosines, [&](int k) {
+        table_[static_cast<std::size_t>(k)] =
+            ggx(static_cast<double>(k) / (cosines - 1), eta, alpha_, q);
+    });
+    // Exactly for the piecewise-linear T: 2 sum over segments of integral T(mu) mu dmu.
+    const double h = 1.0 / (cosines - 1);
+    double s = 0;
+    for (int k = 0; k + 1 < cosines; ++k) {
+        const double m0 = k * h, T0 = table_[static_cast<std::size_t>(k)];
+        const double dT = table_[static_cast<std::size_t>(k) + 1] - T0;
+        s += h * (T0 * m0 + T0 * h / 2 + dT * m0 / 2 + dT * h / 3);
+    }
+    c_ = 2 * s;
+}
+
+double BoundaryTransmittance::operator()(double mu) const {
+    if (!(mu > 0)) return 0;
+    mu = std::min(mu, 1.0);
+    if (alpha_ == 0) return 1 - dielectric::fresnel_dielectric(mu, eta_);
+    const double x = mu * static_cast<double>(table_.size() - 1);
+    const std::size_t k = std::min(static_cast<std::size_t>(x), table_.size() - 2);
+    const double t = x - static_cast<double>(k);
+    return table_[k] + t * (table_[k + 1] - table_[k]);
+}
+
+double BoundaryTransmittance::exit_weight(double mu_o) const {
+    return c_ > 0 ? (*this)(mu_o) / (kPi * c_) : 0.0;
+}
+
+GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& frame,
+              const LightingOptions& o, const std::vector<SlabTransmittance>& slabs,
+              LightingStats* stats) {
+    using clock = std::chrono::steady_clock;
+    const auto t_start = clock::now();
+    const int ss = frame.supersample;
+    const int W = frame.sample_width(), H = frame.sample_height();
+    const std::size_t N = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+    if (camera.width != frame.width || camera.height != frame.height || ss < 1 ||
+        frame.view_z.size() != N || frame.shape.size() != N || frame.triangle.size() != N ||
+        frame.barycentric.size() != N || frame.ray_t.size() != N)
+        throw std::invalid_argument("lighting: the frame does not match the camera");
+    if (o.light_samples < 1 || o.environment_samples < 1 || o.shadow_map_size < 1 ||
+        o.shadow_map_size > 16384 || o.transmittance_cosines < 2 || o.transmittance_quadrature < 1)
+        throw std::invalid_argument("lighting: options out of range");
+
+    GBuffer g;
+    g.width = W;
+    g.height = H;
+    g.view_z.assign(N, std::numeric_limits<float>::infinity());
+    g.ray_t.assign(N, 0.f);
+    g.normal.assign(3 * N, 0.f);
+    g.shape.assign(N, -1);
+    g.material.assign(N, -1);
+    g.irradiance.assign(3 * N, 0.f);
+    g.exit_weight.assign(N, 0.f);
+    g.specular.assign(3 * N, 0.f);
+    g.surface.assign(3 * N, 0.f);
+    g.thickness.assign(N, 0.f);
+    g.translucency.assign(3 * N, 0.f);
+
+    // Boundaries: one transmittance per (eta, alpha) of the scene's media.
+    std::map<std::pair<double, double>, BoundaryTransmittance> boundaries;
+    std::vector<const BoundaryTransmittance*> mat_T(scene.materials.size(), nullptr);
+    for (std::size_t m = 0; m < scene.materials.size(); ++m) {
+        const SceneMaterial& sm = scene.materials[m];
+        if (sm.kind != SceneMaterial::Kind::kMedium) continue;
+        const double eta = sm.medium.eta, alpha = eta == 1.0 ? 0.0 : sm.roughness;
+        auto it = boundaries.find({eta, alpha});
+        if (it == boundaries.end())
+            it = boundaries
+                     .emplace(std::make_pair(eta, alpha),
+                              BoundaryTransmittance(eta, alpha, o.transmittance_cosines,
+                                                    o.transmittance_quadrature))
+                     .first;
+        mat_T[m] = &it->second;
+    }
+    auto slab_of = [&](int m) -> const SlabTransmittance* {
+        if (m < 0 || static_cast<std::size_t>(m) >= slabs.size()) return nullptr;
+        const SlabTransmittance& s = slabs[static_cast<std::size_t>(m)];
+        return s.thickness_mm.empty() || s.transmittance.empty() ? nullptr : &s;
+    };
+
+    // Receivers and what the camera sees directly.
+    std::vector<Receiver> rec(N);
+    std::vector<RGB> surf(N, RGB{}), irr(N, RGB{}), spec(N, RGB{}), transl(N, RGB{});
+    std::vector<double> thick(N, 0.0);
+    tbb::parallel_for(0, H, [&](int sy) {
+        for (int sx = 0; sx < W; ++sx) {
+            const std::size_t i = frame.sample_index(sx, sy);
+            const Vec3 d = camera.ray_direction((sx + 0.5) / ss, (sy + 0.5) / ss);
+            const int s = frame.shape[i];
+            const double t_geo = s >= 0 ? frame.ray_t[i] : kInf;
+            // Sphere lights are not rasterized (nor in volpath's BVH): the nearest in front.
+            double tl = kInf;
+            const SceneLight* hit_light = nullptr;
+            for (const SceneLight& l : scene.lights)
+                if (l.type == LightType::kSphere) {
+                    const double t = hit_sphere(camera.position, d, l.position, l.radius);
+                    if (t < tl) tl = t, hit_light = &l;
+                }
+            if (hit_light && tl < t_geo) {
+                surf[i] = hit_light->color;
+            } else if (s < 0) {
+                for (const SceneLight& l : scene.lights) {
+                    if (l.type == LightType::kEnvironment)
+                        for (std::size_t c = 0; c < 3; ++c) surf[i][c] += l.color[c];
+                    if (l.type == LightType::kDirectional && l.angular_radius_deg > 0) {
+                        const double a = l.angular_radius_deg * kPi / 180;
+                        if (dot(d, l.direction) >= std::cos(a))
+                            for (std::size_t c = 0; c < 3; ++c)
+                                surf[i][c] += l.color[c] / (kPi * std::sin(a) * std::sin(a));
+                    }
+                }
+            }
+            if (s < 0) continue;
+            g.view_z[i] = static_cast<float>(frame.view_z[i]);
+            g.ray_t[i] = static_cast<float>(frame.ray_t[i]);
+            const SceneShape& sh = scene.shapes[static_cast<std::size_t>(s)];
+            const auto& tri = sh.mesh.triangles[frame.triangle[i]];
+            const Vec3 &v0 = sh.mesh.positions[tri[0]], &v1 = sh.mesh.positions[tri[1]],
+                       &v2 = sh.mesh.positions[tri[2]];
+            // Facet normal as volpath/embree_scene.cpp computes it (double precision).
+            const Vec3 n = normalize(cross(v1 - v0, v2 - v0));
+            g.shape[i] = s;
+            g.material[i] = sh.material;
+            for (int c = 0; c < 3; ++c)
+                g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(n[c]);
+            if (hit_light && tl < t_geo) continue;  // a sphere light in front: nothing to light
+            Receiver& r = rec[i];
+            const auto [b1, b2] = frame.barycentric[i];
+            r.p = v0 * (1 - b1 - b2) + v1 * b1 + v2 * b2;
+            r.n = n;
+            r.wo = -d;
+            r.shape = s;
+            r.material = sh.material;
+            const SceneMaterial& m = scene.materials[static_cast<std::size_t>(sh.material)];
+            if (m.kind == SceneMaterial::Kind::kDiffuse) {
+                r.kind = Kind::kDiffuse;
+                r.ns = dot(n, r.wo) < 0 ? -n : n;
+            } else if (dot(n, r.wo) > 0) {  // a medium seen from outside
+                r.kind = Kind::kMedium;
+                r.ns = n;
+                const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(sh.material)];
+                g.exit_weight[i] = static_cast<float>(T.exit_weight(dot(n, r.wo)));
+                if (T.alpha() == 0) {
+                    // Mirror: F times what the reflected ray sees of the sphere lights, the
+                    // environment and the suns (unoccluded).
+                    const Vec3 rd = n * (2 * dot(n, r.wo)) - r.wo;
+                    const double F = dielectric::fresnel_dielectric(dot(n, r.wo), T.eta());
+                    double tb = kInf;
+                    const SceneLight* sl = nullptr;
+                    for (const SceneLight& l : scene.lights)
+                        if (l.type == LightType::kSphere) {
+                            const double t = hit_sphere(r.p, rd, l.position, l.radius);
+                            if (t < tb) tb = t, sl = &l;
+                        }
+                    RGB Lr{};
+                    if (sl) {
+                        Lr = sl->color;
+                    } else {
+                        for (const SceneLight& l : scene.lights) {
+                            if (l.type == LightType::kEnvironment)
+                                for (std::size_t c = 0; c < 3; ++c) Lr[c] += l.color[c];
+                            if (l.type == LightType::kDirectional && l.angular_radius_deg > 0) {
+                                const double a = l.angular_radius_deg * kPi / 180;
+                                if (dot(rd, l.direction) >= std::cos(a))
+                                    for (std::size_t c = 0; c < 3; ++c)
+                                        Lr[c] += l.color[c] / (kPi * std::sin(a) * std::sin(a));
+                            }
+                        }
+                    }
+                    for (std::size_t c = 0; c < 3; ++c) spec[i][c] = F * Lr[c];
+                }
+            }
+        }
+    });
+
+    Box receivers, casters;
+    for (const Receiver& r : rec)
+        if (r.kind != Kind::kNone) receivers.add(r.p);
+    for (const SceneShape& s : scene.shapes) {
+        const auto b = s.mesh.bounds();
+        if (b[0].x <= b[1].x) {
+            casters.add(b[0]);
+            casters.add(b[1]);
+        }
+    }
+    const double scene_size =
+        casters.empty() ? 1.0 : std::max(1e-300, length(casters.hi - casters.lo));
+
+    // Light samples, in scene order.
+    std::vector<LightSample> samples;
+    bool thickness_taken = false;
+    for (const SceneLight& l : scene.lights) {
+        const bool first = !thickness_taken && l.type != LightType::kEnvironment;
+        thickness_taken = thickness_taken || first;
+        switch (l.type) {
+            case LightType::kDirectional: {
+                const Vec3 axis = normalize(l.direction);
+                if (l.angular_radius_deg <= 0) {
+                    LightSample s;
+                    s.w = axis;
+                    s.value = l.color;
+                    s.thickness_view = first;
+                    samples.push_back(s);
+                    break;
+                }
+                const double a = l.angular_radius_deg * kPi / 180, cos_max = std::cos(a);
+                const double L_per = 1.0 / (kPi * std::sin(a) * std::sin(a));
+                const double omega = 2 * kPi * (1 - cos_max);
+                const int n = o.light_samples;
+                for (int k = 0; k < n; ++k) {
+                    LightSample s;
+                    // Uniform in solid angle over the cone: cos theta uniform in [cos_max, 1].
+                    s.w = around(axis, 1 - fib_u(k, n) * (1 - cos_max), fib_v(k));
+                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * L_per * omega / n;
+                    samples.push_back(s);
+                }
+                if (first) {
+                    LightSample s;
+                    s.w = axis;
+                    s.thickness_view = true;
+                    s.lights = false;
+                    samples.push_back(s);
+                }
+                break;
+            }
+            case LightType::kPoint: {
+                LightSample s;
+                s.directional = false;
+                s.pos = l.position;
+                s.value = l.color;
+                s.thickness_view = first;
+                samples.push_back(s);
+                break;
+            }
+            case LightType::kSphere: {
+                if (receivers.empty()) break;
+                // The cap every receiver could see: around the axis towards the receivers' box,
+                // half-angle (largest angle of a box corner off the axis) + arccos(r / (largest
+                // corner distance)), the visible cap of the farthest point.
+                const Vec3 c0 = l.position;
+                const Vec3 centre = (receivers.lo + receivers.hi) * 0.5;
+                const Vec3 axis = length(centre - c0) > 0 ? normalize(centre - c0) : Vec3{0, 0, 1};
+                double ang = 0, dmax = 0;
+                for (const Vec3& c : receivers.corners()) {
+                    const Vec3 d = c - c0;
+                    const double len = length(d);
+                    dmax = std::max(dmax, len);
+                    if (len > 0)
+                        ang = std::max(ang, std::acos(std::clamp(dot(d, axis) / len, -1.0, 1.0)));
+                }
+                const double rim =
+                    std::acos(std::clamp(l.radius / std::max(dmax, 1e-300), 0.0, 1.0));
+                const double cap = std::min(kPi, ang + rim), cos_cap = std::cos(cap);
+                const double area = 2 * kPi * l.radius * l.radius * (1 - cos_cap);
+                const int n = o.light_samples;
+                for (int k = 0; k < n; ++k) {
+                    LightSample s;
+                    s.directional = false;
+                    s.lobe = true;
+                    s.lobe_n = around(axis, 1 - fib_u(k, n) * (1 - cos_cap), fib_v(k));
+                    s.pos = c0 + s.lobe_n * l.radius;
+                    // A patch of area A / n with radiance L: intensity L (A / n) cos towards w.
+                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * area / n;
+                    samples.push_back(s);
+                }
+                if (first) {
+                    LightSample s;
+                    s.directional = false;
+                    s.pos = c0;
+                    s.thickness_view = true;
+                    s.lights = false;
+                    samples.push_back(s);
+                }
+                break;
+            }
+            case LightType::kEnvironment: {
+                const int n = o.environment_samples;
+                for (int k = 0; k < n; ++k) {
+                    LightSample s;
+                    const double z = 1 - 2 * fib_u(k, n), rr = std::sqrt(std::max(0.0, 1 - z * z));
+                    const double phi = 2 * kPi * fib_v(k);
+                    s.w = {rr * std::cos(phi), rr * std::sin(phi), z};
+                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * 4 * kPi / n;
+                    samples.push_back(s);
+                }
+                break;
+            }
+        }
+    }
+
+    // What a sample gives receiver r: direction towards the light and irradiance at normal
+    // incidence (0 where its lobe faces away).
+    auto incident = [](const LightSample& s, const Vec3& p, Vec3& wi, RGB& E) {
+        if (s.directional) {
+            wi = s.w;
+            E = s.value;
+            return true;
+        }
+        const Vec3 d = s.pos - p;
+        const double d2 = dot(d, d);
+        if (!(d2 > 0)) return false;
+        wi = d * (1 / std::sqrt(d2));
+        double k = 1 / d2;
+        if (s.lobe) k *= std::max(0.0, -dot(s.lobe_n, wi));
+        if (!(k > 0)) return false;
+        for (std::size_t c = 0; c < 3; ++c) E[c] = s.value[c] * k;
+        return true;
+    };
+    // Whether the sample can light r at all (before shadows), or give it translucency.
+    auto reaches = [&](const LightSample& s, const Receiver& r) {
+        if (r.kind == Kind::kNone) return false;
+        Vec3 wi;
+        RGB E;
+        if (!incident(s, r.p, wi, E)) return false;
+        const double c = dot(r.ns, wi);
+        if (c > 0) return true;
+        return r.kind == Kind::kMedium && (s.thickness_view || slab_of(r.material) != nullptr);
+    };
+
+    const double near = 1e-6 * scene_size;
+    double shadow_ms = 0;
+    int maps = 0;
+    for (const LightSample& s : samples) {
+        const bool any = tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, N, 4096), false,
+            [&](const tbb::blocked_range<std::size_t>& br, bool acc) {
+                for (std::size_t i = br.begin(); i != br.end() && !acc; ++i)
+                    acc = reaches(s, rec[i]);
+                return acc;
+            },
+            [](bool a, bool b) { return a || b; });
+        if (!any) continue;
+        std::vector<ShadowView> views;
+        if (s.directional)
+            views.push_back(fit_directional(s.w, receivers, casters, o.shadow_map_size));
+        else
+            views = fit_point(s.pos, receivers, near, o.shadow_map_size);
+        const bool need_map =
+            o.shadows || s.thickness_view ||
+            std::any_of(slabs.begin(), slabs.end(),
+                        [](const SlabTransmittance& t) { return !t.thickness_mm.empty(); });
+        for (std::size_t vi = 0; vi < views.size(); ++vi) {
+            ShadowMap sm;
+            if (need_map) {
+                const auto t0 = clock::now();
+                sm = render_shadow_map(scene, views[vi]);
+                shadow_ms += std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+                ++maps;
+            }
+            tbb::parallel_for(
+                tbb::blocked_range<std::size_t>(0, N, 1024),
+                [&](const tbb::blocked_range<std::size_t>& br) {
+                    for (std::size_t i = br.begin(); i != br.end(); ++i) {
+                        const Receiver& r = rec[i];
+                        if (r.kind == Kind::kNone) continue;
+                        // Cube faces: a receiver belongs to the first face it projects into.
+                        auto in_view = [&](const ShadowView& v) {
+                            const ClipVertex c = v.to_clip(r.p);
+                            if (v.orthographic) return true;
+                            return c.w > 0 && std::abs(c.x) <= c.w && std::abs(c.y) <= c.w;
+                        };
+                        if (views.size() > 1) {
+                            if (!in_view(views[vi])) continue;
+                            bool earlier = false;
+                            for (std::size_t k = 0; k < vi && !earlier; ++k)
+                                earlier = in_view(views[k]);
+                            if (earlier) continue;
+                        }
+                        Vec3 wi;
+                        RGB E;
+                        if (!incident(s, r.p, wi, E)) continue;
+                        const double cs = dot(r.ns, wi);
+                        // Thickness along the light's ray from the map's first hit, if that is the
+                        // receiver's own shape [Jimenez10].
+                        double d_thick = -1;
+                        if (r.kind == Kind::kMedium && need_map &&
+                            (s.thickness_view || (cs < 0 && slab_of(r.material)))) {
+                            const ShadowMap::Lookup lk = sm.lookup(r.p);
+                            if (lk.inside && lk.shape == r.shape && std::isfinite(lk.map_depth))
+                                d_thick = std::max(0.0, lk.point_depth - lk.map_depth) *
+                                          lk.distance_per_depth;
+                        }
+                        if (s.thickness_view) thick[i] = std::max(0.0, d_thick);
+                        if (!s.lights) continue;
+                        if (cs > 0) {
+                            bool lit = true;
+                            if (o.shadows) {
+                                const ClipVertex c0 = views[vi].to_clip(r.p);
+                                const double texel = views[vi].texel_size(c0.w);
+                                const Vec3 nl = dot(r.n, wi) >= 0 ? r.n : -r.n;
+                                const ShadowMap::Lookup lk =
+                                    sm.lookup(r.p + nl * (o.normal_offset_texels * texel));
+                                lit = !lk.inside ||
+                                      lk.point_depth <= lk.map_depth + o.depth_bias_texels * texel;
+                            }
+                            if (!lit) continue;
+                            if (r.kind == Kind::kDiffuse) {
+                                const auto& alb =
+                                    scene.materials[static_cast<std::size_t>(r.material)].albedo;
+                                for (std::size_t c = 0; c < 3; ++c)
+                                    surf[i][c] += alb[c] / kPi * E[c] * cs;
+                            } else {
+                                const BoundaryTransmittance& T =
+                                    *mat_T[static_cast<std::size_t>(r.material)];
+                                const double t = T(cs);
+                                for (std::size_t c = 0; c < 3; ++c) irr[i][c] += t * E[c] * cs;
+                                if (T.alpha() > 0) {
+                                    Vec3 bs, bt;
+                                    basis(r.n, bs, bt);
+                                    auto local = [&](const Vec3& v) {
+                                        return Vec3{dot(v, bs), dot(v, bt), dot(v, r.n)};
+                                    };
+                                    const double f = dielectric::rough_dielectric_f(
+                                        local(r.wo), local(wi), T.eta(), T.alpha(),
+                                        dielectric::TransportMode::kRadiance);
+                                    for (std::size_t c = 0; c < 3; ++c) spec[i][c] += f * cs * E[c];
+                                }
+                            }
+                        } else if (r.kind == Kind::kMedium && d_thick >= 0) {
+                            if (const SlabTransmittance* st = slab_of(r.material)) {
+                                const auto Ts = st->at(d_thick * scene.unit_mm);
+                                for (std::size_t c = 0; c < 3; ++c)
+                                    transl[i][c] += E[c] * (-cs) * Ts[c];
+                            }
+                        }
+                    }
+                });
+        }
+    }
+
+    for (std::size_t i = 0; i < N; ++i) {
+        g.thickness[i] = static_cast<float>(thick[i]);
+        for (std::size_t c = 0; c < 3; ++c) {
+            g.surface[3 * i + c] = static_cast<float>(surf[i][c]);
+            g.irradiance[3 * i + c] = static_cast<float>(irr[i][c]);
+            g.specular[3 * i + c] = static_cast<float>(spec[i][c]);
+            g.translucency[3 * i + c] = static_cast<float>(transl[i][c]);
+        }
+    }
+    if (stats) {
+        stats->shadow_maps = maps;
+        stats->light_samples = static_cast<int>(samples.size());
+        stats->shadow_ms = shadow_ms;
+        stats->shading_ms =
+            std::chrono::duration<double, std::milli>(clock::now() - t_start).count() - shadow_ms;
+    }
+    return g;
+}
+
+}  // namespace ssslab::realtime

@@ -1,0 +1,146 @@
+// Pass 1 of the real-time renderer: the G-buffer and its lighting (issue 13; design.md, "The
+// real-time renderer"). From a rasterized frame (realtime/raster.h) and the scene: per sample the
+// facet normal and material, the irradiance transmitted into a medium through its dielectric
+// boundary, the exit weight that turns the medium's exitance into radiance towards the camera,
+// the first-surface reflection ("specular"), the radiance of diffuse surfaces and of what is
+// seen directly ("surface"), and the thickness and translucency of thin parts
+// [Jimenez et al. 2010, "Real-time realistic skin translucency"].
+//
+// Every light is a set of shadow-mapped point or directional samples (realtime/shadow_map.h):
+// a delta directional light one orthographic map, the sun's disc `light_samples` directions in
+// its cone, a point light one perspective map (or cube faces), a sphere light `light_samples`
+// points on the cap of it the receivers can see, each a point light of the exact cosine-lobed
+// intensity of its patch of the surface (so that the sum converges to the sphere's irradiance),
+// the constant environment `environment_samples` directions over the sphere. Samples are
+// stratified deterministically (Fibonacci spirals), maps are rendered one at a time and their
+// contributions summed per G-buffer sample in light order: bit-identical for any thread count.
+//
+// The boundary is volpath's (core/dielectric.h): Fresnel for a smooth one, the GGX rough
+// dielectric [Walter et al. 2007] for roughness alpha; diffuse surfaces are Lambert, two-sided.
+#pragma once
+
+#include "core/scene.h"
+#include "realtime/raster.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace ssslab::realtime {
+
+struct LightingOptions {
+    /// Stratified samples per finite light: points on a sphere light, directions in the sun's
+    /// disc (angular_radius_deg > 0).
+    int light_samples = 16;
+    /// Stratified directions of the constant environment light, each a shadow-mapped
+    /// directional light.
+    int environment_samples = 64;
+    int shadow_map_size = 2048;  ///< texels per side
+    bool shadows = true;
+    /// Shadow tests look the receiver up at p + n * normal_offset_texels * texel (n the facet
+    /// normal on the light's side, texel the map's texel size at p) [Holbert 2011, "Saying
+    /// goodbye to shadow acne"], and call it lit when its depth is at most the map's plus
+    /// depth_bias_texels * texel.
+    double normal_offset_texels = 1.0;
+    double depth_bias_texels = 1.0;
+    /// GGX directional transmittance tables: cosines tabulated (uniform in cos theta, linear
+    /// interpolation) and the quadrature's points per axis of the microfacet normals.
+    int transmittance_cosines = 65;
+    int transmittance_quadrature = 64;
+};
+
+/// Per SAMPLE of the frame (frame.sample_width() x frame.sample_height(), row-major, y down),
+/// plain arrays.
+struct GBuffer {
+    int width = 0, height = 0;  ///< samples
+    std::vector<float> view_z;  ///< RasterFrame::view_z (+inf: nothing)
+    std::vector<float> ray_t;   ///< RasterFrame::ray_t (0: nothing)
+    /// 3 per sample: the facet normal as volpath's "normal" layer holds it: the triangle's
+    /// geometric normal, outward for the mesh's winding (not turned towards the camera); 0 for
+    /// nothing.
+    std::vector<float> normal;
+    std::vector<std::int32_t> shape;     ///< scene shape index, -1 nothing
+    std::vector<std::int32_t> material;  ///< scene material index, -1 nothing
+    /// 3: irradiance transmitted into the medium through its boundary (medium samples seen from
+    /// outside; 0 elsewhere): sum over light samples of T(w_i) E_i cos(theta_i), shadowed.
+    std::vector<float> irradiance;
+    /// 1: radiance towards the camera per unit exitance leaving the medium, T(w_o) / (pi c)
+    /// (BoundaryTransmittance::exit_weight). Medium samples; 0 elsewhere.
+    std::vector<float> exit_weight;
+    /// 3: radiance reflected off a medium's boundary towards the camera, direct light only
+    /// (volpath's "specular" layer at max_depth = 1): GGX reflection of every light sample, or
+    /// for a smooth boundary F times the radiance of the sphere lights, environment and suns
+    /// in the mirror direction (unoccluded: no ray tracing here).
+    std::vector<float> specular;
+    /// 3: radiance of diffuse (Lambert) surfaces from direct light, plus emitters and the
+    /// environment seen directly (what volpath's radiance holds there at max_depth = 1).
+    std::vector<float> surface;
+    /// 1: for medium samples, the medium thickness the first light's rays cross before
+    /// reaching this point: distance from its shadow map's first hit, when that is the same
+    /// shape, to the point [world units]; 0 where none. The first light is the first one of the
+    /// scene that is not the environment; sphere lights and suns are taken from their centre.
+    std::vector<float> thickness;
+    /// 3: exitance at medium samples from light transmitted through thin parts [Jimenez10],
+    /// generalised: sum over light samples of E_i max(0, -n.w_i) T_slab(d_i), d_i the shadow-map
+    /// thickness along w_i in mm and T_slab the material's slab transmittance table; 0 where
+    /// the table is empty.
+    std::vector<float> translucency;
+
+    std::size_t samples() const {
+        return static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    }
+};
+
+/// Diffuse transmittance of a slab of the material (normal incidence) against thickness, from
+/// an MC engine (the caller computes it); empty: no translucency.
+struct SlabTransmittance {
+    std::vector<double> thickness_mm;                  ///< increasing
+    std::vector<std::array<double, 3>> transmittance;  ///< per thickness, RGB
+    /// Interpolated at d mm: log-linear in T between the entries (linear where one is 0),
+    /// clamped to the first and last entry outside them; 0 for an empty table.
+    std::array<double, 3> at(double d_mm) const;
+};
+
+/// Directional transmittance of a medium's boundary for light arriving from outside at cosine
+/// mu: 1 - F(mu, eta) for a smooth boundary (alpha = 0); for GGX alpha the transmission lobe of
+/// volpath's rough dielectric (core/dielectric.h, importance transport: flux) integrated over
+/// the inside hemisphere, tabulated once by deterministic quadrature over the microfacet normals
+/// (midpoint rule in the GGX distribution's own coordinates, so that narrow lobes are resolved)
+/// and interpolated linearly in mu.
+class BoundaryTransmittance {
+  public:
+    BoundaryTransmittance(double eta, double alpha, int cosines = 65, int quadrature = 64);
+    double eta() const { return eta_; }
+    double alpha() const { return alpha_; }
+    double operator()(double mu) const;
+    /// c = (1/pi) integral of T(w) cos over the hemisphere = 2 integral_0^1 T(mu) mu dmu
+    /// (exactly, for the interpolated table).
+    double hemispherical() const { return c_; }
+    /// Radiance leaving per unit exitance at cosine mu_o: T(mu_o) / (pi c), so that
+    /// integral of exit_weight cos over the hemisphere is 1.
+    double exit_weight(double mu_o) const;
+    /// The quadrature itself at one cosine (alpha > 0).
+    static double ggx(double mu, double eta, double alpha, int quadrature);
+
+  private:
+    double eta_ = 1, alpha_ = 0, c_ = 1;
+    std::vector<double> table_;  // GGX: T at mu = k / (n - 1)
+};
+
+struct LightingStats {
+    int shadow_maps = 0;
+    double shadow_ms = 0, shading_ms = 0;
+    int light_samples = 0;  ///< point and directional samples of all lights (with or without map)
+};
+
+/// Pass 1. `camera` is the camera the frame was rasterized with
+/// (RasterCamera::from_scene(scene.camera, frame.width, frame.height)); with supersampling the
+/// G-buffer is at the sample grid. `slabs` is indexed by scene material (may be empty or
+/// shorter: no translucency). Throws std::invalid_argument for a frame that does not match the
+/// camera or options out of range.
+GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& frame,
+              const LightingOptions& o, const std::vector<SlabTransmittance>& slabs = {},
+              LightingStats* stats = nullptr);
+
+}  // namespace ssslab::realtime

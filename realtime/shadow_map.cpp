@@ -1,0 +1,188 @@
+// Shadow maps (see shadow_map.h).
+#include "realtime/shadow_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace ssslab::realtime {
+
+void Box::add(const Vec3& p) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+}
+
+std::array<Vec3, 8> Box::corners() const {
+    std::array<Vec3, 8> c;
+    for (int i = 0; i < 8; ++i)
+        c[static_cast<std::size_t>(i)] = {(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y,
+                                          (i & 4) ? hi.z : lo.z};
+    return c;
+}
+
+ClipVertex ShadowView::to_clip(const Vec3& p) const {
+    const Vec3 d = p - origin;
+    if (orthographic) return {dot(d, right) / half_x, dot(d, up) / half_y, dot(d, forward)};
+    // As RasterCamera::to_clip, with tan_half = half_y and tan_half aspect = half_x.
+    return {dot(d, right) / half_x, dot(d, up) / half_y, dot(d, forward)};
+}
+
+double ShadowView::texel_size(double w) const {
+    const double h = 2 * std::max(half_x, half_y) / size;
+    return orthographic ? h : h * std::max(w, 0.0);
+}
+
+namespace {
+
+// A frame (right, up, forward) with forward = f.
+void frame_along(const Vec3& f, Vec3& right, Vec3& up) {
+    Vec3 s, t;
+    basis(f, s, t);
+    right = s;
+    up = t;  // (s, t, f) is right-handed; the map's handedness does not matter for depth
+}
+
+}  // namespace
+
+ShadowView fit_directional(const Vec3& to_light, const Box& receivers, const Box& casters, int size,
+                           double pad_texels) {
+    ShadowView v;
+    v.orthographic = true;
+    v.size = size;
+    v.forward = -normalize(to_light);
+    frame_along(v.forward, v.right, v.up);
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    double x0 = kInf, x1 = -kInf, y0 = kInf, y1 = -kInf, z0 = kInf, z1 = -kInf;
+    for (const Vec3& c : receivers.corners()) {
+        x0 = std::min(x0, dot(c, v.right));
+        x1 = std::max(x1, dot(c, v.right));
+        y0 = std::min(y0, dot(c, v.up));
+        y1 = std::max(y1, dot(c, v.up));
+        z0 = std::min(z0, dot(c, v.forward));
+        z1 = std::max(z1, dot(c, v.forward));
+    }
+    // Casters anywhere in front of the receivers: the depth origin before all of them.
+    if (!casters.empty())
+        for (const Vec3& c : casters.corners()) z0 = std::min(z0, dot(c, v.forward));
+    const double span = std::max({x1 - x0, y1 - y0, 1e-9 * (1 + std::abs(z0))});
+    // Square texels: the larger side sets the texel size; padding of pad_texels on each side.
+    const double half = 0.5 * span * size / std::max(1.0, size - 2 * pad_texels);
+    v.half_x = v.half_y = half;
+    // Every caster then lies at depth >= gap > 0; the near plane at half of it clips none.
+    const double gap = 1e-6 * (span + (z1 - z0)) + 1e-9;
+    const double depth0 = z0 - gap;
+    v.near = 0.5 * gap;
+    v.origin = v.right * (0.5 * (x0 + x1)) + v.up * (0.5 * (y0 + y1)) + v.forward * depth0;
+    return v;
+}
+
+std::vector<ShadowView> fit_point(const Vec3& position, const Box& receivers, double near, int size,
+                                  double pad_texels) {
+    std::vector<ShadowView> out;
+    if (receivers.empty()) return out;
+    const auto corners = receivers.corners();
+    const Vec3 centre = (receivers.lo + receivers.hi) * 0.5;
+    const Vec3 to_c = centre - position;
+    const double widen = size / std::max(1.0, size - 2 * pad_texels);
+    if (length(to_c) > 0) {
+        ShadowView v;
+        v.orthographic = false;
+        v.size = size;
+        v.near = near;
+        v.origin = position;
+        v.forward = normalize(to_c);
+        frame_along(v.forward, v.right, v.up);
+        const double cos_max = std::cos(75.0 * 3.14159265358979323846 / 180);
+        bool fits = true;
+        double tx = 0, ty = 0;
+        for (const Vec3& c : corners) {
+            const Vec3 d = c - position;
+            const double z = dot(d, v.forward), l = length(d);
+            if (!(z > cos_max * l) || !(l > 0)) {
+                fits = false;
+                break;
+            }
+            tx = std::max(tx, std::abs(dot(d, v.right)) / z);
+            ty = std::max(ty, std::abs(dot(d, v.up)) / z);
+        }
+        if (fits) {
+            const double t = std::max({tx, ty, 1e-6}) * widen;
+            v.half_x = v.half_y = t;
+            out.push_back(v);
+            return out;
+        }
+    }
+    // Cube faces (tan 1, widened by the padding), each kept unless the whole box lies behind
+    // its plane: a coarse fit, for lights among their receivers.
+    const Vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (const Vec3& f : axes) {
+        ShadowView v;
+        v.orthographic = false;
+        v.size = size;
+        v.near = near;
+        v.origin = position;
+        v.forward = f;
+        frame_along(f, v.right, v.up);
+        v.half_x = v.half_y = widen;
+        bool sees = false;
+        for (const Vec3& c : corners) sees = sees || dot(c - position, f) > 0;
+        if (sees) out.push_back(v);
+    }
+    return out;
+}
+
+ShadowMap::Lookup ShadowMap::lookup(const Vec3& p) const {
+    Lookup r;
+    const ClipVertex c = view.to_clip(p);
+    double u = c.x, w = c.y;
+    if (!view.orthographic) {
+        if (!(c.w > view.near)) return r;
+        u /= c.w;
+        w /= c.w;
+    }
+    const double fx = (u + 1) * 0.5 * view.size, fy = (1 - w) * 0.5 * view.size;
+    if (!(fx >= 0 && fy >= 0 && fx < view.size && fy < view.size)) return r;
+    const std::size_t i =
+        static_cast<std::size_t>(static_cast<int>(fy)) * static_cast<std::size_t>(view.size) +
+        static_cast<std::size_t>(static_cast<int>(fx));
+    r.inside = true;
+    r.point_depth = c.w;
+    r.map_depth = depth[i];
+    r.shape = shape[i];
+    r.distance_per_depth = view.orthographic ? 1.0 : length(p - view.origin) / c.w;
+    return r;
+}
+
+ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view) {
+    RasterCamera cam;
+    cam.width = cam.height = view.size;
+    cam.position = view.origin;
+    cam.forward = view.forward;
+    cam.right = view.right;
+    cam.up = view.up;
+    cam.tan_half = view.half_y;
+    cam.aspect = view.half_x / view.half_y;
+    std::vector<RasterMesh> meshes;
+    meshes.reserve(scene.shapes.size());
+    for (const SceneShape& s : scene.shapes) {
+        RasterMesh m;
+        m.vertices.reserve(s.mesh.positions.size());
+        for (const Vec3& p : s.mesh.positions) m.vertices.push_back(view.to_clip(p));
+        m.triangles = s.mesh.triangles;
+        m.cull_back_faces = false;
+        meshes.push_back(std::move(m));
+    }
+    RasterOptions o;
+    o.orthographic = view.orthographic;
+    // Orthographic: the origin lies in front of every caster, so the near plane clips nothing.
+    o.near = view.near;
+    ShadowMap sm;
+    sm.view = view;
+    const RasterFrame f = rasterize(cam, meshes, o);
+    sm.depth.resize(f.view_z.size());
+    sm.shape = f.shape;
+    for (std::size_t i = 0; i < f.view_z.size(); ++i) sm.depth[i] = static_cast<float>(f.view_z[i]);
+    return sm;
+}
+
+}  // namespace ssslab::realtime
