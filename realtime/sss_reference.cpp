@@ -1,0 +1,468 @@
+#include "realtime/sss_reference.h"
+
+#include "core/rng.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace ssslab::realtime {
+
+SssExactKernel SssExactKernel::from_kernels(const std::array<const approx::Kernel2D*, 3>& k) {
+    for (int ch = 0; ch < 3; ++ch)
+        if (!k[ch]) throw std::invalid_argument("SssExactKernel: null kernel");
+    SssExactKernel e{{*k[0], *k[1], *k[2]}, k[0]->h_mm(), k[0]->n(), {}, {}, {}};
+    for (int ch = 1; ch < 3; ++ch)
+        if (k[ch]->n() != e.n || std::fabs(k[ch]->h_mm() - e.h_mm) > 1e-12 * e.h_mm)
+            throw std::invalid_argument(
+                "SssExactKernel: the channels' kernels are on different grids");
+    const int n = e.n;
+    const size_t n1 = static_cast<size_t>(n) + 1;
+    for (int ch = 0; ch < 3; ++ch)
+        if (!(e.channel[ch].quadrant().minCoeff() >= 0))
+            throw std::invalid_argument("SssExactKernel: channel " + std::to_string(ch) +
+                                        " has a negative (or NaN) cell");
+    // Summed-area tables: sat(i, j) = mass of the quadrant's cells [0, i) x [0, j).
+    for (int ch = 0; ch < 3; ++ch) {
+        const Eigen::MatrixXd& q = e.channel[ch].quadrant();
+        std::vector<double>& s = e.sat[ch];
+        s.assign(n1 * n1, 0.0);
+        for (int i = 0; i < n; ++i) {
+            double row = 0;  // cells [i, i + 1) x [0, j)
+            for (int j = 0; j < n; ++j) {
+                row += q(i, j);
+                s[(i + 1) * n1 + j + 1] = s[i * n1 + j + 1] + row;
+            }
+        }
+    }
+    // The sampling density: the mean of the channels, m(i, j) = 4 mean_c q_c(i, j) (sum 1).
+    e.cum_y.assign(static_cast<size_t>(n) * n1, 0.0);
+    e.cdf_x.assign(n1, 0.0);
+    for (int i = 0; i < n; ++i) {
+        double* row = &e.cum_y[static_cast<size_t>(i) * n1];
+        for (int j = 0; j < n; ++j) {
+            const double m = 4.0 / 3.0 *
+                             (e.channel[0].quadrant()(i, j) + e.channel[1].quadrant()(i, j) +
+                              e.channel[2].quadrant()(i, j));
+            row[j + 1] = row[j] + m;
+        }
+        e.cdf_x[i + 1] = e.cdf_x[i] + row[n];
+    }
+    const double total = e.cdf_x[n];
+    if (!(total > 0) || !std::isfinite(total))
+        throw std::invalid_argument("SssExactKernel: the kernel has no mass");
+    for (double& v : e.cdf_x) v /= total;
+    e.cdf_x[n] = 1.0;
+    return e;
+}
+
+namespace {
+
+using Method = SssReferenceOptions::Method;
+
+void check(const SssGBuffer& g, const std::vector<SssExactKernel>& kernels, const SssParams& p,
+           const SssReferenceOptions& o) {
+    if (g.width < 1 || g.height < 1) throw std::invalid_argument("sss_reference: empty G-buffer");
+    const size_t n = g.pixels();
+    if (g.irradiance.size() != 3 * n || g.view_z.size() != n || g.material.size() != n)
+        throw std::invalid_argument("sss_reference: G-buffer arrays differ from width x height");
+    if (!(p.tan_half > 0) || !std::isfinite(p.tan_half))
+        throw std::invalid_argument("sss_reference: tan_half must be > 0");
+    if (!(p.aspect > 0) || !std::isfinite(p.aspect))
+        throw std::invalid_argument("sss_reference: aspect must be > 0");
+    if (!(p.unit_mm > 0) || !std::isfinite(p.unit_mm))
+        throw std::invalid_argument("sss_reference: unit_mm must be > 0");
+    if (!(p.follow_strength >= 0))
+        throw std::invalid_argument("sss_reference: follow_strength < 0");
+    if (!(p.reject_depth >= 0)) throw std::invalid_argument("sss_reference: reject_depth < 0");
+    if (o.method != Method::kAuto && o.method != Method::kExact && o.method != Method::kSampled)
+        throw std::invalid_argument("sss_reference: unknown method");
+    if (o.method != Method::kExact && o.samples_per_stratum < 2)
+        throw std::invalid_argument("sss_reference: samples_per_stratum must be >= 2");
+    if (o.method != Method::kExact && o.samples < o.samples_per_stratum)
+        throw std::invalid_argument("sss_reference: samples must be >= samples_per_stratum");
+    if (o.method == Method::kAuto && o.max_exact_taps < 1)
+        throw std::invalid_argument("sss_reference: max_exact_taps must be >= 1");
+    for (const SssExactKernel& k : kernels) {
+        const size_t n1 = static_cast<size_t>(k.n) + 1;
+        if (k.n < 1 || !(k.h_mm > 0) || k.cdf_x.size() != n1 ||
+            k.cum_y.size() != n1 * static_cast<size_t>(k.n))
+            throw std::invalid_argument(
+                "sss_reference: a kernel was not built by SssExactKernel::from_kernels");
+        for (const auto& s : k.sat)
+            if (s.size() != n1 * n1)
+                throw std::invalid_argument(
+                    "sss_reference: a kernel was not built by SssExactKernel::from_kernels");
+    }
+    for (size_t i = 0; i < n; ++i) {
+        const int32_t m = g.material[i];
+        if (m < -1 || m >= static_cast<int32_t>(kernels.size()))
+            throw std::invalid_argument("sss_reference: material index " + std::to_string(m) +
+                                        " without a kernel");
+        if (m >= 0 && !(g.view_z[i] > 0 && std::isfinite(g.view_z[i])))
+            throw std::invalid_argument(
+                "sss_reference: a medium pixel has no positive finite depth");
+    }
+}
+
+// One axis of a pixel's footprint: the screen pixels [lo, hi] it covers (clamped to the image)
+// and, for each of their hi - lo + 2 boundaries, its place on the kernel's grid: C(u) factors as
+// sign * (bilinear weights of cells i0, i0 + 1 of the summed-area table at fraction f).
+struct Axis {
+    int lo = 0, hi = 0;
+    std::vector<int> i0;
+    std::vector<double> f, sign;
+    int count() const { return hi - lo + 1; }
+};
+
+// The window of pixels of an axis of `len` pixels whose squares overlap the kernel's support
+// [-extent, extent] mm about pixel `pos`, at `s` pixels per mm.
+void axis_window(Axis& a, int pos, int len, double s, double extent_mm) {
+    // Pixel pos + d overlaps iff |d| - 1/2 < extent s: |d| <= ceil(extent s + 1/2) - 1.
+    const double r = std::ceil(extent_mm * s + 0.5) - 1;
+    a.lo = static_cast<int>(std::max(0.0, pos - r));
+    a.hi = static_cast<int>(std::min(static_cast<double>(len - 1), pos + r));
+}
+
+// Fill an axis's boundaries. Boundary k lies at (lo + k - pos - 1/2) / s mm; the outer ones of
+// an edge pixel lie at -+infinity (clamp-to-edge: the edge pixel takes the kernel's mass out to
+// infinity); all are clamped to the grid, [0, n] cells from the centre.
+void axis_boundaries(Axis& a, int pos, int len, double s, double h_mm, int n) {
+    const int nb = a.count() + 1;
+    a.i0.resize(static_cast<size_t>(nb));
+    a.f.resize(static_cast<size_t>(nb));
+    a.sign.resize(static_cast<size_t>(nb));
+    for (int k = 0; k < nb; ++k) {
+        double b = (a.lo + k - pos - 0.5) / s;
+        if (k == 0 && a.lo == 0) b = -std::numeric_limits<double>::infinity();
+        if (k == nb - 1 && a.hi == len - 1) b = std::numeric_limits<double>::infinity();
+        const double u = std::min(static_cast<double>(n), std::fabs(b) / h_mm);
+        const int i = std::min(static_cast<int>(u), n - 1);
+        a.i0[static_cast<size_t>(k)] = i;
+        a.f[static_cast<size_t>(k)] = u - i;
+        a.sign[static_cast<size_t>(k)] = b < 0 ? -1.0 : 1.0;
+    }
+}
+
+// The stratification of kSampled: `m` cells of the unit square (u_x, u_y), `rows` rows of
+// height 1 / rows, row r split into cols(r) cells of width 1 / cols(r) (cell areas within a factor
+// (1 + 1 / (m / rows)) of each other); two points per cell, a third in the first samples mod 2.
+struct Strata {
+    int m = 0, rows = 0;
+    Strata(int samples, int per) : m(samples / per), rows(static_cast<int>(std::sqrt(m))) {
+        rows = std::max(1, rows);
+        while (rows * rows > m) --rows;  // std::sqrt rounding
+    }
+    int cols(int r) const { return m / rows + (r < m % rows ? 1 : 0); }
+};
+
+// One kSampled sample, per channel: w_c (E'(q) - E(c)) if q is kept, w_c if it is dropped.
+struct Sample {
+    std::array<double, 3> y{}, d{};
+};
+
+// Per-channel accumulation of a stratified estimate: sum over strata of A_h mean_h(y) and of
+// A_h^2 var_h(y) / n_h (the unbiased variance of the stratified mean).
+struct StratAcc {
+    std::array<double, 3> mean{}, var{};
+    void add(double area, int count, const std::array<double, 3>* y) {
+        for (int ch = 0; ch < 3; ++ch) {
+            double sum = 0;
+            for (int s = 0; s < count; ++s) sum += y[s][ch];
+            const double ybar = sum / count;
+            double ss = 0;
+            for (int s = 0; s < count; ++s) ss += (y[s][ch] - ybar) * (y[s][ch] - ybar);
+            mean[ch] += area * ybar;
+            var[ch] += area * area * ss / (count - 1) / count;
+        }
+    }
+};
+
+}  // namespace
+
+SssReferenceResult sss_reference(const SssGBuffer& g, const std::vector<SssExactKernel>& kernels,
+                                 const SssParams& p, const SssReferenceOptions& o) {
+    check(g, kernels, p, o);
+    const int w = g.width, h = g.height;
+    const size_t npix = g.pixels();
+
+    // Kernel scale [Freude14 Eq. 4.11]: pixels per mm at view depth z, along x and along y.
+    const double px_per_mm_z = w / (2.0 * p.tan_half * p.aspect * p.unit_mm);
+    const double py_per_mm_z = h / (2.0 * p.tan_half * p.unit_mm);
+
+    SssReferenceResult res;
+    res.irradiance.assign(3 * npix, 0.0f);
+    res.standard_error.assign(3 * npix, 0.0f);
+    // 0: no medium, 1: exact, 2: sampled (counted after the loop: deterministic).
+    std::vector<unsigned char> how(npix, 0);
+
+    // kSampled's strata: (area, points) in the order they are drawn.
+    const int per = o.method == Method::kExact ? 2 : o.samples_per_stratum;
+    const Strata st(o.method == Method::kExact ? 2 : o.samples, per);
+    std::vector<std::pair<double, int>> strata;
+    for (int r = 0; r < st.rows; ++r)
+        for (int col = 0; col < st.cols(r); ++col) {
+            const int cnt = per + (static_cast<int>(strata.size()) < o.samples % per ? 1 : 0);
+            strata.emplace_back(1.0 / (static_cast<double>(st.rows) * st.cols(r)), cnt);
+        }
+
+    tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+        Axis ax, ay;
+        std::vector<Sample> samples;
+        std::vector<double> c0, c1;  // corner values of two boundary rows, 3 per corner
+        std::vector<std::array<double, 3>> ys, zs;
+
+        for (int y = rows.begin(); y < rows.end(); ++y)
+            for (int x = 0; x < w; ++x) {
+                const size_t c = static_cast<size_t>(y) * w + static_cast<size_t>(x);
+                const int32_t mat = g.material[c];
+                const float* ec_f = &g.irradiance[3 * c];
+                if (mat < 0) {
+                    for (int ch = 0; ch < 3; ++ch) res.irradiance[3 * c + ch] = ec_f[ch];
+                    continue;
+                }
+                const SssExactKernel& k = kernels[static_cast<size_t>(mat)];
+                const int n = k.n;
+                const size_t n1 = static_cast<size_t>(n) + 1;
+                const double hk = k.h_mm, extent = k.extent_mm();
+                const double zc = g.view_z[c];
+                const double sx = px_per_mm_z / zc, sy = py_per_mm_z / zc;
+                const std::array<double, 3> ec = {ec_f[0], ec_f[1], ec_f[2]};
+
+                // E'(q) - E(c) per channel under the edge rule; false: q is dropped (kReject).
+                auto edge = [&](size_t q, std::array<double, 3>& d) {
+                    const float* e = &g.irradiance[3 * q];
+                    switch (p.mode) {
+                        case SssEdgeMode::kNone:
+                            for (int ch = 0; ch < 3; ++ch) d[ch] = e[ch] - ec[ch];
+                            return true;
+                        case SssEdgeMode::kFollowSurface: {
+                            // [Freude14 Eq. 4.12]: E' = E (1 - s) + E(c) s.
+                            const double dz = std::fabs(static_cast<double>(g.view_z[q]) - zc);
+                            const double s = std::min(1.0, p.follow_strength * dz / p.tan_half);
+                            for (int ch = 0; ch < 3; ++ch) d[ch] = (1 - s) * (e[ch] - ec[ch]);
+                            return true;
+                        }
+                        case SssEdgeMode::kReject: {
+                            const double dz = std::fabs(static_cast<double>(g.view_z[q]) - zc);
+                            if (g.material[q] != mat || !(dz <= p.reject_depth)) return false;
+                            for (int ch = 0; ch < 3; ++ch) d[ch] = e[ch] - ec[ch];
+                            return true;
+                        }
+                    }
+                    return true;
+                };
+
+                axis_window(ax, x, w, sx, extent);
+                axis_window(ay, y, h, sy, extent);
+                const double taps = static_cast<double>(ax.count()) * ay.count();
+                const bool exact =
+                    o.method == Method::kExact ||
+                    (o.method == Method::kAuto && taps <= static_cast<double>(o.max_exact_taps));
+                std::array<double, 3> out{}, se{};
+
+                if (exact) {
+                    how[c] = 1;
+                    axis_boundaries(ax, x, w, sx, hk, n);
+                    axis_boundaries(ay, y, h, sy, hk, n);
+                    const int nbx = ax.count() + 1;
+                    c0.resize(3 * static_cast<size_t>(nbx));
+                    c1.resize(3 * static_cast<size_t>(nbx));
+                    // Corner values C(b_kx, b_ly) = sign_x sign_y F(|b_kx|, |b_ly|), F the
+                    // quadrant's cumulative mass: bilinear in the summed-area table, exact for
+                    // a piecewise-constant density.
+                    auto corners = [&](int l, std::vector<double>& row) {
+                        const size_t jl = static_cast<size_t>(l);
+                        const int j = ay.i0[jl];
+                        const double fy = ay.f[jl], sgy = ay.sign[jl];
+                        for (int kx = 0; kx < nbx; ++kx) {
+                            const size_t kk = static_cast<size_t>(kx);
+                            const size_t i = static_cast<size_t>(ax.i0[kk]);
+                            const double fx = ax.f[kk], sg = ax.sign[kk] * sgy;
+                            for (int ch = 0; ch < 3; ++ch) {
+                                const double* s = k.sat[ch].data();
+                                const double* r0 = s + i * n1 + static_cast<size_t>(j);
+                                const double* r1 = r0 + n1;
+                                const double v = (1 - fx) * ((1 - fy) * r0[0] + fy * r0[1]) +
+                                                 fx * ((1 - fy) * r1[0] + fy * r1[1]);
+                                row[3 * kk + ch] = sg * v;
+                            }
+                        }
+                    };
+                    std::array<double, 3> sum{}, kept{};
+                    bool dropped = false;
+                    std::array<double, 3> d{};
+                    corners(0, c0);
+                    for (int ly = 0; ly < ay.count(); ++ly) {
+                        corners(ly + 1, c1);
+                        const size_t row = static_cast<size_t>(ay.lo + ly) * w;
+                        for (int kx = 0; kx < ax.count(); ++kx) {
+                            const size_t kk = 3 * static_cast<size_t>(kx);
+                            std::array<double, 3> wq;
+                            for (int ch = 0; ch < 3; ++ch)
+                                wq[ch] =
+                                    c1[kk + 3 + ch] - c1[kk + ch] - c0[kk + 3 + ch] + c0[kk + ch];
+                            if (wq[0] == 0 && wq[1] == 0 && wq[2] == 0) continue;
+                            const size_t q = row + static_cast<size_t>(ax.lo + kx);
+                            if (!edge(q, d)) {
+                                dropped = true;
+                                continue;
+                            }
+                            for (int ch = 0; ch < 3; ++ch) {
+                                sum[ch] += wq[ch] * d[ch];
+                                kept[ch] += wq[ch];
+                            }
+                        }
+                        std::swap(c0, c1);
+                    }
+                    for (int ch = 0; ch < 3; ++ch) {
+                        double v = sum[ch];
+                        // kReject: (all weights) / (kept weights), all = the kernel's unit mass.
+                        if (dropped) v = kept[ch] != 0 ? v / kept[ch] : 0.0;
+                        out[ch] = ec[ch] + v;
+                    }
+                } else {
+                    how[c] = 2;
+                    RngStream rng(o.seed, rng_domain::kSssReference, c);
+                    StratAcc acc_y, acc_d;
+                    // The samples are kept: kReject's delta method makes a second pass over
+                    // them at the ratio.
+                    samples.clear();
+                    bool any_dropped = false;
+                    int stratum = 0;
+                    for (int r = 0; r < st.rows; ++r) {
+                        const int nc = st.cols(r);
+                        for (int col = 0; col < nc; ++col, ++stratum) {
+                            const int cnt = strata[static_cast<size_t>(stratum)].second;
+                            for (int s = 0; s < cnt; ++s) {
+                                const double ux = (r + rng.uniform()) / st.rows;
+                                const double uy = (col + rng.uniform()) / nc;
+                                // x: the sign from the half of [0, 1), |x| by the marginal's
+                                // inverse CDF (piecewise linear: uniform within the cell).
+                                const double sgx = ux < 0.5 ? -1.0 : 1.0;
+                                const double vx = std::fabs(2 * ux - 1);
+                                int i = static_cast<int>(
+                                            std::upper_bound(k.cdf_x.begin(), k.cdf_x.end(), vx) -
+                                            k.cdf_x.begin()) -
+                                        1;
+                                i = std::clamp(i, 0, n - 1);
+                                const double pi = k.cdf_x[i + 1] - k.cdf_x[i];
+                                const double fx = std::clamp((vx - k.cdf_x[i]) / pi, 0.0, 1.0);
+                                // y given the column, the same way.
+                                const double* cum = &k.cum_y[static_cast<size_t>(i) * n1];
+                                const double sgy = uy < 0.5 ? -1.0 : 1.0;
+                                const double t = std::fabs(2 * uy - 1) * cum[n];
+                                int j =
+                                    static_cast<int>(std::upper_bound(cum, cum + n1, t) - cum) - 1;
+                                j = std::clamp(j, 0, n - 1);
+                                const double pj = cum[j + 1] - cum[j];
+                                const double fy = std::clamp((t - cum[j]) / pj, 0.0, 1.0);
+                                // Probability of the full-grid cell: pi pj / row mass / 4 (signs).
+                                const double prob = pi * pj / cum[n] / 4;
+                                // The pixel holding the point (box reconstruction), clamped.
+                                const double qx = x + sgx * (i + fx) * hk * sx;
+                                const double qy = y + sgy * (j + fy) * hk * sy;
+                                const int ix = static_cast<int>(
+                                    std::clamp(std::floor(qx + 0.5), 0.0, w - 1.0));
+                                const int iy = static_cast<int>(
+                                    std::clamp(std::floor(qy + 0.5), 0.0, h - 1.0));
+                                const size_t q =
+                                    static_cast<size_t>(iy) * w + static_cast<size_t>(ix);
+                                Sample smp{};
+                                std::array<double, 3> d{};
+                                const bool keep = edge(q, d);
+                                for (int ch = 0; ch < 3; ++ch) {
+                                    const double wc = k.channel[ch].quadrant()(i, j) / prob;
+                                    if (keep)
+                                        smp.y[ch] = wc * d[ch];
+                                    else
+                                        smp.d[ch] = wc;
+                                }
+                                any_dropped = any_dropped || !keep;
+                                samples.push_back(smp);
+                            }
+                        }
+                    }
+                    // Stratified means and variances.
+                    size_t at = 0;
+                    for (const auto& [area, cnt] : strata) {
+                        ys.resize(static_cast<size_t>(cnt));
+                        zs.resize(static_cast<size_t>(cnt));
+                        for (int s = 0; s < cnt; ++s) {
+                            ys[static_cast<size_t>(s)] = samples[at + static_cast<size_t>(s)].y;
+                            zs[static_cast<size_t>(s)] = samples[at + static_cast<size_t>(s)].d;
+                        }
+                        acc_y.add(area, cnt, ys.data());
+                        acc_d.add(area, cnt, zs.data());
+                        at += static_cast<size_t>(cnt);
+                    }
+                    if (!any_dropped) {
+                        for (int ch = 0; ch < 3; ++ch) {
+                            out[ch] = ec[ch] + acc_y.mean[ch];
+                            se[ch] = std::sqrt(acc_y.var[ch]);
+                        }
+                    } else {
+                        // kReject: R = Y / D, D = 1 - (dropped mass), both from the samples;
+                        // D is kept above the centre pixel's exact weight (the centre is never
+                        // dropped, so the true D is at least that).
+                        ax.lo = ax.hi = x;  // the centre pixel only
+                        ay.lo = ay.hi = y;
+                        axis_boundaries(ax, x, w, sx, hk, n);
+                        axis_boundaries(ay, y, h, sy, hk, n);
+                        std::array<double, 3> rr{};
+                        for (int ch = 0; ch < 3; ++ch) {
+                            const double* s = k.sat[ch].data();
+                            auto f = [&](size_t kx, size_t ly) {
+                                const size_t i = static_cast<size_t>(ax.i0[kx]);
+                                const size_t j = static_cast<size_t>(ay.i0[ly]);
+                                const double fx = ax.f[kx], fy = ay.f[ly];
+                                const double* r0 = s + i * n1 + j;
+                                const double* r1 = r0 + n1;
+                                return ax.sign[kx] * ay.sign[ly] *
+                                       ((1 - fx) * ((1 - fy) * r0[0] + fy * r0[1]) +
+                                        fx * ((1 - fy) * r1[0] + fy * r1[1]));
+                            };
+                            const double wc = f(1, 1) - f(0, 1) - f(1, 0) + f(0, 0);
+                            const double dd = std::max(1.0 - acc_d.mean[ch], wc);
+                            rr[ch] = dd > 0 ? acc_y.mean[ch] / dd : 0.0;
+                            out[ch] = ec[ch] + rr[ch];
+                            rr[ch] = dd > 0 ? rr[ch] : 0.0;
+                            se[ch] = dd;  // D, for the delta method below
+                        }
+                        // Delta method: Var(Y / D) ~ Var(mean of y + R d) / D^2.
+                        StratAcc acc_z;
+                        at = 0;
+                        for (const auto& [area, cnt] : strata) {
+                            zs.resize(static_cast<size_t>(cnt));
+                            for (int s = 0; s < cnt; ++s) {
+                                const Sample& smp = samples[at + static_cast<size_t>(s)];
+                                for (int ch = 0; ch < 3; ++ch)
+                                    zs[static_cast<size_t>(s)][ch] = smp.y[ch] + rr[ch] * smp.d[ch];
+                            }
+                            acc_z.add(area, cnt, zs.data());
+                            at += static_cast<size_t>(cnt);
+                        }
+                        for (int ch = 0; ch < 3; ++ch)
+                            se[ch] = se[ch] > 0 ? std::sqrt(acc_z.var[ch]) / se[ch] : 0.0;
+                    }
+                }
+                for (int ch = 0; ch < 3; ++ch) {
+                    res.irradiance[3 * c + ch] = static_cast<float>(out[ch]);
+                    res.standard_error[3 * c + ch] = static_cast<float>(se[ch]);
+                }
+            }
+    });
+
+    for (unsigned char v : how) {
+        res.exact_pixels += v == 1;
+        res.sampled_pixels += v == 2;
+    }
+    return res;
+}
+
+}  // namespace ssslab::realtime
