@@ -388,7 +388,7 @@ std::vector<std::string> ConfigTable::string_list(std::string_view key) {
 }
 
 std::optional<std::vector<double>> ConfigTable::optional_number_list(std::string_view key,
-                                                                    Range range) {
+                                                                     Range range) {
     mark(key);
     const toml::node* n = find(key);
     if (!n) return std::nullopt;

@@ -21,9 +21,12 @@ double ms_since(Clock::time_point t0) {
 
 const char* to_string(SssMethod m) {
     switch (m) {
-        case SssMethod::kSeparable: return "separable";
-        case SssMethod::kReference: return "reference";
-        case SssMethod::kNone: return "none";
+        case SssMethod::kSeparable:
+            return "separable";
+        case SssMethod::kReference:
+            return "reference";
+        case SssMethod::kNone:
+            return "none";
     }
     return "?";
 }
@@ -205,7 +208,8 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame,
                 normal.at(x, y, c) = static_cast<float>(nrm[cc] * inv);
                 if (sub_se) sub_se->at(x, y, c) = static_cast<float>(std::sqrt(var[cc]) * inv);
             }
-            depth.at(x, y, 0) = static_cast<float>(frame.raster.depth[frame.raster.pixel_index(x, y)]);
+            depth.at(x, y, 0) =
+                static_cast<float>(frame.raster.depth[frame.raster.pixel_index(x, y)]);
             const auto best = std::max_element(votes.begin(), votes.end());
             material.at(x, y, 0) = static_cast<float>(best - votes.begin() - 1);
         }

@@ -53,7 +53,7 @@ albedo = [0.5, 0.5, 0.5]
 type = "sphere"
 radius = 4
 subdivisions = 4
-translate = [0, 4, 0]
+translate = [0, 4.1, 0]
 material = "jelly"
 [[shapes]]
 type = "plane"
@@ -97,6 +97,15 @@ std::map<int, FrameMaterial> materials_for(const Scene& s, const realtime::Raste
     return m;
 }
 
+// Small shadow maps and few light samples: the tests are about the wiring, not the lighting.
+FrameOptions small() {
+    FrameOptions o;
+    o.lighting.shadow_map_size = 256;
+    o.lighting.light_samples = 4;
+    o.lighting.environment_samples = 8;
+    return o;
+}
+
 const float* layer(const LayeredImage& im, const std::string& name) {
     return im.layer(name).pixels().data();
 }
@@ -107,13 +116,16 @@ TEST(Frame, WithoutMediaTheSssPassDoesNotRun) {
                  std::string("preset = \"Skin1\"\nroughness = 0.3").size(),
                  "type = \"diffuse\"\nalbedo = [0.8, 0.2, 0.1]");
     const Scene s = scene_of(text);
-    FrameOptions o;
+    FrameOptions o = small();
     const realtime::RasterizedFrame f = realtime::rasterize_frame(s, o);
     EXPECT_TRUE(f.media_in_view.empty());
     EXPECT_EQ(f.lit_in_view.size(), 2u);
     const realtime::FrameResult r = realtime::render_frame(s, f, {}, o);
-    for (const auto& p : r.times)
-        if (p.pass == "sss") EXPECT_EQ(p.ms, 0.0);
+    for (const auto& p : r.times) {
+        if (p.pass == "sss") {
+            EXPECT_EQ(p.ms, 0.0);
+        }
+    }
     const size_t n = 3u * 48u * 40u;
     double lit = 0;
     for (size_t i = 0; i < n; ++i) {
@@ -130,11 +142,13 @@ TEST(Frame, WithoutMediaTheSssPassDoesNotRun) {
 // translucency) per sample, computed here from realtime::shade's own G-buffer.
 TEST(Frame, CompositeIsTheGBufferTermsAndANarrowKernelIsTheIdentity) {
     const Scene s = scene_of(kScene);
-    FrameOptions o;
+    FrameOptions o = small();
     const realtime::RasterizedFrame f = realtime::rasterize_frame(s, o);
     ASSERT_EQ(f.media_in_view, std::vector<int>{0});
     const RadialProfile p = gaussian_profile({1e-4, 1e-4, 1e-4}, 1e-5, 200);  // 0.1 um wide
-    const auto mats = materials_for(s, f, p, "svd:rank=1", 17, false);
+    // L1-normalised, so that the pass's weights sum to 1 (the rank-1 SVD of this discrete,
+    // nearly separable kernel alone holds 99.98 % of it).
+    const auto mats = materials_for(s, f, p, "svd:rank=1,l1", 17, false);
     const realtime::FrameResult sep = realtime::render_frame(s, f, mats, o);
     o.method = SssMethod::kNone;
     const realtime::FrameResult none = realtime::render_frame(s, f, mats, o);
@@ -143,13 +157,13 @@ TEST(Frame, CompositeIsTheGBufferTermsAndANarrowKernelIsTheIdentity) {
     size_t medium = 0;
     for (size_t i = 0; i < g.samples(); ++i)
         for (size_t c = 0; c < 3; ++c) {
-            const double expect =
-                g.material[i] == 0
-                    ? g.exit_weight[i] * (a[c] * g.irradiance[3 * i + c] + g.translucency[3 * i + c])
-                    : 0.0;
+            const double expect = g.material[i] == 0
+                                      ? g.exit_weight[i] * (a[c] * g.irradiance[3 * i + c] +
+                                                            g.translucency[3 * i + c])
+                                      : 0.0;
             EXPECT_NEAR(layer(none.image, "subsurface")[3 * i + c], expect, 1e-6 * (1 + expect));
-            EXPECT_EQ(layer(sep.image, "subsurface")[3 * i + c],
-                      layer(none.image, "subsurface")[3 * i + c]);
+            EXPECT_NEAR(layer(sep.image, "subsurface")[3 * i + c],
+                        layer(none.image, "subsurface")[3 * i + c], 1e-6 * (1 + expect));
             medium += g.material[i] == 0 && c == 0;
         }
     EXPECT_GT(medium, 50u);
@@ -157,17 +171,49 @@ TEST(Frame, CompositeIsTheGBufferTermsAndANarrowKernelIsTheIdentity) {
     EXPECT_NEAR(a[0], 0.5 / 0.98, 1e-3);
 }
 
+// A medium slab filling the view from above, lit by a small sphere light just beside the view:
+// a peaked irradiance, and a medium in every pixel of the kernels' footprints.
+constexpr const char* kSlab = R"(
+[scene]
+name = "slab"
+[camera]
+position = [0, 40, 0]
+target = [0, 0, 0]
+up = [0, 0, -1]
+fov_y_deg = 30
+width = 64
+height = 56
+[[lights]]
+type = "sphere"
+position = [13, 1.5, 0]
+radius = 0.5
+radiance = [3000, 3000, 3000]
+[[materials]]
+name = "slab"
+preset = "Skin1"
+roughness = 0.3
+[[shapes]]
+type = "box"
+size = [200, 20, 200]
+translate = [0, -10, 0]
+material = "slab"
+)";
+
 // On a Gaussian profile, which is separable, the separable pass with many taps and the exact 2D
-// reference agree up to the taps' sampling; a wrong kernel scale in either would not.
+// reference agree up to the taps' sampling and the pass's linear interpolation; a wrong kernel
+// scale in either would not. (Where the footprint reaches pixels without a medium the two
+// differ by design: between its passes the separable pass leaves those pixels unblurred.)
 TEST(Frame, SeparablePassMatchesTheReferenceOnASeparableKernel) {
-    const Scene s = scene_of(kScene);
-    FrameOptions o;
+    const Scene s = scene_of(kSlab);
+    FrameOptions o = small();
     o.width = 64;
     o.height = 56;
     o.sss.mode = realtime::SssEdgeMode::kNone;
     o.reference.method = realtime::SssReferenceOptions::Method::kExact;
     const realtime::RasterizedFrame f = realtime::rasterize_frame(s, o);
-    const RadialProfile p = gaussian_profile({0.8, 0.5, 0.3}, 0.01, 400);
+    // 3 to 6 pixels wide (sigma): the separable pass interpolates linearly between texels (a
+    // tent of variance 1/6 px^2 on top of the kernel's), the reference integrates boxes exactly.
+    const RadialProfile p = gaussian_profile({2.4, 1.8, 1.2}, 0.02, 600);
     const auto mats = materials_for(s, f, p, "svd:rank=1", 201, true);
     const realtime::FrameResult sep = realtime::render_frame(s, f, mats, o);
     o.method = SssMethod::kReference;
@@ -178,7 +224,7 @@ TEST(Frame, SeparablePassMatchesTheReferenceOnASeparableKernel) {
     const ImageLayer& mat = ref.image.layer("material");
     for (int y = 0; y < 56; ++y)
         for (int x = 0; x < 64; ++x) {
-            if (mat.at(x, y) != 0) continue;
+            ASSERT_EQ(mat.at(x, y), 0) << "the slab fills the view";
             for (int c = 0; c < 3; ++c) {
                 const double a = sep.image.layer("subsurface").at(x, y, c);
                 const double b = ref.image.layer("subsurface").at(x, y, c);
@@ -191,7 +237,7 @@ TEST(Frame, SeparablePassMatchesTheReferenceOnASeparableKernel) {
     ASSERT_GT(r2, 0);
     std::printf("separable vs reference: %.3g %% RMS; no pass vs reference: %.3g %%\n",
                 100 * std::sqrt(d2 / r2), 100 * std::sqrt(blur2 / r2));
-    EXPECT_LT(std::sqrt(d2 / r2), 0.02);
+    EXPECT_LT(std::sqrt(d2 / r2), 0.005);
     // The pass does something here: without it the difference is far larger.
     EXPECT_GT(std::sqrt(blur2 / r2), 5 * std::sqrt(d2 / r2));
 }
@@ -212,7 +258,7 @@ translate = [0, 4, 80]
 material = "hidden"
 )";
     const Scene s = scene_of(text);
-    FrameOptions o;
+    FrameOptions o = small();
     const realtime::RasterizedFrame f = realtime::rasterize_frame(s, o);
     EXPECT_EQ(f.media_in_view, std::vector<int>{0});
     try {
@@ -225,7 +271,7 @@ material = "hidden"
 
 TEST(Frame, BitIdenticalForOneAndTwoThreadsWithSupersampling) {
     const Scene s = scene_of(kScene);
-    FrameOptions o;
+    FrameOptions o = small();
     o.raster.supersample = 2;
     o.sss.jitter = 0.33;
     const RadialProfile p = gaussian_profile({0.8, 0.5, 0.3}, 0.01, 400);
@@ -254,24 +300,24 @@ TEST(Frame, BitIdenticalForOneAndTwoThreadsWithSupersampling) {
 TEST(RasterCommand, WritesTheLayersThePassTimesAndRefusesBadInput) {
     testing::TempDir dir;
     const fs::path scene = dir.write("ball.toml", kScene);
-    const auto r = testing::run_ssslab({"raster", scene.string(), "--photons", "2000", "--cache",
-                                        (dir / "res").string(), "--out",
-                                        (dir / "ball.exr").string(), "--no-translucency"},
-                                       dir.path());
+    const auto r = testing::run_ssslab(
+        {"raster", scene.string(), "--photons", "2000", "--cache", (dir / "res").string(), "--out",
+         (dir / "ball.exr").string(), "--no-translucency"},
+        dir.path());
     ASSERT_EQ(r.exit_code, 0) << r.err;
     for (const char* pass : {"raster", "shadow maps", "lighting", "sss", "composite", "frame"})
         EXPECT_NE(r.out.find(pass), std::string::npos) << pass << "\n" << r.out;
     const LayeredImage im = read_exr((dir / "ball.exr").string());
-    for (const char* n : {"radiance", "subsurface", "specular", "depth", "normal", "irradiance",
-                          "material"})
+    for (const char* n :
+         {"radiance", "subsurface", "specular", "depth", "normal", "irradiance", "material"})
         EXPECT_TRUE(im.has_layer(n)) << n;
     EXPECT_EQ(im.metadata().at("ssslab.model"), "svd:rank=1");
     EXPECT_TRUE(fs::exists(dir / "ball.png"));
     EXPECT_TRUE(fs::exists(dir / "ball.exr.toml"));
     // The profile is cached: a second run with another model computes no MCML run.
     const auto again = testing::run_ssslab(
-        {"raster", scene.string(), "--photons", "2000", "--cache", (dir / "res").string(),
-         "--out", (dir / "b2.exr").string(), "--no-translucency", "--model", "deon:n=2"},
+        {"raster", scene.string(), "--photons", "2000", "--cache", (dir / "res").string(), "--out",
+         (dir / "b2.exr").string(), "--no-translucency", "--model", "deon:n=2"},
         dir.path());
     ASSERT_EQ(again.exit_code, 0) << again.err;
     EXPECT_NE(again.out.find("0 MCML runs computed"), std::string::npos) << again.out;
@@ -282,9 +328,9 @@ TEST(RasterCommand, WritesTheLayersThePassTimesAndRefusesBadInput) {
         dir.path());
     EXPECT_EQ(bad.exit_code, 2);
     EXPECT_NE(bad.err.find("--model"), std::string::npos) << bad.err;
-    const auto fit = testing::run_ssslab({"raster", scene.string(), "--model",
-                                          "manual:fit=edge", "--out", (dir / "x.exr").string()},
-                                         dir.path());
+    const auto fit = testing::run_ssslab(
+        {"raster", scene.string(), "--model", "manual:fit=edge", "--out", (dir / "x.exr").string()},
+        dir.path());
     EXPECT_EQ(fit.exit_code, 2);
     EXPECT_NE(fit.err.find("kernel study"), std::string::npos) << fit.err;
     EXPECT_FALSE(fs::exists(dir / "x.exr"));

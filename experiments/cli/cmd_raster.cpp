@@ -83,7 +83,7 @@ std::string raster_toml(const RasterArgs& a, const Scene& scene, const realtime:
     st.record("light_samples", static_cast<std::int64_t>(o.lighting.light_samples));
     st.record("environment_samples", static_cast<std::int64_t>(o.lighting.environment_samples));
     st.record("shadow_map_size", static_cast<std::int64_t>(o.lighting.shadow_map_size));
-    st.record("translucency", !a.no_translucency);
+    st.record("translucency", std::string(a.no_translucency ? "off" : "on"));
     ConfigTable t = root.table_or_empty("times_ms");
     for (const auto& p : r.times) t.record(p.pass, p.ms);
     t.record("frame", r.total_ms());
@@ -91,8 +91,10 @@ std::string raster_toml(const RasterArgs& a, const Scene& scene, const realtime:
     g.record("mcml_nodes_computed", static_cast<std::int64_t>(in.computed));
     g.record("mcml_nodes_reused", static_cast<std::int64_t>(in.reused));
     for (const auto& [m, p] : in.profiles)
-        g.record("rd_total_" + scene.materials[static_cast<size_t>(m)].name,
-                 std::vector<double>(p.rd_total.begin(), p.rd_total.end()));
+        for (int c = 0; c < 3; ++c)
+            g.record(
+                "rd_total_" + scene.materials[static_cast<size_t>(m)].name + "_" + kChannelNames[c],
+                p.rd_total[static_cast<size_t>(c)]);
     doc->add_resolved_section("provenance", provenance(command_line()));
     return "# ssslab raster: the scene as resolved, the settings, the pass times, provenance\n" +
            scene.resolved_toml + "\n" + doc->resolved_toml();
@@ -141,8 +143,7 @@ int run_raster(const RasterArgs& a) {
     o.reference.seed = a.common.seed.value_or(1);
 
     // The passes run with --threads workers (the image does not depend on how many).
-    tbb::task_arena arena(a.common.threads > 0 ? a.common.threads
-                                               : tbb::task_arena::automatic);
+    tbb::task_arena arena(a.common.threads > 0 ? a.common.threads : tbb::task_arena::automatic);
     realtime::RasterizedFrame frame;
     arena.execute([&] { frame = realtime::rasterize_frame(scene, o); });
     runner::RealtimeInputOptions io;
@@ -194,13 +195,13 @@ int run_raster(const RasterArgs& a) {
     tx.stage(out.string() + ".toml", toml);
     tx.commit();
     if (!a.common.quiet) {
-        std::printf("%s: %d x %d (%d x %d samples), %zu medium material%s in view (%d MCML runs "
-                    "computed, %d reused, %.1f s), sss %s, model %s, %d taps\n",
-                    scene.name.c_str(), r.image.width(), r.image.height(),
-                    frame.raster.sample_width(), frame.raster.sample_height(),
-                    frame.media_in_view.size(), frame.media_in_view.size() == 1 ? "" : "s",
-                    in.computed, in.reused, inputs_s, realtime::to_string(o.method),
-                    a.model.c_str(), a.taps);
+        std::printf(
+            "%s: %d x %d (%d x %d samples), %zu medium material%s in view (%d MCML runs "
+            "computed, %d reused, %.1f s), sss %s, model %s, %d taps\n",
+            scene.name.c_str(), r.image.width(), r.image.height(), frame.raster.sample_width(),
+            frame.raster.sample_height(), frame.media_in_view.size(),
+            frame.media_in_view.size() == 1 ? "" : "s", in.computed, in.reused, inputs_s,
+            realtime::to_string(o.method), a.model.c_str(), a.taps);
         for (const auto& p : r.times) std::printf("  %-12s %10.3f ms\n", p.pass.c_str(), p.ms);
         std::printf("  %-12s %10.3f ms  (%d shadow maps) -> %s (+ .png, .exr.toml)\n", "frame",
                     r.total_ms(), r.lighting.shadow_maps, out.string().c_str());
@@ -275,9 +276,11 @@ void register_raster(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--exposure", a->exposure, "Exposure of the PNG preview in stops (default 0)")
         ->check(number_in(-100, 100, false));
     add_out_option(*sub, a->common, "Output EXR (default results/raster/<scene>.exr)");
-    add_seed_option(*sub, a->common,
-                    "Seed of the ground-truth profiles and of the reference's sampling (default 1)");
-    add_threads_option(*sub, a->common, "Worker threads (default: all); the image does not depend on it");
+    add_seed_option(
+        *sub, a->common,
+        "Seed of the ground-truth profiles and of the reference's sampling (default 1)");
+    add_threads_option(*sub, a->common,
+                       "Worker threads (default: all); the image does not depend on it");
     add_quiet_flag(*sub, a->common);
     sub->callback([a, &action] { action = [a] { return run_raster(*a); }; });
 }

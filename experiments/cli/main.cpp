@@ -76,6 +76,7 @@ int main(int argc, char** argv) {
     register_materials(app, action);
     register_scene(app, action);
     register_render(app, action);
+    register_raster(app, action);
     register_compare(app, action);
     register_bench(app, action);
     // No command: `run` (the main job; options such as --quick or --dry-run go to it).

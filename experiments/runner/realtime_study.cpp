@@ -125,8 +125,8 @@ double percentile(std::vector<double> v, double q) {
 
 /// sRGB PNG of an RGB layer times `gain`, optionally cropped to [x0, x0 + cw) x [y0, y0 + ch)
 /// and magnified `zoom` times (nearest neighbour).
-std::string png_of(const ImageLayer& l, double gain, int x0 = 0, int y0 = 0, int cw = 0,
-                   int ch = 0, int zoom = 1) {
+std::string png_of(const ImageLayer& l, double gain, int x0 = 0, int y0 = 0, int cw = 0, int ch = 0,
+                   int zoom = 1) {
     if (cw <= 0) cw = l.width();
     if (ch <= 0) ch = l.height();
     const int W = cw * zoom, H = ch * zoom;
@@ -137,10 +137,8 @@ std::string png_of(const ImageLayer& l, double gain, int x0 = 0, int y0 = 0, int
                 double v = gain * l.at(x0 + x / zoom, y0 + y / zoom, c);
                 v = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 0.0;
                 v = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
-                rgb[(static_cast<size_t>(y) * static_cast<size_t>(W) + static_cast<size_t>(x)) *
-                        3 +
-                    static_cast<size_t>(c)] =
-                    static_cast<unsigned char>(std::lround(255.0 * v));
+                rgb[(static_cast<size_t>(y) * static_cast<size_t>(W) + static_cast<size_t>(x)) * 3 +
+                    static_cast<size_t>(c)] = static_cast<unsigned char>(std::lround(255.0 * v));
             }
     return encode_png_rgb8(W, H, rgb);
 }
@@ -196,8 +194,8 @@ RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_
         }
         return m;
     };
-    s.models = read_models("models", {"svd:rank=1", "preintegration", "guided:k=1",
-                                      "manual:table_a1,unit=mm"});
+    s.models = read_models(
+        "models", {"svd:rank=1", "preintegration", "guided:k=1", "manual:table_a1,unit=mm"});
     if (s.models.empty()) t.fail("models", "expected at least one model");
     s.taps = static_cast<int>(t.integer("taps", 17, Range::closed(1, 1025)));
     s.sweep_models = read_models("sweep_models", {});
@@ -227,10 +225,9 @@ RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_
     return s;
 }
 
-RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
-                                       const RenderStudyContext& ctx, const ArtifactCache& cache,
-                                       const fs::path& results_root, const fs::path& stage,
-                                       std::vector<Metric>& metrics) {
+RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const RenderStudyContext& ctx,
+                                       const ArtifactCache& cache, const fs::path& results_root,
+                                       const fs::path& stage, std::vector<Metric>& metrics) {
     RealtimeStudyResult res;
     const fs::path dir = stage / "realtime";
     fs::create_directories(dir);
@@ -241,10 +238,9 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
              "raw_rms_vs_volpath,volpath_noise_rms,sss_ms,frame_ms,kernel_build_s\n";
     sweep << "scene,model,label,taps,jitter,rms_vs_reference_rgb,rms_vs_volpath_rgb,sss_ms,"
              "frame_ms\n";
-    decomposition
-        << "scene,channel,pixels,reference_signal_rms,separability_model,separability,"
-           "screen_space,screen_space_se,specular,specular_se,surfaces,surfaces_se,total,"
-           "total_se\n";
+    decomposition << "scene,channel,pixels,reference_signal_rms,separability_model,separability,"
+                     "screen_space,screen_space_se,specular,specular_se,surfaces,surfaces_se,total,"
+                     "total_se\n";
     struct SceneScores {
         std::string scene;
         size_t pixels = 0;
@@ -254,8 +250,9 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
     std::vector<SceneScores> all;
     std::ostringstream viewers;
     const realtime::SssEdgeMode mode = spec.edge == "reject" ? realtime::SssEdgeMode::kReject
-                                       : spec.edge == "none" ? realtime::SssEdgeMode::kNone
-                                                             : realtime::SssEdgeMode::kFollowSurface;
+                                       : spec.edge == "none"
+                                           ? realtime::SssEdgeMode::kNone
+                                           : realtime::SssEdgeMode::kFollowSurface;
 
     for (const std::string& path : spec.scenes) {
         const Scene scene = read_scene(path);
@@ -305,7 +302,8 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
         res.reused += in.reused;
         SampleBudget vb;
         vb.samples = spp;
-        const std::optional<CachedRender> vp = cached_render(scene, "realtime", w, h, vb, ctx, cache);
+        const std::optional<CachedRender> vp =
+            cached_render(scene, "realtime", w, h, vb, ctx, cache);
         if (!vp) {
             res.interrupted = true;
             return res;
@@ -321,8 +319,8 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
         // Kernels per (model, taps), built once.
         std::map<std::pair<std::string, int>, std::map<int, realtime::FrameMaterial>> kernels;
         std::map<std::pair<std::string, int>, double> build_s;
-        auto kernels_of = [&](const std::string& model, int taps, bool exact)
-            -> const std::map<int, realtime::FrameMaterial>& {
+        auto kernels_of = [&](const std::string& model, int taps,
+                              bool exact) -> const std::map<int, realtime::FrameMaterial>& {
             auto& k = kernels[{model, taps}];
             if (!k.empty() || in.profiles.empty()) return k;
             const auto t0 = std::chrono::steady_clock::now();
@@ -357,14 +355,16 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
                     for (int q = 0; q < s; ++q) {
                         const std::int32_t sh =
                             frame.raster.shape[frame.raster.sample_index(x * s + q, y * s + j)];
-                        all_medium = all_medium && sh >= 0 &&
-                                     scene.materials[static_cast<size_t>(
-                                                         scene.shapes[static_cast<size_t>(sh)]
-                                                             .material)]
-                                             .kind == SceneMaterial::Kind::kMedium;
+                        all_medium =
+                            all_medium && sh >= 0 &&
+                            scene.materials[static_cast<size_t>(
+                                                scene.shapes[static_cast<size_t>(sh)].material)]
+                                    .kind == SceneMaterial::Kind::kMedium;
                     }
-                if (all_medium) mask.push_back(i);
-                else if (covered) surfaces.push_back(i);
+                if (all_medium)
+                    mask.push_back(i);
+                else if (covered)
+                    surfaces.push_back(i);
             }
         SceneScores ss;
         ss.scene = scene.name;
@@ -426,9 +426,9 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
                     sc.label = approx::parse_model(model).label();
                     sc.taps = taps;
                     sc.jitter = jit;
-                    score_frame(run(kernels_of(model, taps, false),
-                                    realtime::SssMethod::kSeparable, jit),
-                                sc);
+                    score_frame(
+                        run(kernels_of(model, taps, false), realtime::SssMethod::kSeparable, jit),
+                        sc);
                     sweep_row(sc);
                 }
 
@@ -514,10 +514,9 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
                     << "\">\n<p class=\"flipbar\">";
             for (size_t i = 0; i < entries.size(); ++i)
                 viewers << "<button type=\"button\" data-src=\"realtime/" << esc(scene.name) << "/"
-                        << esc(entries[i].name) << ".png\" data-diff=\"realtime/"
-                        << esc(scene.name) << "/" << esc(entries[i].diff) << "\""
-                        << (i == 1 ? " class=\"on\"" : "") << ">" << esc(entries[i].caption)
-                        << "</button> ";
+                        << esc(entries[i].name) << ".png\" data-diff=\"realtime/" << esc(scene.name)
+                        << "/" << esc(entries[i].diff) << "\"" << (i == 1 ? " class=\"on\"" : "")
+                        << ">" << esc(entries[i].caption) << "</button> ";
             viewers << "<br><label>exposure <input type=\"range\" class=\"exposure\" min=\"-4\" "
                        "max=\"4\" step=\"0.5\" value=\"0\"> <span class=\"ev\">0</span> "
                        "stops</label> <label><input type=\"checkbox\" class=\"diffmode\"> "
@@ -530,18 +529,18 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
                        "2D reference</span>.</p>\n<table class=\"cut\"><tr>";
             for (const Entry& e : entries)
                 viewers << "<td><img src=\"realtime/" << esc(scene.name) << "/cut_" << esc(e.name)
-                        << ".png\" alt=\"cut-out " << esc(e.caption) << "\"><br><img src=\"realtime/"
-                        << esc(scene.name) << "/cutdiff_" << esc(e.name)
-                        << ".png\" alt=\"difference " << esc(e.caption) << "\"><br>"
+                        << ".png\" alt=\"cut-out " << esc(e.caption)
+                        << "\"><br><img src=\"realtime/" << esc(scene.name) << "/cutdiff_"
+                        << esc(e.name) << ".png\" alt=\"difference " << esc(e.caption) << "\"><br>"
                         << esc(e.caption) << "</td>";
             viewers << "</tr></table>\n</div>\n";
         }
         if (!ctx.quiet)
-            std::printf("  realtime %s: %d x %d, %zu medium pixels, %zu models, path tracer %s "
-                        "(%llu spp)\n",
-                        scene.name.c_str(), w, h, mask.size(), ss.scores.size(),
-                        vp->computed_now ? "rendered" : "reused",
-                        static_cast<unsigned long long>(vp->spp));
+            std::printf(
+                "  realtime %s: %d x %d, %zu medium pixels, %zu models, path tracer %s "
+                "(%llu spp)\n",
+                scene.name.c_str(), w, h, mask.size(), ss.scores.size(),
+                vp->computed_now ? "rendered" : "reused", static_cast<unsigned long long>(vp->spp));
         all.push_back(std::move(ss));
     }
 
@@ -563,18 +562,17 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
                     const NoiseCorrectedRms& r = sc.vs_reference[static_cast<size_t>(c)];
                     const NoiseCorrectedRms& v = sc.vs_volpath[static_cast<size_t>(c)];
                     const double sig = ss.signal[static_cast<size_t>(c)];
-                    table << ss.scene << "," << sc.model << "," << sc.label << "," << sc.taps
-                          << "," << kChannelNames[c] << "," << ss.pixels << "," << fmt(r.rms)
-                          << "," << fmt(r.rms_se) << ","
-                          << fmt(table_max > 0 ? r.rms / table_max : 0) << ","
-                          << fmt(scene_max > 0 ? r.rms / scene_max : 0) << ","
+                    table << ss.scene << "," << sc.model << "," << sc.label << "," << sc.taps << ","
+                          << kChannelNames[c] << "," << ss.pixels << "," << fmt(r.rms) << ","
+                          << fmt(r.rms_se) << "," << fmt(table_max > 0 ? r.rms / table_max : 0)
+                          << "," << fmt(scene_max > 0 ? r.rms / scene_max : 0) << ","
                           << fmt(sig > 0 ? r.rms / sig : 0) << "," << fmt(v.rms) << ","
                           << fmt(v.rms_se) << "," << fmt(v.raw_rms) << "," << fmt(v.noise_rms)
                           << "," << fmt(sc.sss_ms) << "," << fmt(sc.frame_ms) << ","
                           << fmt(sc.build_s) << "\n";
                     sum_norm += table_max > 0 ? r.rms / table_max : 0;
-                    const std::string base = ss.scene + "." + metric_label(sc.label) + "." +
-                                             kChannelNames[c];
+                    const std::string base =
+                        ss.scene + "." + metric_label(sc.label) + "." + kChannelNames[c];
                     metrics.push_back({base + ".rms_vs_reference", "1", r.rms, r.rms_se,
                                        r.rms_se > 0, r.rms_se > 0 ? 0 : 1e-4});
                     metrics.push_back({base + ".rms_vs_volpath", "1", v.rms, v.rms_se, true, 0});
@@ -600,8 +598,8 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
     std::ostringstream thesis;
     thesis << "thesis_scene,our_scene,model,R,G,B,sum\n";
     for (const ThesisRow& t : thesis_table_6_4())
-        thesis << t.scene << "," << t.ours << ",\"" << t.model << "\"," << t.r << "," << t.g
-               << "," << t.b << "," << t.sum << "\n";
+        thesis << t.scene << "," << t.ours << ",\"" << t.model << "\"," << t.r << "," << t.g << ","
+               << t.b << "," << t.sum << "\n";
     write_file_atomic(dir / "table_6_4.csv", table.str());
     write_file_atomic(dir / "error_vs_time.csv", sweep.str());
     write_file_atomic(dir / "decomposition.csv", decomposition.str());

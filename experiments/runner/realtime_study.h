@@ -78,8 +78,8 @@ struct RealtimeStudyResult {
 /// Render every scene's frames, reuse or render the path tracer's references, write
 /// <stage>/realtime/ and append the metrics (per scene, model and channel: rms_vs_reference,
 /// rms_vs_volpath) to `metrics`. `results_root` holds the cache (the MCML profiles).
-RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec,
-                                       const RenderStudyContext& ctx, const ArtifactCache& cache,
+RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const RenderStudyContext& ctx,
+                                       const ArtifactCache& cache,
                                        const std::filesystem::path& results_root,
                                        const std::filesystem::path& stage,
                                        std::vector<Metric>& metrics);
