@@ -416,7 +416,7 @@ SssReferenceResult sss_reference(const SssGBuffer& g, const std::vector<SssExact
                         ay.lo = ay.hi = y;
                         axis_boundaries(ax, x, w, sx, hk, n);
                         axis_boundaries(ay, y, h, sy, hk, n);
-                        std::array<double, 3> rr{};
+                        std::array<double, 3> rr{}, dd{};
                         for (int ch = 0; ch < 3; ++ch) {
                             auto f = [&](size_t kx, size_t ly) {
                                 const size_t i = static_cast<size_t>(ax.i0[kx]);
@@ -429,11 +429,9 @@ SssReferenceResult sss_reference(const SssGBuffer& g, const std::vector<SssExact
                                         fx * ((1 - fy) * r1[0] + fy * r1[3]));
                             };
                             const double wc = f(1, 1) - f(0, 1) - f(1, 0) + f(0, 0);
-                            const double dd = std::max(1.0 - acc_d.mean[ch], wc);
-                            rr[ch] = dd > 0 ? acc_y.mean[ch] / dd : 0.0;
+                            dd[ch] = std::max(1.0 - acc_d.mean[ch], wc);
+                            rr[ch] = dd[ch] > 0 ? acc_y.mean[ch] / dd[ch] : 0.0;
                             out[ch] = ec[ch] + rr[ch];
-                            rr[ch] = dd > 0 ? rr[ch] : 0.0;
-                            se[ch] = dd;  // D, for the delta method below
                         }
                         // Delta method: Var(Y / D) ~ Var(mean of y + R d) / D^2.
                         StratAcc acc_z;
@@ -449,7 +447,7 @@ SssReferenceResult sss_reference(const SssGBuffer& g, const std::vector<SssExact
                             at += static_cast<size_t>(cnt);
                         }
                         for (int ch = 0; ch < 3; ++ch)
-                            se[ch] = se[ch] > 0 ? std::sqrt(acc_z.var[ch]) / se[ch] : 0.0;
+                            se[ch] = dd[ch] > 0 ? std::sqrt(acc_z.var[ch]) / dd[ch] : 0.0;
                     }
                 }
                 for (int ch = 0; ch < 3; ++ch) {
