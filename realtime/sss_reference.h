@@ -37,11 +37,13 @@
 //     (marginal in x, conditional in y, both by inverse CDF of the piecewise-constant density; the
 //     signs of x and y from the same uniforms), the weights K_c / p per channel, E' of the pixel
 //     holding the point (box reconstruction: an unbiased estimate of the exact sum). The unit
-//     square of the two uniforms is stratified into samples / 2 cells of (nearly) equal area with
-//     two independent points each, so the standard error is estimated from the within-stratum
-//     differences without bias. kReject: a ratio estimator (kept numerator over 1 - dropped mass,
-//     both from the same samples), its standard error by the delta method; its bias is
-//     O(1 / samples), below the standard error (see sss_reference.cpp).
+//     square of the two uniforms is stratified into samples / samples_per_stratum cells of
+//     (nearly) equal area with samples_per_stratum (default 2) independent points each, so the
+//     standard error is estimated from the within-stratum differences without bias (in the mean
+//     square: per pixel it is noisy where few samples reach a bright region, see realtime/README).
+//     kReject: a ratio estimator (kept numerator over 1 - dropped mass, both from the same
+//     samples), its standard error by the delta method; its bias is O(1 / samples), below the
+//     standard error (see sss_reference.cpp).
 //   - kAuto: kExact where the footprint holds at most max_exact_taps pixels, kSampled elsewhere.
 //
 // Random numbers: Philox streams keyed by (seed, rng_domain::kSssReference, pixel index), drawn in
@@ -64,9 +66,10 @@ struct SssExactKernel {
     std::array<approx::Kernel2D, 3> channel;
     double h_mm = 0;  ///< cell side
     int n = 0;        ///< cells per half side (the quadrant is n x n)
-    /// Summed-area tables of each channel's quadrant, (n + 1) x (n + 1), index i (n + 1) + j:
-    /// the mass in cells [0, i) x [0, j) of the quadrant (x along i).
-    std::array<std::vector<double>, 3> sat;
+    /// Summed-area tables of the channels' quadrants, (n + 1) x (n + 1) x 3, index
+    /// 3 (i (n + 1) + j) + channel (interleaved: one cache line serves the three channels): the
+    /// mass in cells [0, i) x [0, j) of the quadrant (x along i).
+    std::vector<double> sat;
     /// The sampling density, the mean of the three channels (quadrant masses m(i, j), sum 1):
     /// marginal CDF over i (n + 1 values, the last 1) and, per i, the cumulative sums over j
     /// (n + 1 values per row, row i at i (n + 1), the last the row's mass).

@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <random>
 #include <string>
@@ -206,34 +207,46 @@ TEST(SssReference, FlatExactEqualsConvolveExact) {
     }
 }
 
-// Pixels of twice the cell size: pixel offset d holds cells 2d - 1 and 2d of each axis, so W is
-// a sum of 2 x 2 cell masses and the reference is a plain loop over Kernel2D::at.
+// Pixels of an even number k of cells along an axis: pixel offset d holds cells k d - k / 2 to
+// k d + k / 2 - 1, so W is a sum of whole cell masses and the reference is a plain loop over
+// Kernel2D::at. Square pixels of 2 x 2 cells, and non-square ones of 4 x 2 (aspect 2.4 on a
+// 24 x 20 image: the x scale follows the projection).
 TEST(SssReference, FlatExactEqualsAPlainLoopOverTheCells) {
     const std::vector<Kernel2D> kk = skin_kernels();
     const std::vector<SssExactKernel> k = {exact_kernel(kk)};
     const int w = 24, h = 20, n = kk[0].n();
-    SssParams p = camera(w, h, SssEdgeMode::kNone);
-    p.unit_mm = 0.04;
-    const double z = 10;  // pixel 2 tan_half z unit_mm / h = 0.02 mm = 2 h
-    const ImageRGB e = random_image(w, h, 0.02, 4);
-    ImageRGB ref(w, h, 0.02, 0.0);
-    auto pix = [](int cell) { return cell >= 0 ? (cell + 1) / 2 : -((-cell) / 2); };
-    for (int ch = 0; ch < 3; ++ch)
-        for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x) {
-                double s = 0;
-                for (int j = -n; j < n; ++j) {
-                    const int qy = std::clamp(y + pix(j), 0, h - 1);
-                    for (int i = -n; i < n; ++i)
-                        s += kk[ch].at(i, j) * e.at(ch, std::clamp(x + pix(i), 0, w - 1), qy);
+    for (int kx : {2, 4}) {
+        SssParams p = camera(w, h, SssEdgeMode::kNone);
+        p.unit_mm = 0.04;
+        // Pixel height 2 tan_half z unit_mm / h = 0.02 mm = 2 cells; width 2 tan_half aspect z
+        // unit_mm / w = kx cells.
+        const double z = 10;
+        p.aspect = kx * 0.01 * w / (2 * p.tan_half * z * p.unit_mm);
+        const ImageRGB e = random_image(w, h, 0.02, 4);
+        ImageRGB ref(w, h, 0.02, 0.0);
+        // The pixel offset holding cell c for pixels of m cells (m even): floor((c + m/2) / m).
+        auto pix = [](int c, int m) {
+            const int t = c + m / 2;
+            return t >= 0 ? t / m : -((-t + m - 1) / m);
+        };
+        for (int ch = 0; ch < 3; ++ch)
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    double s = 0;
+                    for (int j = -n; j < n; ++j) {
+                        const int qy = std::clamp(y + pix(j, 2), 0, h - 1);
+                        for (int i = -n; i < n; ++i)
+                            s += kk[ch].at(i, j) *
+                                 e.at(ch, std::clamp(x + pix(i, kx), 0, w - 1), qy);
+                    }
+                    ref.at(ch, x, y) = s;
                 }
-                ref.at(ch, x, y) = s;
-            }
-    const SssReferenceResult r =
-        realtime::sss_reference(from_image(e, z), k, p, method(Method::kExact));
-    const double d = rel_diff(r.irradiance, ref);
-    std::printf("  pixel = 2 cells: max |reference - plain loop| / max = %.3g\n", d);
-    EXPECT_LT(d, 1e-6);
+        const SssReferenceResult r =
+            realtime::sss_reference(from_image(e, z), k, p, method(Method::kExact));
+        const double d = rel_diff(r.irradiance, ref);
+        std::printf("  pixel = %d x 2 cells: max |reference - plain loop| / max = %.3g\n", kx, d);
+        EXPECT_LT(d, 1e-6);
+    }
 }
 
 // ---- 3. A separable kernel: the reference is sss_pass with full-resolution taps -------------
@@ -606,7 +619,7 @@ TEST(SssReference, BadInputIsRefused) {
     EXPECT_THROW(realtime::sss_reference(g, k, p, method(Method::kSampled, 1)),
                  std::invalid_argument);
     SssExactKernel broken = k[0];
-    broken.sat[1].clear();
+    broken.sat.pop_back();
     EXPECT_THROW(realtime::sss_reference(g, {broken}, p), std::invalid_argument);
     EXPECT_THROW(SssExactKernel::from_kernels({&kk[0], nullptr, &kk[2]}), std::invalid_argument);
     const Kernel2D other(Eigen::MatrixXd::Ones(4, 4), 0.01);
@@ -643,13 +656,13 @@ TEST(SssReference, TimingPrint) {
     auto secs = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
     const double t_build = secs(t0, std::chrono::steady_clock::now());
     // 1 mm pixels (a head and shoulders 256 mm across at 256 x 256): the footprint is 83 x 83
-    // pixels. 128 x 128 here, to keep the test fast (the per-pixel cost is that of 256 x 256 but
-    // for the clamped footprints at the edges).
-    const int w = 128, h = 128;
+    // pixels. 128 x 128 unless SSSLAB_REFERENCE_TIMING_SIZE says otherwise, to keep the test fast.
+    const char* size_env = std::getenv("SSSLAB_REFERENCE_TIMING_SIZE");
+    const int w = size_env ? std::max(16, std::atoi(size_env)) : 128, h = w;
     SssParams p = camera(w, h, SssEdgeMode::kFollowSurface);
     p.unit_mm = 1;
     const double z = h;
-    const SssGBuffer g = lit_disc(w, h, 63.5, 64.5, 30, z);
+    const SssGBuffer g = lit_disc(w, h, w / 2 - 0.5, h / 2 + 0.5, 0.23 * w, z);
     std::printf("  Skin1-like kernel: n = %d, h = %.4f mm, tables built in %.3f s\n", n, hmm,
                 t_build);
     SssReferenceResult ex, sm;
@@ -657,9 +670,13 @@ TEST(SssReference, TimingPrint) {
         t0 = std::chrono::steady_clock::now();
         SssReferenceResult r = realtime::sss_reference(g, k, p, method(m, 256));
         const double t = secs(t0, std::chrono::steady_clock::now());
-        std::printf("  %d x %d, 1 mm pixels, %s: %.3f s (%.2f us a pixel)\n", w, h,
-                    m == Method::kExact ? "exact (83 x 83 taps)" : "sampled (256 samples)", t,
-                    1e6 * t / (w * h));
+        // One thread: the cost a pixel, less sensitive to other work on the machine.
+        t0 = std::chrono::steady_clock::now();
+        tbb::task_arena(1).execute([&] { realtime::sss_reference(g, k, p, method(m, 256)); });
+        const double t1 = secs(t0, std::chrono::steady_clock::now());
+        std::printf("  %d x %d, 1 mm pixels, %s: %.3f s (%.2f us a pixel; one thread %.2f us)\n", w,
+                    h, m == Method::kExact ? "exact (83 x 83 taps)" : "sampled (256 samples)", t,
+                    1e6 * t / (w * h), 1e6 * t1 / (w * h));
         (m == Method::kExact ? ex : sm) = std::move(r);
     }
     double err = 0, se = 0, ref = 0;
