@@ -317,7 +317,8 @@ TEST(RasterCommand, WritesTheLayersThePassTimesAndRefusesBadInput) {
     // The profile is cached: a second run with another model computes no MCML run.
     const auto again = testing::run_ssslab(
         {"raster", scene.string(), "--photons", "2000", "--cache", (dir / "res").string(), "--out",
-         (dir / "b2.exr").string(), "--no-translucency", "--model", "deon:n=2"},
+         (dir / "b2.exr").string(), "--no-translucency", "--model", "deon:n=2", "--shadow-map",
+         "256", "--env-samples", "8"},
         dir.path());
     ASSERT_EQ(again.exit_code, 0) << again.err;
     EXPECT_NE(again.out.find("0 MCML runs computed"), std::string::npos) << again.out;
