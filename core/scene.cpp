@@ -76,6 +76,7 @@ SceneMaterial read_material(ConfigTable& t, const std::string& base_dir) {
     if (type == "medium") {
         m.kind = SceneMaterial::Kind::kMedium;
         m.medium = medium_coefficients_from_config(t);
+        m.preset = m.medium.name;  // the preset's name, or empty
         m.medium.name = m.name;
         for (int c = 0; c < 3; ++c)
             if (m.medium.g[c] <= -1 || m.medium.g[c] >= 1)

@@ -63,6 +63,9 @@ struct SceneMaterial {
     Kind kind = Kind::kMedium;
     /// kMedium: coefficients per cm, as everywhere in ssslab (Scene::per_world_unit converts).
     Medium medium;
+    /// kMedium: the preset the coefficients came from ("Skin1"; empty for explicit ones), for
+    /// what is tabulated per preset (Freude14 Table A.1's manual kernel parameters).
+    std::string preset;
     double roughness = 0;  ///< kMedium: GGX alpha of the boundary (0: smooth)
     /// kMedium, heterogeneous: an OpenVDB file (resolved path; empty: homogeneous) and the float
     /// grid in it whose density scales sigma_a and sigma_s (positions in world units).

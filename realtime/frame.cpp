@@ -83,18 +83,29 @@ double FrameResult::total_ms() const {
     return t;
 }
 
+LitFrame light_frame(const Scene& scene, const RasterizedFrame& frame, const FrameOptions& o,
+                     const std::vector<SlabTransmittance>& slabs) {
+    LitFrame lit;
+    const auto t0 = Clock::now();
+    lit.gbuffer = shade(scene, frame.camera, frame.raster, o.lighting, slabs, &lit.stats);
+    lit.ms = ms_since(t0);
+    return lit;
+}
+
 FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame,
                          const std::map<int, FrameMaterial>& materials, const FrameOptions& o,
                          const std::vector<SlabTransmittance>& slabs) {
+    return render_frame(scene, frame, light_frame(scene, frame, o, slabs), materials, o);
+}
+
+FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const LitFrame& lit,
+                         const std::map<int, FrameMaterial>& materials, const FrameOptions& o) {
     FrameResult res;
     res.times.push_back({"raster", frame.ms});
-
-    // Pass 1: shadow maps and the G-buffer.
-    auto t0 = Clock::now();
-    const GBuffer g = shade(scene, frame.camera, frame.raster, o.lighting, slabs, &res.lighting);
-    const double pass1 = ms_since(t0);
-    res.times.push_back({"shadow maps", res.lighting.shadow_ms});
-    res.times.push_back({"lighting", std::max(0.0, pass1 - res.lighting.shadow_ms)});
+    res.lighting = lit.stats;
+    res.times.push_back({"shadow maps", lit.stats.shadow_ms});
+    res.times.push_back({"lighting", std::max(0.0, lit.ms - lit.stats.shadow_ms)});
+    const GBuffer& g = lit.gbuffer;
 
     // Passes 2-3: one kernel per medium in view, indexed densely.
     std::vector<int> dense(scene.materials.size(), -1);
@@ -127,28 +138,33 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame,
     p.aspect = frame.camera.aspect;
     p.unit_mm = scene.unit_mm;
     std::vector<float> scattered, scattered_se;
-    t0 = Clock::now();
-    if (!any_medium || o.method == SssMethod::kNone) {
-        scattered = sg.irradiance;  // nothing to scatter: the pass is not run
-    } else if (o.method == SssMethod::kSeparable) {
-        std::vector<SssMaterialKernel> k;
-        for (const FrameMaterial* fm : used) k.push_back(fm->kernel);
-        scattered = sss_pass(sg, k, p);
-    } else {
-        std::vector<SssExactKernel> k;
-        for (const FrameMaterial* fm : used) {
+    const bool run = any_medium && o.method != SssMethod::kNone;
+    std::vector<SssMaterialKernel> taps;
+    std::vector<SssExactKernel> exact;
+    for (const FrameMaterial* fm : used) {
+        if (!run) break;
+        if (o.method == SssMethod::kSeparable) {
+            taps.push_back(fm->kernel);
+        } else {
             if (!fm->exact)
                 throw std::invalid_argument("render_frame: material \"" + fm->name +
                                             "\" has no exact kernel for the reference");
-            k.push_back(*fm->exact);
+            exact.push_back(*fm->exact);
         }
-        SssReferenceResult r = sss_reference(sg, k, p, o.reference);
+    }
+    auto t0 = Clock::now();  // the pass alone: its inputs are ready, as on a GPU
+    if (!run) {
+        scattered = sg.irradiance;  // nothing to scatter: the pass is not run
+    } else if (o.method == SssMethod::kSeparable) {
+        scattered = sss_pass(sg, taps, p);
+    } else {
+        SssReferenceResult r = sss_reference(sg, exact, p, o.reference);
         scattered = std::move(r.irradiance);
         scattered_se = std::move(r.standard_error);
         res.sss_exact_pixels = r.exact_pixels;
         res.sss_sampled_pixels = r.sampled_pixels;
     }
-    res.times.push_back({"sss", any_medium && o.method != SssMethod::kNone ? ms_since(t0) : 0.0});
+    res.times.push_back({"sss", run ? ms_since(t0) : 0.0});
 
     // Pass 4: composite per sample, then the box filter to pixels.
     t0 = Clock::now();

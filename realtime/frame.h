@@ -105,6 +105,17 @@ struct PassTime {
     double ms = 0;
 };
 
+/// Pass 1 of a frame: what every SSS variant of it shares (a study scores many models on one
+/// G-buffer: it lights the frame once).
+struct LitFrame {
+    GBuffer gbuffer;
+    LightingStats stats;
+    double ms = 0;  ///< the whole pass (shadow maps and shading)
+};
+/// `slabs` (by scene material) feed translucency and may be empty.
+LitFrame light_frame(const Scene& scene, const RasterizedFrame& frame, const FrameOptions& o,
+                     const std::vector<SlabTransmittance>& slabs = {});
+
 struct FrameResult {
     LayeredImage image{1, 1};
     std::vector<PassTime> times;  ///< every pass, in order, including the raster's
@@ -113,9 +124,12 @@ struct FrameResult {
     double total_ms() const;
 };
 
-/// The passes after the raster. `materials` must hold every medium in frame.media_in_view
-/// (std::invalid_argument naming the missing one otherwise); `slabs` (by scene material) feed
-/// translucency and may be empty.
+/// Passes 2-4 on a lit frame (its times, and the raster's, are the result's first entries).
+/// `materials` must hold every medium in frame.media_in_view (std::invalid_argument naming the
+/// missing one otherwise).
+FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const LitFrame& lit,
+                         const std::map<int, FrameMaterial>& materials, const FrameOptions& o);
+/// The passes after the raster: light_frame, then the above.
 FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame,
                          const std::map<int, FrameMaterial>& materials, const FrameOptions& o,
                          const std::vector<SlabTransmittance>& slabs = {});

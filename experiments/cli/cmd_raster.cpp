@@ -168,9 +168,14 @@ int run_raster(const RasterArgs& a) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::map<int, realtime::FrameMaterial> materials;
     std::vector<realtime::SlabTransmittance> slabs(scene.materials.size());
-    for (const auto& [m, p] : in.profiles)
-        materials[m] = realtime::make_frame_material(p, model, a.taps,
-                                                     o.method == realtime::SssMethod::kReference);
+    for (const auto& [m, p] : in.profiles) {
+        try {
+            materials[m] = realtime::make_frame_material(
+                p, model, a.taps, o.method == realtime::SssMethod::kReference);
+        } catch (const std::invalid_argument& e) {  // e.g. no Table A.1 row for the material
+            throw InputError(kCommandLine, "--model", e.what());
+        }
+    }
     for (const auto& [m, t] : in.slabs) {
         slabs[static_cast<size_t>(m)].thickness_mm = t.thickness_mm;
         slabs[static_cast<size_t>(m)].transmittance = t.transmittance;

@@ -70,7 +70,7 @@ RealtimeInputs realtime_inputs(const Scene& scene, const std::vector<int>& mater
                 out.profiles[m] = material_profile(r, label_of(scene, m));
                 // The preset's name where there is one (Table A.1 rows are by preset).
                 const SceneMaterial& sm = scene.materials[static_cast<size_t>(m)];
-                out.profiles[m].name = sm.medium.name.empty() ? sm.name : sm.medium.name;
+                out.profiles[m].name = sm.preset.empty() ? sm.name : sm.preset;
                 continue;
             }
             SlabTable& t = out.slabs[m];
