@@ -17,6 +17,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -72,6 +74,7 @@ struct LightSample {
     Vec3 lobe_n{};
     bool thickness_view = false;  // its map gives GBuffer::thickness
     bool lights = true;           // false: a thickness view only
+    int light = -1;               // index in Scene::lights
 };
 
 enum class Kind : std::uint8_t { kNone, kDiffuse, kMedium };
@@ -353,6 +356,7 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
     std::vector<LightSample> samples;
     bool thickness_taken = false;
     for (const SceneLight& l : scene.lights) {
+        const std::size_t first_sample = samples.size();
         const bool first = !thickness_taken && l.type != LightType::kEnvironment;
         thickness_taken = thickness_taken || first;
         switch (l.type) {
@@ -449,7 +453,23 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
                 break;
             }
         }
+        for (std::size_t k = first_sample; k < samples.size(); ++k)
+            samples[k].light = static_cast<int>(&l - scene.lights.data());
     }
+    // Sphere lights are not in the shadow maps (as they are not in volpath's BVH), but they
+    // occlude what lies behind them: the environment, suns and other lights.
+    std::vector<int> spheres;
+    for (std::size_t k = 0; k < scene.lights.size(); ++k)
+        if (scene.lights[k].type == LightType::kSphere) spheres.push_back(static_cast<int>(k));
+    auto behind_sphere = [&](const LightSample& s, const Vec3& p, const Vec3& wi) {
+        const double dist = s.directional ? kInf : length(s.pos - p);
+        for (int k : spheres) {
+            if (k == s.light) continue;
+            const SceneLight& l = scene.lights[static_cast<std::size_t>(k)];
+            if (hit_sphere(p, wi, l.position, l.radius) < dist) return true;
+        }
+        return false;
+    };
 
     // What a sample gives receiver r: direction towards the light and irradiance at normal
     // incidence (0 where its lobe faces away).
@@ -556,7 +576,7 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
                                 lit = !lk.inside ||
                                       lk.point_depth <= lk.map_depth + o.depth_bias_texels * texel;
                             }
-                            if (!lit) continue;
+                            if (!lit || (!spheres.empty() && behind_sphere(s, r.p, wi))) continue;
                             if (r.kind == Kind::kDiffuse) {
                                 const auto& alb =
                                     scene.materials[static_cast<std::size_t>(r.material)].albedo;
