@@ -114,14 +114,16 @@ double BoundaryTransmittance::ggx(double mu, double eta, double alpha, int q) {
     mu = std::min(mu, 1.0);
     const Vec3 wo{std::sqrt(std::max(0.0, 1 - mu * mu)), 0, mu};
     // Microfacet normals m in the coordinates of the GGX distribution D(m) cos(theta_m) dw_m =
-    // du dphi / (2 pi): tan^2 theta_m = alpha^2 u / (1 - u); midpoint rule in u and in phi over
-    // [0, pi] (the lobe is symmetric about the plane of incidence). Then
+    // du dphi / (2 pi): tan^2 theta_m = alpha^2 u / (1 - u). The integrand grows as
+    // 1 / cos(theta_m) ~ 1 / sqrt(1 - u) towards grazing microfacets, so u = 1 - v^2 (du = 2 v
+    // dv) makes it smooth; midpoint rule in v and in phi over [0, pi] (the lobe is symmetric
+    // about the plane of incidence). Then
     // T = integral f(wo, wi) |cos theta_i| dw_i = integral f |cos theta_i| / |dw_m/dw_i| dw_m,
     // with wi the refraction of wo through m.
     double sum = 0;
     for (int a = 0; a < q; ++a) {
-        const double u = (a + 0.5) / q;
-        const double t2 = alpha * alpha * u / (1 - u);
+        const double v = (a + 0.5) / q, u = 1 - v * v, jac = 2 * v;
+        const double t2 = alpha * alpha * u / (v * v);
         const double ct = 1 / std::sqrt(1 + t2), st = std::sqrt(t2) * ct;
         for (int b = 0; b < q; ++b) {
             const double phi = kPi * (b + 0.5) / q;
@@ -138,10 +140,10 @@ double BoundaryTransmittance::ggx(double mu, double eta, double alpha, int q) {
             const double dwm_dwi = std::abs(dot(wi, m)) / (dd * dd);
             const double dens = ggx::D(m, alpha) * ct;  // per unit solid angle of m, du dphi/2pi
             if (!(dens > 0) || !(dwm_dwi > 0)) continue;
-            sum += f * std::abs(wi.z) / (dwm_dwi * dens);
+            sum += jac * f * std::abs(wi.z) / (dwm_dwi * dens);
         }
     }
-    // integral over (u, phi in [0, 2 pi)) of g du dphi / (2 pi), phi folded: 2 * pi / q / (2 pi).
+    // integral over (v, phi in [0, 2 pi)) of g 2 v dv dphi / (2 pi), phi folded: 2 pi / q / (2 pi).
     return sum / (static_cast<double>(q) * q);
 }
 
@@ -560,7 +562,7 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
                             (s.thickness_view || (cs < 0 && slab_of(r.material)))) {
                             const ShadowMap::Lookup lk = sm.lookup(r.p);
                             if (lk.inside && lk.shape == r.shape && std::isfinite(lk.map_depth))
-                                d_thick = std::max(0.0, lk.point_depth - lk.map_depth) *
+                                d_thick = std::max(0.0, lk.point_depth - lk.map_depth_smooth) *
                                           lk.distance_per_depth;
                         }
                         if (s.thickness_view) thick[i] = std::max(0.0, d_thick);

@@ -148,7 +148,26 @@ ShadowMap::Lookup ShadowMap::lookup(const Vec3& p) const {
     r.inside = true;
     r.point_depth = c.w;
     r.map_depth = depth[i];
+    r.map_depth_smooth = r.map_depth;
     r.shape = shape[i];
+    // Bilinear between the texel centres around (fx, fy).
+    const double gx = fx - 0.5, gy = fy - 0.5;
+    const int x0 = static_cast<int>(std::floor(gx)), y0 = static_cast<int>(std::floor(gy));
+    if (x0 >= 0 && y0 >= 0 && x0 + 1 < view.size && y0 + 1 < view.size) {
+        const double tx = gx - x0, ty = gy - y0;
+        double v[4];
+        bool ok = true;
+        for (int k = 0; k < 4 && ok; ++k) {
+            const std::size_t j =
+                static_cast<std::size_t>(y0 + k / 2) * static_cast<std::size_t>(view.size) +
+                static_cast<std::size_t>(x0 + k % 2);
+            v[k] = depth[j];
+            ok = shape[j] == r.shape && std::isfinite(v[k]);
+        }
+        if (ok)
+            r.map_depth_smooth =
+                (v[0] * (1 - tx) + v[1] * tx) * (1 - ty) + (v[2] * (1 - tx) + v[3] * tx) * ty;
+    }
     r.distance_per_depth = view.orthographic ? 1.0 : length(p - view.origin) / c.w;
     return r;
 }

@@ -69,13 +69,17 @@ struct ShadowMap {
     std::vector<std::int32_t> shape;
 
     struct Lookup {
-        bool inside = false;            ///< the point projects into the map, before its near plane
-        double point_depth = 0;         ///< the point's depth along forward
-        double map_depth = 0;           ///< the texel's first surface (+inf: none)
+        bool inside = false;     ///< the point projects into the map, beyond its near plane
+        double point_depth = 0;  ///< the point's depth along forward
+        double map_depth = 0;    ///< the texel's first surface (+inf: none)
+        /// The first surface's depth interpolated bilinearly between the four nearest texel
+        /// centres when they all hold the nearest texel's shape (exact on a plane: thickness
+        /// from it does not step with the texels), else map_depth.
+        double map_depth_smooth = 0;
         std::int32_t shape = -1;        ///< the texel's shape
         double distance_per_depth = 1;  ///< distance along the light's ray per unit depth
     };
-    /// The texel a world point falls into (nearest texel, no filtering).
+    /// The texel a world point falls into (nearest texel; the shadow test does not filter).
     Lookup lookup(const Vec3& p) const;
 };
 
