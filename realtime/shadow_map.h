@@ -62,7 +62,8 @@ std::vector<ShadowView> fit_point(const Vec3& position, const Box& receivers, do
 
 /// A rasterized shadow map: depth of the first surface along the view's forward axis (+inf
 /// where none) and its shape, per texel (row-major, y down), as float and int32 (8 bytes a
-/// texel; the rasterizer's 44-byte frame is freed once they are copied out).
+/// texel; rasterized in bands of at most 2^20 texels, so the rasterizer's 44-byte frame adds at
+/// most 46 MB while one is drawn).
 struct ShadowMap {
     ShadowView view;
     std::vector<float> depth;
@@ -83,7 +84,7 @@ struct ShadowMap {
     Lookup lookup(const Vec3& p) const;
 };
 
-/// The scene's shapes rasterized into the view (both sides of every triangle).
+/// The scene's shapes rasterized into the view (both sides of every triangle), band by band.
 ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view);
 
 }  // namespace ssslab::realtime

@@ -289,7 +289,7 @@ translate = [0, 1, 0]
 material = "d"
 )";
     const Scene s = parse_scene(text, "shadow.toml", ".");
-    for (int size : {128, 512}) {
+    for (int size : {128, 512, 2048}) {  // 2048: drawn in four bands
         LightingOptions o;
         o.shadow_map_size = size;
         const Rendered r = render_rt(s, 64, 64, 2, o);
