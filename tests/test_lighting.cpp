@@ -249,6 +249,20 @@ TEST(Lighting, DiffuseDirectLightingAgainstVolpath) {
     std::printf("  [measured] 3 %% too bright: mean z %.2f, median |z| %.2f\n", off.mean_z,
                 off.median_abs_z);
     EXPECT_GT(off.mean_z, 4 / std::sqrt(off.n));
+    // Normals: volpath's "normal" layer holds the facet normal outward for the winding (not
+    // turned towards the camera); the G-buffer's is the same. Pixels inside one box face.
+    int faces = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (!interior(last, x, y, 1e300) ||
+                last.g.shape[last.frame.sample_index(4 * x, 4 * y)] != 2)
+                continue;
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(pixel(last, last.g.normal, x, y, c),
+                            vp.image.layer("normal").at(x, y, c), 1e-5);
+            ++faces;
+        }
+    EXPECT_GT(faces, 5);
     // The background is the environment.
     EXPECT_NEAR(last.g.surface[0], 0.15f, 1e-6);
 }
