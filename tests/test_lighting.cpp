@@ -644,6 +644,19 @@ material = "m"
     EXPECT_EQ(SlabTransmittance{}.at(1)[0], 0.0);
 }
 
+TEST(Lighting, VolpathMaxDepthIsKeyedOnlyWhenSet) {
+    // volpath's direct-lighting reference: the checkpoint key of a default render is what it
+    // was (no max_depth item), and max_depth = 1 changes it.
+    const Scene s = parse_scene(kDiffuseScene, "diffuse.toml", ".");
+    volpath::RenderOptions o;
+    const std::string a = volpath::render_fingerprint(s, o);
+    EXPECT_EQ(a.find("max_depth"), std::string::npos);
+    o.max_depth = 1;
+    const std::string b = volpath::render_fingerprint(s, o);
+    EXPECT_NE(b.find("max_depth"), std::string::npos);
+    EXPECT_NE(a, b);
+}
+
 TEST(Lighting, BitIdenticalForOneAndTwoThreads) {
     Scene s = parse_scene(kDiffuseScene, "diffuse.toml", ".");
     // And a medium with translucency, so that every layer is exercised.
