@@ -361,9 +361,8 @@ material = "d"
     }
 }
 
-const char* medium_box(const char* roughness, const char* lights) {
-    static std::string text;
-    text = std::string(R"(
+std::string medium_box(const char* roughness, const char* lights) {
+    return std::string(R"(
 [scene]
 name = "slab"
 [camera]
@@ -388,7 +387,6 @@ size = [8, 1, 8]
 translate = [0, -0.5, 0]
 material = "m"
 )";
-    return text.c_str();
 }
 
 TEST(Lighting, IrradianceThroughTheBoundary) {
