@@ -17,6 +17,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -72,6 +74,7 @@ struct LightSample {
     Vec3 lobe_n{};
     bool thickness_view = false;  // its map gives GBuffer::thickness
     bool lights = true;           // false: a thickness view only
+    int light = -1;               // index in Scene::lights
 };
 
 enum class Kind : std::uint8_t { kNone, kDiffuse, kMedium };
@@ -111,14 +114,16 @@ double BoundaryTransmittance::ggx(double mu, double eta, double alpha, int q) {
     mu = std::min(mu, 1.0);
     const Vec3 wo{std::sqrt(std::max(0.0, 1 - mu * mu)), 0, mu};
     // Microfacet normals m in the coordinates of the GGX distribution D(m) cos(theta_m) dw_m =
-    // du dphi / (2 pi): tan^2 theta_m = alpha^2 u / (1 - u); midpoint rule in u and in phi over
-    // [0, pi] (the lobe is symmetric about the plane of incidence). Then
+    // du dphi / (2 pi): tan^2 theta_m = alpha^2 u / (1 - u). The integrand grows as
+    // 1 / cos(theta_m) ~ 1 / sqrt(1 - u) towards grazing microfacets, so u = 1 - v^2 (du = 2 v
+    // dv) makes it smooth; midpoint rule in v and in phi over [0, pi] (the lobe is symmetric
+    // about the plane of incidence). Then
     // T = integral f(wo, wi) |cos theta_i| dw_i = integral f |cos theta_i| / |dw_m/dw_i| dw_m,
     // with wi the refraction of wo through m.
     double sum = 0;
     for (int a = 0; a < q; ++a) {
-        const double u = (a + 0.5) / q;
-        const double t2 = alpha * alpha * u / (1 - u);
+        const double v = (a + 0.5) / q, u = 1 - v * v, jac = 2 * v;
+        const double t2 = alpha * alpha * u / (v * v);
         const double ct = 1 / std::sqrt(1 + t2), st = std::sqrt(t2) * ct;
         for (int b = 0; b < q; ++b) {
             const double phi = kPi * (b + 0.5) / q;
@@ -135,10 +140,10 @@ double BoundaryTransmittance::ggx(double mu, double eta, double alpha, int q) {
             const double dwm_dwi = std::abs(dot(wi, m)) / (dd * dd);
             const double dens = ggx::D(m, alpha) * ct;  // per unit solid angle of m, du dphi/2pi
             if (!(dens > 0) || !(dwm_dwi > 0)) continue;
-            sum += f * std::abs(wi.z) / (dwm_dwi * dens);
+            sum += jac * f * std::abs(wi.z) / (dwm_dwi * dens);
         }
     }
-    // integral over (u, phi in [0, 2 pi)) of g du dphi / (2 pi), phi folded: 2 * pi / q / (2 pi).
+    // integral over (v, phi in [0, 2 pi)) of g 2 v dv dphi / (2 pi), phi folded: 2 pi / q / (2 pi).
     return sum / (static_cast<double>(q) * q);
 }
 
@@ -353,6 +358,7 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
     std::vector<LightSample> samples;
     bool thickness_taken = false;
     for (const SceneLight& l : scene.lights) {
+        const std::size_t first_sample = samples.size();
         const bool first = !thickness_taken && l.type != LightType::kEnvironment;
         thickness_taken = thickness_taken || first;
         switch (l.type) {
@@ -449,7 +455,23 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
                 break;
             }
         }
+        for (std::size_t k = first_sample; k < samples.size(); ++k)
+            samples[k].light = static_cast<int>(&l - scene.lights.data());
     }
+    // Sphere lights are not in the shadow maps (as they are not in volpath's BVH), but they
+    // occlude what lies behind them: the environment, suns and other lights.
+    std::vector<int> spheres;
+    for (std::size_t k = 0; k < scene.lights.size(); ++k)
+        if (scene.lights[k].type == LightType::kSphere) spheres.push_back(static_cast<int>(k));
+    auto behind_sphere = [&](const LightSample& s, const Vec3& p, const Vec3& wi) {
+        const double dist = s.directional ? kInf : length(s.pos - p);
+        for (int k : spheres) {
+            if (k == s.light) continue;
+            const SceneLight& l = scene.lights[static_cast<std::size_t>(k)];
+            if (hit_sphere(p, wi, l.position, l.radius) < dist) return true;
+        }
+        return false;
+    };
 
     // What a sample gives receiver r: direction towards the light and irradiance at normal
     // incidence (0 where its lobe faces away).
@@ -540,7 +562,7 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
                             (s.thickness_view || (cs < 0 && slab_of(r.material)))) {
                             const ShadowMap::Lookup lk = sm.lookup(r.p);
                             if (lk.inside && lk.shape == r.shape && std::isfinite(lk.map_depth))
-                                d_thick = std::max(0.0, lk.point_depth - lk.map_depth) *
+                                d_thick = std::max(0.0, lk.point_depth - lk.map_depth_smooth) *
                                           lk.distance_per_depth;
                         }
                         if (s.thickness_view) thick[i] = std::max(0.0, d_thick);
@@ -556,7 +578,7 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
                                 lit = !lk.inside ||
                                       lk.point_depth <= lk.map_depth + o.depth_bias_texels * texel;
                             }
-                            if (!lit) continue;
+                            if (!lit || (!spheres.empty() && behind_sphere(s, r.p, wi))) continue;
                             if (r.kind == Kind::kDiffuse) {
                                 const auto& alb =
                                     scene.materials[static_cast<std::size_t>(r.material)].albedo;

@@ -51,7 +51,9 @@ struct LightingOptions {
 };
 
 /// Per SAMPLE of the frame (frame.sample_width() x frame.sample_height(), row-major, y down),
-/// plain arrays.
+/// plain arrays. Sphere lights are not rasterized (nor in volpath's BVH): where one lies in
+/// front of the geometry, `surface` holds its radiance and the lighting layers are 0 (view_z,
+/// shape, material and normal still describe the geometry behind it).
 struct GBuffer {
     int width = 0, height = 0;  ///< samples
     std::vector<float> view_z;  ///< RasterFrame::view_z (+inf: nothing)

@@ -148,40 +148,78 @@ ShadowMap::Lookup ShadowMap::lookup(const Vec3& p) const {
     r.inside = true;
     r.point_depth = c.w;
     r.map_depth = depth[i];
+    r.map_depth_smooth = r.map_depth;
     r.shape = shape[i];
+    // Bilinear between the texel centres around (fx, fy).
+    const double gx = fx - 0.5, gy = fy - 0.5;
+    const int x0 = static_cast<int>(std::floor(gx)), y0 = static_cast<int>(std::floor(gy));
+    if (x0 >= 0 && y0 >= 0 && x0 + 1 < view.size && y0 + 1 < view.size) {
+        const double tx = gx - x0, ty = gy - y0;
+        double v[4];
+        bool ok = true;
+        for (int k = 0; k < 4 && ok; ++k) {
+            const std::size_t j =
+                static_cast<std::size_t>(y0 + k / 2) * static_cast<std::size_t>(view.size) +
+                static_cast<std::size_t>(x0 + k % 2);
+            v[k] = depth[j];
+            ok = shape[j] == r.shape && std::isfinite(v[k]);
+        }
+        if (ok)
+            r.map_depth_smooth =
+                (v[0] * (1 - tx) + v[1] * tx) * (1 - ty) + (v[2] * (1 - tx) + v[3] * tx) * ty;
+    }
     r.distance_per_depth = view.orthographic ? 1.0 : length(p - view.origin) / c.w;
     return r;
 }
 
 ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view) {
-    RasterCamera cam;
-    cam.width = cam.height = view.size;
-    cam.position = view.origin;
-    cam.forward = view.forward;
-    cam.right = view.right;
-    cam.up = view.up;
-    cam.tan_half = view.half_y;
-    cam.aspect = view.half_x / view.half_y;
-    std::vector<RasterMesh> meshes;
-    meshes.reserve(scene.shapes.size());
-    for (const SceneShape& s : scene.shapes) {
-        RasterMesh m;
-        m.vertices.reserve(s.mesh.positions.size());
-        for (const Vec3& p : s.mesh.positions) m.vertices.push_back(view.to_clip(p));
-        m.triangles = s.mesh.triangles;
-        m.cull_back_faces = false;
-        meshes.push_back(std::move(m));
+    std::vector<std::vector<ClipVertex>> clip(scene.shapes.size());
+    for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
+        clip[k].reserve(scene.shapes[k].mesh.positions.size());
+        for (const Vec3& p : scene.shapes[k].mesh.positions) clip[k].push_back(view.to_clip(p));
     }
+    ShadowMap sm;
+    sm.view = view;
+    const std::size_t S = static_cast<std::size_t>(view.size);
+    sm.depth.assign(S * S, std::numeric_limits<float>::infinity());
+    sm.shape.assign(S * S, -1);
+    // Horizontal bands of at most 2^20 texels, each rasterized on its own, so that the
+    // rasterizer's frame (44 bytes a texel) stays below 46 MB for any map size. A band of rows
+    // [r0, r1) is the map's clip space stretched in y: y' = (y - yc w) / hh (w = 1 when
+    // orthographic), which keeps clip coordinates linear.
+    const int rows = std::max(1, static_cast<int>((std::size_t{1} << 20) / S));
     RasterOptions o;
     o.orthographic = view.orthographic;
     // Orthographic: the origin lies in front of every caster, so the near plane clips nothing.
     o.near = view.near;
-    ShadowMap sm;
-    sm.view = view;
-    const RasterFrame f = rasterize(cam, meshes, o);
-    sm.depth.resize(f.view_z.size());
-    sm.shape = f.shape;
-    for (std::size_t i = 0; i < f.view_z.size(); ++i) sm.depth[i] = static_cast<float>(f.view_z[i]);
+    for (int r0 = 0; r0 < view.size; r0 += rows) {
+        const int r1 = std::min(view.size, r0 + rows);
+        const double top = 1 - 2.0 * r0 / view.size, bottom = 1 - 2.0 * r1 / view.size;
+        const double yc = 0.5 * (top + bottom), hh = 0.5 * (top - bottom);
+        RasterCamera cam;  // only its size matters for a frame of clip-space meshes
+        cam.width = view.size;
+        cam.height = r1 - r0;
+        std::vector<RasterMesh> meshes(scene.shapes.size());
+        for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
+            RasterMesh& m = meshes[k];
+            m.vertices.resize(clip[k].size());
+            for (std::size_t v = 0; v < clip[k].size(); ++v) {
+                const ClipVertex& c = clip[k][v];
+                m.vertices[v] = {c.x, (c.y - yc * (view.orthographic ? 1.0 : c.w)) / hh, c.w};
+            }
+            m.triangles = scene.shapes[k].mesh.triangles;
+            m.cull_back_faces = false;
+        }
+        const RasterFrame f = rasterize(cam, meshes, o);
+        for (int y = 0; y < r1 - r0; ++y)
+            for (int x = 0; x < view.size; ++x) {
+                const std::size_t i = f.sample_index(x, y);
+                const std::size_t j =
+                    static_cast<std::size_t>(r0 + y) * S + static_cast<std::size_t>(x);
+                sm.depth[j] = static_cast<float>(f.view_z[i]);
+                sm.shape[j] = f.shape[i];
+            }
+    }
     return sm;
 }
 

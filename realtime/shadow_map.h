@@ -62,24 +62,29 @@ std::vector<ShadowView> fit_point(const Vec3& position, const Box& receivers, do
 
 /// A rasterized shadow map: depth of the first surface along the view's forward axis (+inf
 /// where none) and its shape, per texel (row-major, y down), as float and int32 (8 bytes a
-/// texel; the rasterizer's 44-byte frame is freed once they are copied out).
+/// texel; rasterized in bands of at most 2^20 texels, so the rasterizer's 44-byte frame adds at
+/// most 46 MB while one is drawn).
 struct ShadowMap {
     ShadowView view;
     std::vector<float> depth;
     std::vector<std::int32_t> shape;
 
     struct Lookup {
-        bool inside = false;            ///< the point projects into the map, before its near plane
-        double point_depth = 0;         ///< the point's depth along forward
-        double map_depth = 0;           ///< the texel's first surface (+inf: none)
+        bool inside = false;     ///< the point projects into the map, beyond its near plane
+        double point_depth = 0;  ///< the point's depth along forward
+        double map_depth = 0;    ///< the texel's first surface (+inf: none)
+        /// The first surface's depth interpolated bilinearly between the four nearest texel
+        /// centres when they all hold the nearest texel's shape (exact on a plane: thickness
+        /// from it does not step with the texels), else map_depth.
+        double map_depth_smooth = 0;
         std::int32_t shape = -1;        ///< the texel's shape
         double distance_per_depth = 1;  ///< distance along the light's ray per unit depth
     };
-    /// The texel a world point falls into (nearest texel, no filtering).
+    /// The texel a world point falls into (nearest texel; the shadow test does not filter).
     Lookup lookup(const Vec3& p) const;
 };
 
-/// The scene's shapes rasterized into the view (both sides of every triangle).
+/// The scene's shapes rasterized into the view (both sides of every triangle), band by band.
 ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view);
 
 }  // namespace ssslab::realtime
