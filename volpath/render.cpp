@@ -17,7 +17,8 @@ namespace ssslab::volpath {
 
 namespace {
 
-constexpr const char* kEngineVersion = "volpath-render-2";
+constexpr const char* kEngineVersion = "volpath-render-3";  // 3: NEE off the first rough
+                                                            // boundary is "specular"
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
 using RGB = std::array<double, 3>;
@@ -547,6 +548,10 @@ struct Renderer {
                     // An index-matched boundary is no vertex: NEE before it still stands.
                     if (!passable(mi)) prev_nee = false;
                 } else {
+                    // Light sampled at the first boundary from outside is its reflection: the
+                    // "specular" layer's (without this it went into "radiance" only).
+                    const bool first_reflection = depth == 0 && outside && !entered;
+                    if (first_reflection) specular_path = true;
                     RGB c{};
                     nee(
                         p, &n, rng, beta,
@@ -561,6 +566,7 @@ struct Renderer {
                         },
                         c, rays);
                     flush(c);
+                    if (first_reflection) specular_path = false;  // decided by the sample below
                     const double uc = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
                     const auto s = sample_rough_dielectric(wo_l, eta, md.alpha, uc, u1, u2,
                                                            TransportMode::kRadiance);
