@@ -194,6 +194,7 @@ void setup_triangle(const RasterMesh& m, std::uint32_t t, std::int32_t shape, do
 }
 
 // Draw one setup triangle into the part of a tile [tx0, tx1] x [ty0, ty1] it overlaps.
+template <bool kDepthOnly>
 void draw(const SetupTriangle& s, int tx0, int ty0, int tx1, int ty1, bool depth_test, bool ortho,
           RasterFrame& f) {
     const int x0 = std::max(s.x0, tx0), x1 = std::min(s.x1, tx1);
@@ -220,17 +221,19 @@ void draw(const SetupTriangle& s, int tx0, int ty0, int tx1, int ty1, bool depth
             if ((e[0] | e[1] | e[2]) >= 0) {
                 const std::size_t i =
                     static_cast<std::size_t>(y) * sw + static_cast<std::size_t>(x);
-                ++f.fragments[i];
+                if constexpr (!kDepthOnly) ++f.fragments[i];
                 const double ex = (x + 0.5) - s.ox, ey = py - s.oy;
                 const double q = s.a[0] + s.ddx[0] * ex + s.ddy[0] * ey;
                 const double z = ortho ? q : 1.0 / q;
                 if (!depth_test || z < f.view_z[i]) {
-                    const double m = ortho ? 1.0 : z;
                     f.view_z[i] = z;
                     f.shape[i] = s.shape;
-                    f.triangle[i] = s.triangle;
-                    f.barycentric[i] = {(s.a[1] + s.ddx[1] * ex + s.ddy[1] * ey) * m,
-                                        (s.a[2] + s.ddx[2] * ex + s.ddy[2] * ey) * m};
+                    if constexpr (!kDepthOnly) {
+                        const double m = ortho ? 1.0 : z;
+                        f.triangle[i] = s.triangle;
+                        f.barycentric[i] = {(s.a[1] + s.ddx[1] * ex + s.ddy[1] * ey) * m,
+                                            (s.a[2] + s.ddx[2] * ex + s.ddy[2] * ey) * m};
+                    }
                 }
             }
             for (std::size_t k = 0; k < 3; ++k) e[k] += step_x[k];
@@ -302,11 +305,13 @@ RasterFrame rasterize(const RasterCamera& camera, std::span<const RasterMesh> me
     const int ws = f.sample_width(), hs = f.sample_height();
     const std::size_t samples = static_cast<std::size_t>(ws) * static_cast<std::size_t>(hs);
     f.view_z.assign(samples, std::numeric_limits<double>::infinity());
-    f.ray_t.assign(samples, 0.0);
     f.shape.assign(samples, -1);
-    f.triangle.assign(samples, std::numeric_limits<std::uint32_t>::max());
-    f.barycentric.assign(samples, {0.0, 0.0});
-    f.fragments.assign(samples, 0);
+    if (!o.depth_only) {
+        f.ray_t.assign(samples, 0.0);
+        f.triangle.assign(samples, std::numeric_limits<std::uint32_t>::max());
+        f.barycentric.assign(samples, {0.0, 0.0});
+        f.fragments.assign(samples, 0);
+    }
 
     // Geometry: fixed blocks of triangles set up in parallel, concatenated in submission order.
     const double guard = kGuardSamples / std::max(ws, hs) - 1;
@@ -347,9 +352,14 @@ RasterFrame rasterize(const RasterCamera& camera, std::span<const RasterMesh> me
         const int ty = static_cast<int>(bi / static_cast<std::size_t>(ntx));
         const int x0 = tx * ts, y0 = ty * ts;
         const int x1 = std::min(x0 + ts, ws) - 1, y1 = std::min(y0 + ts, hs) - 1;
-        for (const SetupTriangle* s : bins[bi])
-            draw(*s, x0, y0, x1, y1, o.depth_test, o.orthographic, f);
+        for (const SetupTriangle* s : bins[bi]) {
+            if (o.depth_only)
+                draw<true>(*s, x0, y0, x1, y1, o.depth_test, o.orthographic, f);
+            else
+                draw<false>(*s, x0, y0, x1, y1, o.depth_test, o.orthographic, f);
+        }
     });
+    if (o.depth_only) return f;
 
     // Ray distances per sample, box-filtered pixels.
     const int ss = o.supersample;

@@ -73,6 +73,9 @@ struct RasterOptions {
     double near = 1e-3;       ///< near plane [world units]: geometry closer is clipped away
     bool depth_test = true;   ///< false: the last triangle drawn at a sample wins
     bool cull_closed = true;  ///< rasterize(Scene): cull back faces of closed meshes
+    /// Fill view_z and shape only (shadow maps): ray_t, triangle, barycentric, fragments,
+    /// coverage and depth are left empty, 12 bytes a sample instead of 44.
+    bool depth_only = false;
     /// An orthographic projection (the shadow maps of directional lights): vertices' x and y
     /// are [-1, 1] across the image already (not divided by w) and w is the depth along the
     /// view axis; depth and barycentrics interpolate linearly, ray_t = view_z. The near plane

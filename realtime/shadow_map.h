@@ -62,8 +62,8 @@ std::vector<ShadowView> fit_point(const Vec3& position, const Box& receivers, do
 
 /// A rasterized shadow map: depth of the first surface along the view's forward axis (+inf
 /// where none) and its shape, per texel (row-major, y down), as float and int32 (8 bytes a
-/// texel; rasterized in bands of at most 2^20 texels, so the rasterizer's 44-byte frame adds at
-/// most 46 MB while one is drawn).
+/// texel; rasterized depth-only in bands of at most 2^22 texels, so the rasterizer's 12-byte
+/// frame adds at most 51 MB while one is drawn).
 struct ShadowMap {
     ShadowView view;
     std::vector<float> depth;
@@ -85,6 +85,8 @@ struct ShadowMap {
 };
 
 /// The scene's shapes rasterized into the view (both sides of every triangle), band by band.
-ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view);
+/// `band_texels`: the most texels rasterized at once (the map is the same for any value).
+ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view,
+                            std::size_t band_texels = std::size_t{1} << 22);
 
 }  // namespace ssslab::realtime

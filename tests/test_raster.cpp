@@ -702,6 +702,25 @@ TEST(Raster, OpenMeshSeenFromBehindIsDrawn) {
     EXPECT_GT(std::count(f.shape.begin(), f.shape.end(), 0), 100);
 }
 
+// Depth only (shadow maps) draws the same depths and shapes as the full frame, and nothing else.
+TEST(Raster, DepthOnlyDrawsTheSameDepthAndShapes) {
+    const Scene scene = parse_scene(kManyShapes, "many.toml", ".");
+    for (bool ortho : {false, true}) {
+        RasterOptions o;
+        o.orthographic = ortho;
+        o.cull_closed = false;
+        const RasterFrame full = rasterize(scene, o, 96, 64);
+        o.depth_only = true;
+        const RasterFrame d = rasterize(scene, o, 96, 64);
+        EXPECT_EQ(d.view_z, full.view_z);
+        EXPECT_EQ(d.shape, full.shape);
+        EXPECT_TRUE(d.triangle.empty() && d.barycentric.empty() && d.ray_t.empty() &&
+                    d.fragments.empty() && d.coverage.empty());
+        EXPECT_GT(std::count_if(d.shape.begin(), d.shape.end(), [](int s) { return s >= 0; }),
+                  1000);
+    }
+}
+
 TEST(Raster, RefusesSizesOutOfRange) {
     const RasterCamera cam = screen_camera(8, 8);
     RasterOptions o;
