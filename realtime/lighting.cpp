@@ -72,6 +72,7 @@ struct LightSample {
     // Sphere-light patch: intensity value * max(0, lobe . w) towards w (Lambertian emitter).
     bool lobe = false;
     Vec3 lobe_n{};
+    bool environment = false;     // a direction of the environment (its own map size)
     bool thickness_view = false;  // its map gives GBuffer::thickness
     bool lights = true;           // false: a thickness view only
     int light = -1;               // index in Scene::lights
@@ -206,7 +207,8 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
         frame.barycentric.size() != N || frame.ray_t.size() != N)
         throw std::invalid_argument("lighting: the frame does not match the camera");
     if (o.light_samples < 1 || o.environment_samples < 1 || o.shadow_map_size < 1 ||
-        o.shadow_map_size > 16384 || o.transmittance_cosines < 2 || o.transmittance_quadrature < 1)
+        o.shadow_map_size > 16384 || o.environment_map_size < 1 || o.environment_map_size > 16384 ||
+        o.transmittance_cosines < 2 || o.transmittance_quadrature < 1)
         throw std::invalid_argument("lighting: options out of range");
 
     GBuffer g;
@@ -450,6 +452,7 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
                     const double phi = 2 * kPi * fib_v(k);
                     s.w = {rr * std::cos(phi), rr * std::sin(phi), z};
                     for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * 4 * kPi / n;
+                    s.environment = true;
                     samples.push_back(s);
                 }
                 break;
@@ -517,7 +520,9 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
         if (!any) continue;
         std::vector<ShadowView> views;
         if (s.directional)
-            views.push_back(fit_directional(s.w, receivers, casters, o.shadow_map_size));
+            views.push_back(
+                fit_directional(s.w, receivers, casters,
+                                s.environment ? o.environment_map_size : o.shadow_map_size));
         else
             views = fit_point(s.pos, receivers, near, o.shadow_map_size);
         const bool need_map =

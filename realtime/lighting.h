@@ -37,6 +37,10 @@ struct LightingOptions {
     /// directional light.
     int environment_samples = 64;
     int shadow_map_size = 2048;  ///< texels per side
+    /// Texels per side of each environment direction's map: light from many directions, each
+    /// a small share, blurs the shadows that a coarse map resolves (64 maps at 2048 would cost
+    /// more than everything else in a frame).
+    int environment_map_size = 512;
     bool shadows = true;
     /// Shadow tests look the receiver up at p + n * normal_offset_texels * texel (n the facet
     /// normal on the light's side, texel the map's texel size at p) [Holbert 2011, "Saying

@@ -38,7 +38,7 @@ struct RasterArgs {
     std::string edge = "follow";
     int taps = 17;
     int width = 0, height = 0, supersample = 1;
-    int light_samples = 16, environment_samples = 64, shadow_map = 2048;
+    int light_samples = 16, environment_samples = 64, shadow_map = 2048, environment_map = 512;
     double jitter = 0, follow_strength = -1, reject_depth = -1;
     int reference_samples = 256;
     bool no_translucency = false;
@@ -83,6 +83,7 @@ std::string raster_toml(const RasterArgs& a, const Scene& scene, const realtime:
     st.record("light_samples", static_cast<std::int64_t>(o.lighting.light_samples));
     st.record("environment_samples", static_cast<std::int64_t>(o.lighting.environment_samples));
     st.record("shadow_map_size", static_cast<std::int64_t>(o.lighting.shadow_map_size));
+    st.record("environment_map_size", static_cast<std::int64_t>(o.lighting.environment_map_size));
     st.record("translucency", std::string(a.no_translucency ? "off" : "on"));
     ConfigTable t = root.table_or_empty("times_ms");
     for (const auto& p : r.times) t.record(p.pass, p.ms);
@@ -128,6 +129,7 @@ int run_raster(const RasterArgs& a) {
     o.lighting.light_samples = a.light_samples;
     o.lighting.environment_samples = a.environment_samples;
     o.lighting.shadow_map_size = a.shadow_map;
+    o.lighting.environment_map_size = a.environment_map;
     o.method = a.sss == "reference" ? realtime::SssMethod::kReference
                : a.sss == "none"    ? realtime::SssMethod::kNone
                                     : realtime::SssMethod::kSeparable;
@@ -265,7 +267,11 @@ void register_raster(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--env-samples", a->environment_samples,
                     "Stratified shadow-mapped directions of the environment light (default 64)")
         ->check(integer_in(1, 4096));
-    sub->add_option("--shadow-map", a->shadow_map, "Shadow map size in texels (default 2048)")
+    sub->add_option("--shadow-map", a->shadow_map,
+                    "Shadow map size in texels per side, per light sample (default 2048)")
+        ->check(integer_in(16, 16384));
+    sub->add_option("--env-map", a->environment_map,
+                    "Shadow map size of each environment direction (default 512)")
         ->check(integer_in(16, 16384));
     sub->add_option("--reference-samples", a->reference_samples,
                     "--sss reference: kernel samples per pixel where the exact 2D sum is too "

@@ -232,6 +232,8 @@ RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_
         static_cast<int>(t.integer("environment_samples", 64, Range::closed(1, 4096)));
     s.shadow_map_size =
         static_cast<int>(t.integer("shadow_map_size", 2048, Range::closed(16, 16384)));
+    s.environment_map_size =
+        static_cast<int>(t.integer("environment_map_size", 512, Range::closed(16, 16384)));
     s.reference_samples =
         static_cast<int>(t.integer("reference_samples", 256, Range::closed(1, 1 << 20)));
     s.quick_factor = t.number("quick_factor", 0.125, Range::left_open(0, 1));
@@ -289,6 +291,7 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         fo.lighting.light_samples = spec.light_samples;
         fo.lighting.environment_samples = spec.environment_samples;
         fo.lighting.shadow_map_size = spec.shadow_map_size;
+        fo.lighting.environment_map_size = spec.environment_map_size;
         fo.sss.mode = mode;
         fo.sss.follow_strength = realtime::default_follow_strength(scene);
         fo.sss.reject_depth = realtime::default_reject_depth(scene);

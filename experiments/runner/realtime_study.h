@@ -18,7 +18,8 @@
 //   spp = 252                     # the path tracer's reference (a cached render, role
 //                                 # "realtime"; shared with any study of the same budget)
 //   photons = 1e6                 # MCML photons per channel of each material's profile
-//   light_samples = 16, environment_samples = 64, shadow_map_size = 2048
+//   light_samples = 16, environment_samples = 64, shadow_map_size = 2048,
+//   environment_map_size = 512    # realtime/lighting.h LightingOptions
 //   reference_samples = 256       # the exact reference's samples per pixel where it samples
 //   quick_factor = 0.125          # --quick: spp and photons times this (spp at least 12) ...
 //   quick_size = 64               # ... and at most this many pixels wide and high
@@ -59,7 +60,8 @@ struct RealtimeStudySpec {
     std::string edge = "follow";
     std::int64_t spp = 252;
     std::int64_t photons = 1'000'000;
-    int light_samples = 16, environment_samples = 64, shadow_map_size = 2048;
+    int light_samples = 16, environment_samples = 64, shadow_map_size = 2048,
+        environment_map_size = 512;
     int reference_samples = 256;
     double quick_factor = 0.125;
     int quick_size = 64;
