@@ -340,3 +340,156 @@ TEST(RasterCommand, WritesTheLayersThePassTimesAndRefusesBadInput) {
 
 }  // namespace
 }  // namespace ssslab
+
+namespace ssslab {
+namespace {
+
+using realtime::SssEdgeMode;
+
+double layer_sum(const LayeredImage& im, const std::string& name, bool& finite, bool& nonneg) {
+    double s = 0;
+    for (float v : im.layer(name).pixels()) {
+        finite = finite && std::isfinite(v);
+        nonneg = nonneg && v >= 0;
+        s += v;
+    }
+    return s;
+}
+
+// Stiff views: the slab seen at grazing incidence (the kernel's footprint foreshortened to a
+// sliver, depth changing fast along it) and the ball far away, a medium seen through nothing but
+// its silhouette (a few pixels, every neighbour another surface). The pass stays finite and
+// non-negative and keeps the subsurface light within what the no-pass frame has.
+TEST(FrameStiff, GrazingViewAndASilhouetteOnly) {
+    std::string grazing = kSlab;
+    grazing.replace(grazing.find("position = [0, 40, 0]"), 21, "position = [0, 0.8, 30]");
+    grazing.replace(grazing.find("up = [0, 0, -1]"), 15, "up = [0, 1, 0]");
+    std::string far = kScene;
+    far.replace(far.find("position = [0, 8, 40]"), 21, "position = [0, 8, 300]");
+    const RadialProfile p = gaussian_profile({2.4, 1.8, 1.2}, 0.02, 600);
+    for (const std::string* text : {&grazing, &far}) {
+        SCOPED_TRACE(text == &grazing ? "grazing" : "silhouette");
+        const Scene s = scene_of(*text);
+        for (SssEdgeMode mode :
+             {SssEdgeMode::kNone, SssEdgeMode::kFollowSurface, SssEdgeMode::kReject}) {
+            FrameOptions o = small();
+            o.sss.mode = mode;
+            const realtime::RasterizedFrame f = realtime::rasterize_frame(s, o);
+            ASSERT_EQ(f.media_in_view.size(), 1u);
+            if (text == &far) {  // a silhouette: a few pixels, each of them partly the floor
+                const auto n = std::count(f.raster.shape.begin(), f.raster.shape.end(), 0);
+                EXPECT_GT(n, 0);
+                EXPECT_LT(n, 12);
+            }
+            const auto mats = materials_for(s, f, p, "svd:rank=1,l1", 17, true);
+            const realtime::LitFrame lit = realtime::light_frame(s, f, o);
+            const realtime::FrameResult sep = realtime::render_frame(s, f, lit, mats, o);
+            o.method = SssMethod::kReference;
+            const realtime::FrameResult ref = realtime::render_frame(s, f, lit, mats, o);
+            o.method = SssMethod::kNone;
+            const realtime::FrameResult none = realtime::render_frame(s, f, lit, mats, o);
+            bool finite = true, nonneg = true;
+            const double a = layer_sum(sep.image, "subsurface", finite, nonneg);
+            const double b = layer_sum(ref.image, "subsurface", finite, nonneg);
+            const double c = layer_sum(none.image, "subsurface", finite, nonneg);
+            EXPECT_TRUE(finite);
+            EXPECT_TRUE(nonneg);
+            ASSERT_GT(c, 0);
+            // Normalised kernels and clamp-to-edge: light is moved, not made. (With mode none
+            // some leaves the medium's pixels, which then show none of it.)
+            EXPECT_LE(a, 1.02 * c);
+            EXPECT_LE(b, 1.02 * c);
+            if (mode != SssEdgeMode::kNone) {
+                EXPECT_GT(a, 0.5 * c);
+                EXPECT_GT(b, 0.5 * c);
+            }
+        }
+    }
+}
+
+// A depth step between two media: a Skin1 box in front of a Marble slab. Where the pass follows
+// the surface or rejects across the step, the slab's pixels do not depend on what the box is:
+// the same with the box a diffuse surface of the same shape (same shadows), to the last bit.
+// With no edge handling the box's light bleeds into them.
+TEST(FrameStiff, ADepthStepBetweenTwoMediaDoesNotBleed) {
+    const std::string base = R"(
+[scene]
+name = "step"
+[camera]
+position = [0, 40, 0]
+target = [0, 0, 0]
+up = [0, 0, -1]
+fov_y_deg = 30
+width = 64
+height = 56
+[[lights]]
+type = "directional"
+direction = [0.3, 1, 0.2]
+irradiance = [3, 3, 3]
+angular_radius_deg = 2
+[[materials]]
+name = "slab"
+preset = "Marble"
+roughness = 0.3
+[[materials]]
+name = "box"
+BOX
+[[shapes]]
+type = "box"
+size = [200, 20, 200]
+translate = [0, -10, 0]
+material = "slab"
+[[shapes]]
+type = "box"
+size = [8, 6, 30]
+translate = [-2, 8, 0]
+material = "box"
+)";
+    auto with = [&](const std::string& box) {
+        std::string t = base;
+        t.replace(t.find("BOX"), 3, box);
+        return scene_of(t);
+    };
+    const Scene media = with("preset = \"Skin1\"\nroughness = 0.3");
+    const Scene diffuse = with("type = \"diffuse\"\nalbedo = [0.5, 0.5, 0.5]");
+    const RadialProfile p = gaussian_profile({2.4, 1.8, 1.2}, 0.02, 600);
+    for (SssEdgeMode mode :
+         {SssEdgeMode::kNone, SssEdgeMode::kFollowSurface, SssEdgeMode::kReject}) {
+        FrameOptions o = small();
+        o.sss.mode = mode;
+        o.sss.follow_strength = realtime::default_follow_strength(media);
+        o.sss.reject_depth = realtime::default_reject_depth(media);
+        std::array<LayeredImage, 2> im = {LayeredImage(1, 1), LayeredImage(1, 1)};
+        for (int k = 0; k < 2; ++k) {
+            const Scene& s = k == 0 ? media : diffuse;
+            const realtime::RasterizedFrame f = realtime::rasterize_frame(s, o);
+            im[static_cast<size_t>(k)] =
+                realtime::render_frame(s, f, materials_for(s, f, p, "svd:rank=1,l1", 17, false), o)
+                    .image;
+        }
+        double diff = 0, total = 0;
+        int slab = 0;
+        const ImageLayer& mat = im[1].layer("material");
+        for (int y = 0; y < 56; ++y)
+            for (int x = 0; x < 64; ++x) {
+                if (mat.at(x, y) != 0) continue;  // the slab's pixels
+                ++slab;
+                for (int c = 0; c < 3; ++c) {
+                    const double a = im[0].layer("subsurface").at(x, y, c);
+                    const double b = im[1].layer("subsurface").at(x, y, c);
+                    diff += std::abs(a - b);
+                    total += b;
+                }
+            }
+        ASSERT_GT(slab, 1000);
+        std::printf("depth step, mode %d: the box's light in the slab's pixels %.3g %%\n",
+                    static_cast<int>(mode), 100 * diff / total);
+        if (mode == SssEdgeMode::kNone)
+            EXPECT_GT(diff, 1e-3 * total);
+        else
+            EXPECT_EQ(diff, 0.0);
+    }
+}
+
+}  // namespace
+}  // namespace ssslab
