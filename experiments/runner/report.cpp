@@ -518,7 +518,11 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
        << "<body data-images-ok=\"pending\">\n";
     os << "<h1>" << esc(e.title) << "</h1>\n<p class=\"meta\">experiment <code>" << esc(e.name)
        << "</code> from <code>" << esc(e.source) << "</code> &middot; "
-       << (r.quick ? "<b>--quick</b> (budgets &times; " + num(e.mcml.quick_factor) + ")"
+       << (r.quick ? "<b>--quick</b> (budgets &times; " +
+                         num(!e.materials.empty() ? e.mcml.quick_factor
+                             : e.realtime.enabled ? e.realtime.quick_factor
+                                                  : e.render.quick_factor) +
+                         ")"
                    : "full budgets")
        << " &middot; seed " << e.seed << " &middot; revision <code>" << esc(git_revision())
        << "</code> &middot; " << esc(utc_now()) << " &middot; " << num(r.seconds, 3)
