@@ -2,11 +2,18 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 namespace ssslab::realtime {
 
@@ -61,19 +68,40 @@ void check(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
                 if (t.taps.weight[ch].size() != t.taps.offset_mm.size())
                     throw std::invalid_argument("sss_pass: weights and offsets differ in length");
         }
-    for (size_t i = 0; i < n; ++i) {
+    // The first bad pixel (the lowest index, whatever the thread count), found in parallel.
+    auto bad = [&](size_t i) {
         const int32_t m = g.material[i];
+        return m < -1 || m >= static_cast<int32_t>(materials.size()) ||
+               (m >= 0 && !(g.view_z[i] > 0 && std::isfinite(g.view_z[i])));
+    };
+    const size_t first = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 16384), n,
+        [&](const tbb::blocked_range<size_t>& r, size_t found) {
+            for (size_t i = r.begin(); i < r.end() && i < found; ++i)
+                if (bad(i)) return i;
+            return found;
+        },
+        [](size_t a, size_t b) { return std::min(a, b); });
+    if (first < n) {
+        const int32_t m = g.material[first];
         if (m < -1 || m >= static_cast<int32_t>(materials.size()))
             throw std::invalid_argument("sss_pass: material index " + std::to_string(m) +
                                         " without a kernel");
-        if (m >= 0 && !(g.view_z[i] > 0 && std::isfinite(g.view_z[i])))
-            throw std::invalid_argument("sss_pass: a medium pixel has no positive finite depth");
+        throw std::invalid_argument("sss_pass: a medium pixel has no positive finite depth");
     }
 }
 
 // A texel of a pass's input: R, G, B and the view z in the fourth lane, so that one 16-byte
 // load fetches everything a tap needs (GCC vector extension: SSE2 on any x86-64).
 typedef float F4 __attribute__((vector_size(16)));
+typedef int32_t I4 __attribute__((vector_size(16)));
+inline F4 abs4(F4 v) {
+    I4 bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    bits &= 0x7fffffff;
+    std::memcpy(&v, &bits, sizeof v);
+    return v;
+}
 
 // One term's taps prepared for the pass.
 struct PreparedTerm {
@@ -93,91 +121,167 @@ struct LineParams {
     uint32_t seed = 0;
 };
 
+// The texels a 1D pass reads: a row of the G-buffer (irradiance and view z read in place) or a
+// column of the horizontal pass's result (R, G, B, z texels, contiguous).
+struct ColumnLine {
+    const F4* t;
+    F4 texel(int q) const { return t[q]; }
+    float depth(int q) const { return t[q][3]; }
+};
+
 // One output pixel of a 1D pass of term pt at position pos of a line (a row, or a column of the
 // transposed image) of len texels: the rules of the file comment of sss_pass.h, per texel.
-// `line` holds R, G, B, z per texel, `mat` the materials along the line; (x, y, pass) feed the
-// jitter hash. Inside: every tap position lies within [0, len - 1), so no clamping is needed.
-template <SssEdgeMode M, bool Jitter, bool Inside>
-F4 filter_pixel(const F4* line, const int32_t* mat, int len, int pos, const PreparedTerm& pt,
-                double scale, const LineParams& lp, int x, int y, int pass) {
+// `line` holds R, G, B, z per texel, the materials along the line are mat[pos * mstride];
+// (x, y, pass) feed the jitter hash. Inside: every tap position lies within [0, len - 1), so no
+// clamping is needed. In chunks of up to kChunk taps: the texel indices and interpolation
+// weights of all taps first, then the edge rule's per-texel weights (loops over taps that GCC
+// vectorises), then one 16-byte load per texel and the weighted sums.
+constexpr size_t kChunk = 32;
+
+template <SssEdgeMode M, bool Jitter, bool Inside, class Line>
+F4 filter_pixel(const Line& line, const int32_t* mat, ptrdiff_t mstride, int len, int pos,
+                const PreparedTerm& pt, double scale, const LineParams& lp, int x, int y,
+                int pass) {
     const approx::TapKernel& taps = pt.term->taps;
-    const F4 centre = line[pos];
+    const F4 centre = line.texel(pos);
     const float zc = centre[3];
-    const int32_t mc = mat[pos];
-    F4 acc{}, extra{};  // extra: follow-surface's weight of the centre, rejection's kept weight
+    const int32_t mc = mat[pos * mstride];
+    // Two accumulators each (even and odd taps) to shorten the dependency chains.
+    F4 acc0{}, acc1{}, extra0{}, extra1{};  // extra: follow's centre weight, reject's kept weight
     bool dropped = false;
     const size_t count = taps.offset_mm.size();
-    auto texel = [&](int q, float tw, F4 w) {
-        const F4 v = line[q];
-        if constexpr (M == SssEdgeMode::kNone) {
-            acc += (w * tw) * v;
-        } else if constexpr (M == SssEdgeMode::kFollowSurface) {
-            // [Freude14 Eq. 4.12]: s_c = o_c (1 - t) + i_c t, the centre's share summed apart.
-            const float kd = lp.follow * std::fabs(v[3] - zc);
-            const float t = kd < 1.0f ? kd : 1.0f;  // NaN and inf: 1, as std::min(1, kd)
-            acc += (w * (tw * (1 - t))) * v;
-            extra += w * (tw * t);
-        } else {
-            const float dz = std::fabs(v[3] - zc);
-            const bool keep = mat[q] == mc && dz <= lp.reject_depth;
-            dropped |= !keep && tw != 0;
-            const F4 wk = w * (keep ? tw : 0.0f);
-            acc += wk * v;
-            extra += wk;
+    int i0[kChunk], i1[kChunk];
+    alignas(16) float a0[kChunk], a1[kChunk], b[kChunk];
+    for (size_t begin = 0; begin < count; begin += kChunk) {
+        const size_t m = std::min(kChunk, count - begin);
+        // Texels and interpolation weights (approx::tap_texels's rule).
+        for (size_t j = 0; j < m; ++j) {
+            const size_t i = begin + j;
+            double o = taps.offset_mm[i];
+            if constexpr (Jitter)
+                o = approx::jittered_offset_mm(
+                    taps, pt.range, i,
+                    approx::jitter_hash(x, y, pass, static_cast<int>(i), lp.seed));
+            const double s = pos + o * scale;
+            double t;
+            if constexpr (Inside) {
+                i0[j] = static_cast<int>(s);
+                i1[j] = i0[j] + 1;
+                t = s - i0[j];
+            } else {
+                const approx::TapTexels tt = approx::tap_texels(s, len);
+                i0[j] = tt.i0;
+                i1[j] = tt.i1;
+                t = tt.t;
+            }
+            a1[j] = static_cast<float>(t);
+            a0[j] = 1 - a1[j];
         }
-    };
-    for (size_t i = 0; i < count; ++i) {
-        double o = taps.offset_mm[i];
-        if constexpr (Jitter)
-            o = approx::jittered_offset_mm(
-                taps, pt.range, i, approx::jitter_hash(x, y, pass, static_cast<int>(i), lp.seed));
-        const double s = pos + o * scale;
-        int i0, i1;
-        double t;
-        if constexpr (Inside) {
-            i0 = static_cast<int>(s);
-            i1 = i0 + 1;
-            t = s - i0;
-        } else {
-            const approx::TapTexels tt = approx::tap_texels(s, len);
-            i0 = tt.i0;
-            i1 = tt.i1;
-            t = tt.t;
+        // The edge rule's weights per texel.
+        if constexpr (M == SssEdgeMode::kFollowSurface) {
+            // [Freude14 Eq. 4.12]: s_c = o_c (1 - t) + i_c t, the centre's share b summed apart;
+            // four taps at a time (the chunk padded with taps of weight 0 at the centre's depth).
+            alignas(16) float z0[kChunk], z1[kChunk];
+            const size_t m4 = (m + 3) & ~size_t{3};
+            for (size_t j = 0; j < m; ++j) {
+                z0[j] = line.depth(i0[j]);
+                z1[j] = line.depth(i1[j]);
+            }
+            for (size_t j = m; j < m4; ++j) {
+                z0[j] = z1[j] = zc;
+                a0[j] = a1[j] = 0;
+            }
+            const F4 follow = F4{} + lp.follow, one = F4{} + 1.0f, zc4 = F4{} + zc;
+            for (size_t j = 0; j < m4; j += 4) {
+                F4 vz0, vz1, va0, va1;
+                std::memcpy(&vz0, z0 + j, sizeof vz0);
+                std::memcpy(&vz1, z1 + j, sizeof vz1);
+                std::memcpy(&va0, a0 + j, sizeof va0);
+                std::memcpy(&va1, a1 + j, sizeof va1);
+                const F4 k0 = follow * abs4(vz0 - zc4), k1 = follow * abs4(vz1 - zc4);
+                const F4 t0 = k0 < one ? k0 : one;  // NaN and inf: 1, as std::min(1, k)
+                const F4 t1 = k1 < one ? k1 : one;
+                const F4 vb = va0 * t0 + va1 * t1;
+                va0 *= one - t0;
+                va1 *= one - t1;
+                std::memcpy(b + j, &vb, sizeof vb);
+                std::memcpy(a0 + j, &va0, sizeof va0);
+                std::memcpy(a1 + j, &va1, sizeof va1);
+            }
+        } else if constexpr (M == SssEdgeMode::kReject) {
+            for (size_t j = 0; j < m; ++j) {
+                const bool keep0 = mat[i0[j] * mstride] == mc &&
+                                   std::fabs(line.depth(i0[j]) - zc) <= lp.reject_depth;
+                const bool keep1 = mat[i1[j] * mstride] == mc &&
+                                   std::fabs(line.depth(i1[j]) - zc) <= lp.reject_depth;
+                dropped |= (!keep0 && a0[j] != 0) || (!keep1 && a1[j] != 0);
+                a0[j] = keep0 ? a0[j] : 0.0f;
+                a1[j] = keep1 ? a1[j] : 0.0f;
+                b[j] = a0[j] + a1[j];
+            }
         }
-        const float tf = static_cast<float>(t);
-        texel(i0, 1 - tf, pt.weight[i]);
-        texel(i1, tf, pt.weight[i]);
+        // The weighted sums, two taps at a time.
+        const F4* wt = &pt.weight[begin];
+        auto tap = [&](size_t j, F4& acc, F4& extra) {
+            acc += wt[j] * (a0[j] * line.texel(i0[j]) + a1[j] * line.texel(i1[j]));
+            if constexpr (M != SssEdgeMode::kNone) extra += wt[j] * b[j];
+        };
+        size_t j = 0;
+        for (; j + 1 < m; j += 2) {
+            tap(j, acc0, extra0);
+            tap(j + 1, acc1, extra1);
+        }
+        if (j < m) tap(j, acc0, extra0);
     }
-    F4 out = acc;
+    F4 out = acc0 + acc1;
+    const F4 extra = extra0 + extra1;
     if constexpr (M == SssEdgeMode::kFollowSurface) out += extra * centre;
     if constexpr (M == SssEdgeMode::kReject) {
+        const F4 kept = extra;
         if (dropped)
             for (int ch = 0; ch < 3; ++ch)
-                out[ch] = extra[ch] != 0
-                              ? static_cast<float>(acc[ch] * (pt.weight_sum[ch] / extra[ch]))
+                out[ch] = kept[ch] != 0
+                              ? static_cast<float>(out[ch] * (pt.weight_sum[ch] / kept[ch]))
                               : static_cast<float>(pt.weight_sum[ch] * centre[ch]);
     }
     return out;
 }
 
-using PixelFn = F4 (*)(const F4*, const int32_t*, int, int, const PreparedTerm&, double,
-                       const LineParams&, int, int, int);
+template <class Line>
+using PixelFn = F4 (*)(const Line&, const int32_t*, ptrdiff_t, int, int, const PreparedTerm&,
+                       double, const LineParams&, int, int, int);
 
-template <SssEdgeMode M>
-PixelFn pick(bool jitter, bool inside) {
-    if (jitter) return inside ? filter_pixel<M, true, true> : filter_pixel<M, true, false>;
-    return inside ? filter_pixel<M, false, true> : filter_pixel<M, false, false>;
+template <SssEdgeMode M, class Line>
+PixelFn<Line> pick(bool jitter, bool inside) {
+    if (jitter)
+        return inside ? filter_pixel<M, true, true, Line> : filter_pixel<M, true, false, Line>;
+    return inside ? filter_pixel<M, false, true, Line> : filter_pixel<M, false, false, Line>;
 }
-PixelFn pick(SssEdgeMode m, bool jitter, bool inside) {
+template <class Line>
+PixelFn<Line> pick(SssEdgeMode m, bool jitter, bool inside) {
     switch (m) {
         case SssEdgeMode::kNone:
-            return pick<SssEdgeMode::kNone>(jitter, inside);
+            return pick<SssEdgeMode::kNone, Line>(jitter, inside);
         case SssEdgeMode::kFollowSurface:
-            return pick<SssEdgeMode::kFollowSurface>(jitter, inside);
+            return pick<SssEdgeMode::kFollowSurface, Line>(jitter, inside);
         case SssEdgeMode::kReject:
             break;
     }
-    return pick<SssEdgeMode::kReject>(jitter, inside);
+    return pick<SssEdgeMode::kReject, Line>(jitter, inside);
+}
+
+// Transparent huge pages for [p, p + bytes) where the kernel offers them on request (a hint; a
+// no-op elsewhere).
+void advise_huge_pages(void* p, size_t bytes) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    constexpr uintptr_t kHuge = uintptr_t{1} << 21;
+    const uintptr_t begin = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
+    const uintptr_t end = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
+    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+#else
+    (void)p;
+    (void)bytes;
+#endif
 }
 
 }  // namespace
@@ -224,91 +328,113 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
     lp.reject_depth = static_cast<float>(p.reject_depth);
     lp.jitter = p.jitter;
     lp.seed = p.seed;
-    PixelFn fn[2] = {pick(p.mode, jitter, false), pick(p.mode, jitter, true)};
+    const PixelFn<ColumnLine> column_fn[2] = {pick<ColumnLine>(p.mode, jitter, false),
+                                              pick<ColumnLine>(p.mode, jitter, true)};
 
     // Kernel scale [Freude14 Eq. 4.11]: pixels per mm at view depth z, along y and along x.
     const double py_per_mm_z = h / (2.0 * p.tan_half * p.unit_mm);
     const double px_per_mm_z = w / (2.0 * p.tan_half * p.aspect * p.unit_mm);
 
-    // The input as R, G, B, z texels, row-major; the horizontal pass writes its result
-    // transposed (column-major), so that the vertical pass reads contiguous memory too.
-    std::vector<F4> in(n, F4{}), tmp(n, F4{});
-    std::vector<int32_t> mat_t(n);
-    std::vector<float> out(3 * n);
-    const int grain = 16;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          for (size_t c = r.begin(); c < r.end(); ++c) {
-                              const float* e = &g.irradiance[3 * c];
-                              in[c] = F4{e[0], e[1], e[2], g.view_z[c]};
-                              const bool medium = g.material[c] >= 0;
-                              for (int ch = 0; ch < 3; ++ch) out[3 * c + ch] = medium ? 0 : e[ch];
-                          }
-                      });
-    tbb::parallel_for(tbb::blocked_range<int>(0, w, grain), [&](const tbb::blocked_range<int>& r) {
-        for (int x = r.begin(); x < r.end(); ++x)
-            for (int y = 0; y < h; ++y)
-                mat_t[static_cast<size_t>(x) * h + y] = g.material[static_cast<size_t>(y) * w + x];
-    });
+    // The output starts as the input (what material -1 keeps). Large and written once: on
+    // Linux, ask for transparent huge pages, which makes its first touch (a serial page-fault
+    // loop, about 13 ms at 1080p on 4 KiB pages) several times cheaper.
+    std::vector<float> out;
+    out.reserve(3 * n);
+    // advise_huge_pages(out.data(), 3 * n * sizeof(float));
+    out.assign(g.irradiance.begin(), g.irradiance.end());
 
-    // One 1D pass of term k over line `line` (0..lines-1) of src: calls store(pos, value) for
-    // the medium pixels whose kernel has term k, store(pos, nullptr) for the others.
-    auto run_line = [&](const F4* src, const int32_t* mat, int len, size_t k, int dir, int line,
-                        double per_mm_z, auto&& store) {
-        for (int pos = 0; pos < len; ++pos) {
-            const int32_t m = mat[pos];
+    // One 1D pass of term k at positions [begin, end) of a line of len texels, materials at
+    // mat[pos * mstride]: calls store(pos, value) for the medium pixels whose kernel has term k,
+    // store(pos, nullptr) for the others.
+    auto run_line = [&](const auto& line, const auto* fn, const int32_t* mat, ptrdiff_t mstride,
+                        int len, int begin, int end, size_t k, int dir, int index, double per_mm_z,
+                        auto&& store) {
+        for (int pos = begin; pos < end; ++pos) {
+            const int32_t m = mat[pos * mstride];
             if (m < 0 || k >= prep[static_cast<size_t>(m)].size()) {
                 store(pos, nullptr);
                 continue;
             }
             const PreparedTerm& pt = prep[static_cast<size_t>(m)][k];
-            const double scale = per_mm_z / src[pos][3];
+            const F4 c = line.texel(pos);
+            const double scale = per_mm_z / c[3];
             if (pt.term->taps.support_mm * scale < 0.5) {
                 // The whole kernel within the centre pixel's bin: the identity times the
                 // kernel's mass (approx/convolve.h's convention).
-                F4 v;
+                F4 v{};
                 for (int ch = 0; ch < 3; ++ch)
-                    v[ch] = static_cast<float>(pt.weight_sum[ch] * src[pos][ch]);
-                v[3] = 0;
+                    v[ch] = static_cast<float>(pt.weight_sum[ch] * c[ch]);
                 store(pos, &v);
                 continue;
             }
             const bool inside = pos + pt.lo_mm * scale >= 0 && pos + pt.hi_mm * scale < len - 1;
-            const int x = dir == 0 ? pos : line, y = dir == 0 ? line : pos;
-            const F4 v =
-                fn[inside](src, mat, len, pos, pt, scale, lp, x, y, static_cast<int>(2 * k) + dir);
+            const int x = dir == 0 ? pos : index, y = dir == 0 ? index : pos;
+            const F4 v = fn[inside](line, mat, mstride, len, pos, pt, scale, lp, x, y,
+                                    static_cast<int>(2 * k) + dir);
             store(pos, &v);
         }
     };
 
+    // The horizontal pass reads a row of R, G, B, z texels (built per row, so it stays in
+    // cache) and writes its result transposed (column-major), so that the vertical pass reads
+    // contiguous memory too. tmp is left uninitialised: its pages are first touched by the
+    // parallel horizontal pass, not by a serial fill.
+    const std::unique_ptr<F4[]> tmp(new F4[n]);
+    advise_huge_pages(tmp.get(), n * sizeof(F4));
+    const int grain = 16;
     for (size_t k = 0; k < rank; ++k) {
-        // Horizontal, written transposed: pixels without term k hold their input.
-        tbb::parallel_for(tbb::blocked_range<int>(0, h, grain),
-                          [&](const tbb::blocked_range<int>& r) {
-                              for (int y = r.begin(); y < r.end(); ++y) {
-                                  const size_t row = static_cast<size_t>(y) * w;
-                                  run_line(&in[row], &g.material[row], w, k, 0, y, px_per_mm_z,
-                                           [&](int x, const F4* v) {
-                                               F4& dst = tmp[static_cast<size_t>(x) * h + y];
-                                               const F4 src = in[row + x];
-                                               dst = v ? *v : src;
-                                               dst[3] = src[3];
-                                           });
-                              }
-                          });
-        // Vertical, over the columns, summed with the term's signs.
+        // Horizontal, written transposed: pixels without term k hold their input. Blocks of
+        // kBlock rows, so that each column of the block goes out as kBlock contiguous texels.
+        constexpr int kBlock = 16;
+        const int blocks = (h + kBlock - 1) / kBlock;
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, blocks, 1), [&](const tbb::blocked_range<int>& r) {
+                std::vector<F4> buf(static_cast<size_t>(w), F4{});
+                std::vector<F4> block(static_cast<size_t>(w) * kBlock, F4{});
+                for (int b = r.begin(); b < r.end(); ++b) {
+                    const int y0 = b * kBlock, y1 = std::min(h, y0 + kBlock);
+                    for (int y = y0; y < y1; ++y) {
+                        const size_t row = static_cast<size_t>(y) * w;
+                        for (int x = 0; x < w; ++x) {
+                            const float* e = &g.irradiance[3 * (row + x)];
+                            buf[static_cast<size_t>(x)] = F4{e[0], e[1], e[2], g.view_z[row + x]};
+                        }
+                        const ColumnLine line{buf.data()};
+                        run_line(line, column_fn, &g.material[row], 1, w, 0, w, k, 0, y,
+                                 px_per_mm_z, [&](int x, const F4* v) {
+                                     F4& dst = block[static_cast<size_t>(x) * kBlock + (y - y0)];
+                                     const F4 src = buf[static_cast<size_t>(x)];
+                                     dst = v ? *v : src;
+                                     dst[3] = src[3];
+                                 });
+                    }
+                    for (int x = 0; x < w; ++x)
+                        std::memcpy(&tmp[static_cast<size_t>(x) * h + y0],
+                                    &block[static_cast<size_t>(x) * kBlock],
+                                    static_cast<size_t>(y1 - y0) * sizeof(F4));
+                }
+            });
+        // Vertical, over the columns, summed with the term's signs into the output (term 0
+        // sets it: a material without terms gives 0, as an empty sum).
         tbb::parallel_for(
             tbb::blocked_range<int>(0, w, grain), [&](const tbb::blocked_range<int>& r) {
                 for (int x = r.begin(); x < r.end(); ++x) {
-                    const size_t col = static_cast<size_t>(x) * h;
-                    run_line(
-                        &tmp[col], &mat_t[col], h, k, 1, x, py_per_mm_z, [&](int y, const F4* v) {
-                            if (!v) return;
-                            const size_t c = static_cast<size_t>(y) * w + x;
-                            const SssTerm& t = *prep[static_cast<size_t>(g.material[c])][k].term;
-                            for (int ch = 0; ch < 3; ++ch)
-                                out[3 * c + ch] += static_cast<float>(t.sign[ch]) * (*v)[ch];
-                        });
+                    const ColumnLine line{&tmp[static_cast<size_t>(x) * h]};
+                    run_line(line, column_fn, &g.material[static_cast<size_t>(x)], w, h, 0, h, k, 1,
+                             x, py_per_mm_z, [&](int y, const F4* v) {
+                                 const size_t c = static_cast<size_t>(y) * w + x;
+                                 const int32_t m = g.material[c];
+                                 if (!v) {
+                                     if (k == 0 && m >= 0)
+                                         for (int ch = 0; ch < 3; ++ch) out[3 * c + ch] = 0;
+                                     return;
+                                 }
+                                 const SssTerm& t = *prep[static_cast<size_t>(m)][k].term;
+                                 for (int ch = 0; ch < 3; ++ch) {
+                                     const float sv = static_cast<float>(t.sign[ch]) * (*v)[ch];
+                                     out[3 * c + ch] = k == 0 ? sv : out[3 * c + ch] + sv;
+                                 }
+                             });
                 }
             });
     }
