@@ -1,7 +1,8 @@
 // Google Benchmark of the separable SSS pass (realtime/sss_pass.h) at 1920 x 1080: a sphere of
 // medium (view z from the sphere, a third of the image wide) on no medium, 17 taps of a
 // Gaussian-like kernel of 3 mm support at about 20 px a mm (the skin scene's scale), rank 1,
-// follow-surface with and without jitter, one thread and two (Arg). `ssslab bench --realtime`
+// follow-surface with and without jitter, one thread and two (Args: threads, jitter, sphere
+// radius; radius 0: no medium, the pass's fixed cost). `ssslab bench --realtime`
 // is the figure against the memory floor; this one isolates the pass for profiling.
 #include "realtime/sss_pass.h"
 
@@ -15,9 +16,9 @@
 namespace ssslab::realtime {
 namespace {
 
-SssGBuffer sphere_gbuffer(int w, int h) {
+SssGBuffer sphere_gbuffer(int w, int h, double radius) {
     SssGBuffer g(w, h);
-    const double tan_half = std::tan(15.0 * 3.14159265358979 / 180.0), dist = 95, radius = 16;
+    const double tan_half = std::tan(15.0 * 3.14159265358979 / 180.0), dist = 95;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const size_t i = static_cast<size_t>(y) * w + x;
@@ -61,7 +62,7 @@ void BM_SssPass(benchmark::State& state) {
     const int threads = static_cast<int>(state.range(0));
     const bool jitter = state.range(1) != 0;
     const int w = 1920, h = 1080;
-    const SssGBuffer g = sphere_gbuffer(w, h);
+    const SssGBuffer g = sphere_gbuffer(w, h, static_cast<double>(state.range(2)));
     const std::vector<SssMaterialKernel> mats = {gaussian_kernel(17, 3.0)};
     SssParams p;
     p.tan_half = std::tan(15.0 * 3.14159265358979 / 180.0);
@@ -75,9 +76,10 @@ void BM_SssPass(benchmark::State& state) {
     state.counters["medium_px"] = static_cast<double>(medium);
 }
 BENCHMARK(BM_SssPass)
-    ->Args({1, 0})
-    ->Args({2, 0})
-    ->Args({1, 1})
+    ->Args({1, 0, 16})
+    ->Args({2, 0, 16})
+    ->Args({1, 1, 16})
+    ->Args({1, 0, 0})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

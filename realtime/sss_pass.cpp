@@ -126,6 +126,7 @@ struct LineParams {
 struct ColumnLine {
     const F4* t;
     F4 texel(int q) const { return t[q]; }
+    const F4* at(int q) const { return t + q; }
     float depth(int q) const { return t[q][3]; }
 };
 
@@ -184,8 +185,14 @@ F4 filter_pixel(const Line& line, const int32_t* mat, ptrdiff_t mstride, int len
             alignas(16) float z0[kChunk], z1[kChunk];
             const size_t m4 = (m + 3) & ~size_t{3};
             for (size_t j = 0; j < m; ++j) {
-                z0[j] = line.depth(i0[j]);
-                z1[j] = line.depth(i1[j]);
+                if constexpr (Inside) {
+                    const F4* q = line.at(i0[j]);
+                    z0[j] = q[0][3];
+                    z1[j] = q[1][3];
+                } else {
+                    z0[j] = line.depth(i0[j]);
+                    z1[j] = line.depth(i1[j]);
+                }
             }
             for (size_t j = m; j < m4; ++j) {
                 z0[j] = z1[j] = zc;
@@ -223,7 +230,12 @@ F4 filter_pixel(const Line& line, const int32_t* mat, ptrdiff_t mstride, int len
         // The weighted sums, two taps at a time.
         const F4* wt = &pt.weight[begin];
         auto tap = [&](size_t j, F4& acc, F4& extra) {
-            acc += wt[j] * (a0[j] * line.texel(i0[j]) + a1[j] * line.texel(i1[j]));
+            if constexpr (Inside) {
+                const F4* q = line.at(i0[j]);  // i1 = i0 + 1
+                acc += wt[j] * (a0[j] * q[0] + a1[j] * q[1]);
+            } else {
+                acc += wt[j] * (a0[j] * line.texel(i0[j]) + a1[j] * line.texel(i1[j]));
+            }
             if constexpr (M != SssEdgeMode::kNone) extra += wt[j] * b[j];
         };
         size_t j = 0;
@@ -335,13 +347,8 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
     const double py_per_mm_z = h / (2.0 * p.tan_half * p.unit_mm);
     const double px_per_mm_z = w / (2.0 * p.tan_half * p.aspect * p.unit_mm);
 
-    // The output starts as the input (what material -1 keeps). Large and written once: on
-    // Linux, ask for transparent huge pages, which makes its first touch (a serial page-fault
-    // loop, about 13 ms at 1080p on 4 KiB pages) several times cheaper.
-    std::vector<float> out;
-    out.reserve(3 * n);
-    // advise_huge_pages(out.data(), 3 * n * sizeof(float));
-    out.assign(g.irradiance.begin(), g.irradiance.end());
+    // The output starts as the input (what material -1 keeps).
+    std::vector<float> out(g.irradiance);
 
     // One 1D pass of term k at positions [begin, end) of a line of len texels, materials at
     // mat[pos * mstride]: calls store(pos, value) for the medium pixels whose kernel has term k,
@@ -382,11 +389,14 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
     const std::unique_ptr<F4[]> tmp(new F4[n]);
     advise_huge_pages(tmp.get(), n * sizeof(F4));
     const int grain = 16;
+    // Blocks of kBlock rows: the horizontal pass writes each column of a block as kBlock
+    // contiguous texels, and notes which block columns hold a medium pixel (busy), so that the
+    // vertical pass skips the rest (it would store nothing there).
+    constexpr int kBlock = 16;
+    const int blocks = (h + kBlock - 1) / kBlock;
+    std::vector<uint8_t> busy(static_cast<size_t>(blocks) * w, 0);
     for (size_t k = 0; k < rank; ++k) {
-        // Horizontal, written transposed: pixels without term k hold their input. Blocks of
-        // kBlock rows, so that each column of the block goes out as kBlock contiguous texels.
-        constexpr int kBlock = 16;
-        const int blocks = (h + kBlock - 1) / kBlock;
+        // Horizontal, written transposed: pixels without term k hold their input.
         tbb::parallel_for(
             tbb::blocked_range<int>(0, blocks, 1), [&](const tbb::blocked_range<int>& r) {
                 std::vector<F4> buf(static_cast<size_t>(w), F4{});
@@ -398,6 +408,11 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
                         for (int x = 0; x < w; ++x) {
                             const float* e = &g.irradiance[3 * (row + x)];
                             buf[static_cast<size_t>(x)] = F4{e[0], e[1], e[2], g.view_z[row + x]};
+                        }
+                        if (k == 0) {
+                            uint8_t* bz = &busy[static_cast<size_t>(b) * w];
+                            for (int x = 0; x < w; ++x)
+                                bz[x] |= static_cast<uint8_t>(g.material[row + x] >= 0);
                         }
                         const ColumnLine line{buf.data()};
                         run_line(line, column_fn, &g.material[row], 1, w, 0, w, k, 0, y,
@@ -420,21 +435,25 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
             tbb::blocked_range<int>(0, w, grain), [&](const tbb::blocked_range<int>& r) {
                 for (int x = r.begin(); x < r.end(); ++x) {
                     const ColumnLine line{&tmp[static_cast<size_t>(x) * h]};
-                    run_line(line, column_fn, &g.material[static_cast<size_t>(x)], w, h, 0, h, k, 1,
-                             x, py_per_mm_z, [&](int y, const F4* v) {
-                                 const size_t c = static_cast<size_t>(y) * w + x;
-                                 const int32_t m = g.material[c];
-                                 if (!v) {
-                                     if (k == 0 && m >= 0)
-                                         for (int ch = 0; ch < 3; ++ch) out[3 * c + ch] = 0;
-                                     return;
-                                 }
-                                 const SssTerm& t = *prep[static_cast<size_t>(m)][k].term;
-                                 for (int ch = 0; ch < 3; ++ch) {
-                                     const float sv = static_cast<float>(t.sign[ch]) * (*v)[ch];
-                                     out[3 * c + ch] = k == 0 ? sv : out[3 * c + ch] + sv;
-                                 }
-                             });
+                    for (int b = 0; b < blocks; ++b) {
+                        if (!busy[static_cast<size_t>(b) * w + x]) continue;
+                        run_line(line, column_fn, &g.material[static_cast<size_t>(x)], w, h,
+                                 b * kBlock, std::min(h, (b + 1) * kBlock), k, 1, x, py_per_mm_z,
+                                 [&](int y, const F4* v) {
+                                     const size_t c = static_cast<size_t>(y) * w + x;
+                                     const int32_t m = g.material[c];
+                                     if (!v) {
+                                         if (k == 0 && m >= 0)
+                                             for (int ch = 0; ch < 3; ++ch) out[3 * c + ch] = 0;
+                                         return;
+                                     }
+                                     const SssTerm& t = *prep[static_cast<size_t>(m)][k].term;
+                                     for (int ch = 0; ch < 3; ++ch) {
+                                         const float sv = static_cast<float>(t.sign[ch]) * (*v)[ch];
+                                         out[3 * c + ch] = k == 0 ? sv : out[3 * c + ch] + sv;
+                                     }
+                                 });
+                    }
                 }
             });
     }
