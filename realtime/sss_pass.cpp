@@ -108,7 +108,6 @@ struct PreparedTerm {
     const SssTerm* term = nullptr;
     approx::TapJitterRange range;
     std::array<double, 3> weight_sum{};
-    F4 weight_sum4{};             ///< weight_sum as floats, lane 3 zero
     std::vector<F4> weight;       ///< per tap (R, G, B, 0) as floats
     double lo_mm = 0, hi_mm = 0;  ///< the extreme offsets a tap can reach (with jitter)
 };
@@ -117,7 +116,6 @@ struct PreparedTerm {
 struct LineParams {
     float follow = 0;        ///< follow_strength / tan_half
     float reject_depth = 0;  ///< kReject's largest depth difference
-    double jitter = 0;
     uint32_t seed = 0;
 };
 
@@ -330,15 +328,12 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
                 pt.lo_mm = std::min(pt.lo_mm, lo);
                 pt.hi_mm = std::max(pt.hi_mm, hi);
             }
-            for (int ch = 0; ch < 3; ++ch)
-                pt.weight_sum4[ch] = static_cast<float>(pt.weight_sum[ch]);
             prep[m].push_back(std::move(pt));
         }
     }
     LineParams lp;
     lp.follow = static_cast<float>(p.follow_strength / p.tan_half);
     lp.reject_depth = static_cast<float>(p.reject_depth);
-    lp.jitter = p.jitter;
     lp.seed = p.seed;
     const PixelFn<ColumnLine> column_fn[2] = {pick<ColumnLine>(p.mode, jitter, false),
                                               pick<ColumnLine>(p.mode, jitter, true)};
