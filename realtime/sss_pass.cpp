@@ -2,10 +2,18 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 namespace ssslab::realtime {
 
@@ -60,14 +68,39 @@ void check(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
                 if (t.taps.weight[ch].size() != t.taps.offset_mm.size())
                     throw std::invalid_argument("sss_pass: weights and offsets differ in length");
         }
-    for (size_t i = 0; i < n; ++i) {
+    // The first bad pixel (the lowest index, whatever the thread count), found in parallel.
+    auto bad = [&](size_t i) {
         const int32_t m = g.material[i];
+        return m < -1 || m >= static_cast<int32_t>(materials.size()) ||
+               (m >= 0 && !(g.view_z[i] > 0 && std::isfinite(g.view_z[i])));
+    };
+    const size_t first = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 16384), n,
+        [&](const tbb::blocked_range<size_t>& r, size_t found) {
+            for (size_t i = r.begin(); i < r.end() && i < found; ++i)
+                if (bad(i)) return i;
+            return found;
+        },
+        [](size_t a, size_t b) { return std::min(a, b); });
+    if (first < n) {
+        const int32_t m = g.material[first];
         if (m < -1 || m >= static_cast<int32_t>(materials.size()))
             throw std::invalid_argument("sss_pass: material index " + std::to_string(m) +
                                         " without a kernel");
-        if (m >= 0 && !(g.view_z[i] > 0 && std::isfinite(g.view_z[i])))
-            throw std::invalid_argument("sss_pass: a medium pixel has no positive finite depth");
+        throw std::invalid_argument("sss_pass: a medium pixel has no positive finite depth");
     }
+}
+
+// A texel of a pass's input: R, G, B and the view z in the fourth lane, so that one 16-byte
+// load fetches everything a tap needs (GCC vector extension: SSE2 on any x86-64).
+typedef float F4 __attribute__((vector_size(16)));
+typedef int32_t I4 __attribute__((vector_size(16)));
+inline F4 abs4(F4 v) {
+    I4 bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    bits &= 0x7fffffff;
+    std::memcpy(&v, &bits, sizeof v);
+    return v;
 }
 
 // One term's taps prepared for the pass.
@@ -75,7 +108,191 @@ struct PreparedTerm {
     const SssTerm* term = nullptr;
     approx::TapJitterRange range;
     std::array<double, 3> weight_sum{};
+    std::vector<F4> weight;       ///< per tap (R, G, B, 0) as floats
+    double lo_mm = 0, hi_mm = 0;  ///< the extreme offsets a tap can reach (with jitter)
 };
+
+// What one 1D pass needs besides the line it reads.
+struct LineParams {
+    float follow = 0;        ///< follow_strength / tan_half
+    float reject_depth = 0;  ///< kReject's largest depth difference
+    uint32_t seed = 0;
+};
+
+// The texels a 1D pass reads: a row of the G-buffer (irradiance and view z read in place) or a
+// column of the horizontal pass's result (R, G, B, z texels, contiguous).
+struct ColumnLine {
+    const F4* t;
+    F4 texel(int q) const { return t[q]; }
+    const F4* at(int q) const { return t + q; }
+    float depth(int q) const { return t[q][3]; }
+};
+
+// One output pixel of a 1D pass of term pt at position pos of a line (a row, or a column of the
+// transposed image) of len texels: the rules of the file comment of sss_pass.h, per texel.
+// `line` holds R, G, B, z per texel, the materials along the line are mat[pos * mstride];
+// (x, y, pass) feed the jitter hash. Inside: every tap position lies within [0, len - 1), so no
+// clamping is needed. In chunks of up to kChunk taps: the texel indices and interpolation
+// weights of all taps first, then the edge rule's per-texel weights (loops over taps that GCC
+// vectorises), then one 16-byte load per texel and the weighted sums.
+constexpr size_t kChunk = 32;
+
+template <SssEdgeMode M, bool Jitter, bool Inside, class Line>
+F4 filter_pixel(const Line& line, const int32_t* mat, ptrdiff_t mstride, int len, int pos,
+                const PreparedTerm& pt, double scale, const LineParams& lp, int x, int y,
+                int pass) {
+    const approx::TapKernel& taps = pt.term->taps;
+    const F4 centre = line.texel(pos);
+    const float zc = centre[3];
+    const int32_t mc = mat[pos * mstride];
+    // Two accumulators each (even and odd taps) to shorten the dependency chains.
+    F4 acc0{}, acc1{}, extra0{}, extra1{};  // extra: follow's centre weight, reject's kept weight
+    bool dropped = false;
+    const size_t count = taps.offset_mm.size();
+    int i0[kChunk], i1[kChunk];
+    alignas(16) float a0[kChunk], a1[kChunk], b[kChunk];
+    for (size_t begin = 0; begin < count; begin += kChunk) {
+        const size_t m = std::min(kChunk, count - begin);
+        // Texels and interpolation weights (approx::tap_texels's rule).
+        for (size_t j = 0; j < m; ++j) {
+            const size_t i = begin + j;
+            double o = taps.offset_mm[i];
+            if constexpr (Jitter)
+                o = approx::jittered_offset_mm(
+                    taps, pt.range, i,
+                    approx::jitter_hash(x, y, pass, static_cast<int>(i), lp.seed));
+            const double s = pos + o * scale;
+            double t;
+            if constexpr (Inside) {
+                i0[j] = static_cast<int>(s);
+                i1[j] = i0[j] + 1;
+                t = s - i0[j];
+            } else {
+                const approx::TapTexels tt = approx::tap_texels(s, len);
+                i0[j] = tt.i0;
+                i1[j] = tt.i1;
+                t = tt.t;
+            }
+            a1[j] = static_cast<float>(t);
+            a0[j] = 1 - a1[j];
+        }
+        // The edge rule's weights per texel.
+        if constexpr (M == SssEdgeMode::kFollowSurface) {
+            // [Freude14 Eq. 4.12]: s_c = o_c (1 - t) + i_c t, the centre's share b summed apart;
+            // four taps at a time (the chunk padded with taps of weight 0 at the centre's depth).
+            alignas(16) float z0[kChunk], z1[kChunk];
+            const size_t m4 = (m + 3) & ~size_t{3};
+            for (size_t j = 0; j < m; ++j) {
+                if constexpr (Inside) {
+                    const F4* q = line.at(i0[j]);
+                    z0[j] = q[0][3];
+                    z1[j] = q[1][3];
+                } else {
+                    z0[j] = line.depth(i0[j]);
+                    z1[j] = line.depth(i1[j]);
+                }
+            }
+            for (size_t j = m; j < m4; ++j) {
+                z0[j] = z1[j] = zc;
+                a0[j] = a1[j] = 0;
+            }
+            const F4 follow = F4{} + lp.follow, one = F4{} + 1.0f, zc4 = F4{} + zc;
+            for (size_t j = 0; j < m4; j += 4) {
+                F4 vz0, vz1, va0, va1;
+                std::memcpy(&vz0, z0 + j, sizeof vz0);
+                std::memcpy(&vz1, z1 + j, sizeof vz1);
+                std::memcpy(&va0, a0 + j, sizeof va0);
+                std::memcpy(&va1, a1 + j, sizeof va1);
+                const F4 k0 = follow * abs4(vz0 - zc4), k1 = follow * abs4(vz1 - zc4);
+                const F4 t0 = k0 < one ? k0 : one;  // NaN and inf: 1, as std::min(1, k)
+                const F4 t1 = k1 < one ? k1 : one;
+                const F4 vb = va0 * t0 + va1 * t1;
+                va0 *= one - t0;
+                va1 *= one - t1;
+                std::memcpy(b + j, &vb, sizeof vb);
+                std::memcpy(a0 + j, &va0, sizeof va0);
+                std::memcpy(a1 + j, &va1, sizeof va1);
+            }
+        } else if constexpr (M == SssEdgeMode::kReject) {
+            for (size_t j = 0; j < m; ++j) {
+                const bool keep0 = mat[i0[j] * mstride] == mc &&
+                                   std::fabs(line.depth(i0[j]) - zc) <= lp.reject_depth;
+                const bool keep1 = mat[i1[j] * mstride] == mc &&
+                                   std::fabs(line.depth(i1[j]) - zc) <= lp.reject_depth;
+                dropped |= (!keep0 && a0[j] != 0) || (!keep1 && a1[j] != 0);
+                a0[j] = keep0 ? a0[j] : 0.0f;
+                a1[j] = keep1 ? a1[j] : 0.0f;
+                b[j] = a0[j] + a1[j];
+            }
+        }
+        // The weighted sums, two taps at a time.
+        const F4* wt = &pt.weight[begin];
+        auto tap = [&](size_t j, F4& acc, F4& extra) {
+            if constexpr (Inside) {
+                const F4* q = line.at(i0[j]);  // i1 = i0 + 1
+                acc += wt[j] * (a0[j] * q[0] + a1[j] * q[1]);
+            } else {
+                acc += wt[j] * (a0[j] * line.texel(i0[j]) + a1[j] * line.texel(i1[j]));
+            }
+            if constexpr (M != SssEdgeMode::kNone) extra += wt[j] * b[j];
+        };
+        size_t j = 0;
+        for (; j + 1 < m; j += 2) {
+            tap(j, acc0, extra0);
+            tap(j + 1, acc1, extra1);
+        }
+        if (j < m) tap(j, acc0, extra0);
+    }
+    F4 out = acc0 + acc1;
+    const F4 extra = extra0 + extra1;
+    if constexpr (M == SssEdgeMode::kFollowSurface) out += extra * centre;
+    if constexpr (M == SssEdgeMode::kReject) {
+        const F4 kept = extra;
+        if (dropped)
+            for (int ch = 0; ch < 3; ++ch)
+                out[ch] = kept[ch] != 0
+                              ? static_cast<float>(out[ch] * (pt.weight_sum[ch] / kept[ch]))
+                              : static_cast<float>(pt.weight_sum[ch] * centre[ch]);
+    }
+    return out;
+}
+
+template <class Line>
+using PixelFn = F4 (*)(const Line&, const int32_t*, ptrdiff_t, int, int, const PreparedTerm&,
+                       double, const LineParams&, int, int, int);
+
+template <SssEdgeMode M, class Line>
+PixelFn<Line> pick(bool jitter, bool inside) {
+    if (jitter)
+        return inside ? filter_pixel<M, true, true, Line> : filter_pixel<M, true, false, Line>;
+    return inside ? filter_pixel<M, false, true, Line> : filter_pixel<M, false, false, Line>;
+}
+template <class Line>
+PixelFn<Line> pick(SssEdgeMode m, bool jitter, bool inside) {
+    switch (m) {
+        case SssEdgeMode::kNone:
+            return pick<SssEdgeMode::kNone, Line>(jitter, inside);
+        case SssEdgeMode::kFollowSurface:
+            return pick<SssEdgeMode::kFollowSurface, Line>(jitter, inside);
+        case SssEdgeMode::kReject:
+            break;
+    }
+    return pick<SssEdgeMode::kReject, Line>(jitter, inside);
+}
+
+// Transparent huge pages for [p, p + bytes) where the kernel offers them on request (a hint; a
+// no-op elsewhere).
+void advise_huge_pages(void* p, size_t bytes) {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    constexpr uintptr_t kHuge = uintptr_t{1} << 21;
+    const uintptr_t begin = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
+    const uintptr_t end = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
+    if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+#else
+    (void)p;
+    (void)bytes;
+#endif
+}
 
 }  // namespace
 
@@ -84,6 +301,7 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
     check(g, materials, p);
     const int w = g.width, h = g.height;
     const size_t n = g.pixels();
+    const bool jitter = p.jitter > 0;
 
     std::vector<std::vector<PreparedTerm>> prep(materials.size());
     size_t rank = 0;
@@ -93,123 +311,147 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
             PreparedTerm pt;
             pt.term = &t;
             pt.range = approx::tap_jitter_range(t.taps, p.jitter);
-            for (int ch = 0; ch < 3; ++ch)
-                for (double v : t.taps.weight[ch]) pt.weight_sum[ch] += v;
+            const size_t count = t.taps.offset_mm.size();
+            pt.weight.assign(count, F4{});
+            pt.lo_mm = pt.hi_mm = t.taps.offset_mm[0];
+            for (size_t i = 0; i < count; ++i) {
+                for (int ch = 0; ch < 3; ++ch) {
+                    pt.weight_sum[ch] += t.taps.weight[ch][i];
+                    pt.weight[i][ch] = static_cast<float>(t.taps.weight[ch][i]);
+                }
+                pt.weight[i][3] = 0;
+                // The positions a tap reaches: jittered_offset_mm is monotonic in xi.
+                const double lo = jitter ? approx::jittered_offset_mm(t.taps, pt.range, i, -1.0)
+                                         : t.taps.offset_mm[i];
+                const double hi = jitter ? approx::jittered_offset_mm(t.taps, pt.range, i, 1.0)
+                                         : t.taps.offset_mm[i];
+                pt.lo_mm = std::min(pt.lo_mm, lo);
+                pt.hi_mm = std::max(pt.hi_mm, hi);
+            }
             prep[m].push_back(std::move(pt));
         }
     }
+    LineParams lp;
+    lp.follow = static_cast<float>(p.follow_strength / p.tan_half);
+    lp.reject_depth = static_cast<float>(p.reject_depth);
+    lp.seed = p.seed;
+    const PixelFn<ColumnLine> column_fn[2] = {pick<ColumnLine>(p.mode, jitter, false),
+                                              pick<ColumnLine>(p.mode, jitter, true)};
 
     // Kernel scale [Freude14 Eq. 4.11]: pixels per mm at view depth z, along y and along x.
     const double py_per_mm_z = h / (2.0 * p.tan_half * p.unit_mm);
     const double px_per_mm_z = w / (2.0 * p.tan_half * p.aspect * p.unit_mm);
 
-    std::vector<double> in(3 * n), tmp(3 * n), acc(3 * n, 0.0);
-    for (size_t i = 0; i < 3 * n; ++i) in[i] = g.irradiance[i];
+    // The output starts as the input (what material -1 keeps).
+    std::vector<float> out(g.irradiance);
 
-    // One 1D pass of term k along dir (0: x, 1: y) over src: store(c, value) for the medium
-    // pixels whose kernel has term k, store(c, nullptr) for the others.
-    auto pass = [&](const std::vector<double>& src, size_t k, int dir, auto&& store) {
-        const int len = dir == 0 ? w : h;
-        tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
-            for (int y = rows.begin(); y < rows.end(); ++y)
-                for (int x = 0; x < w; ++x) {
-                    const size_t c = static_cast<size_t>(y) * w + static_cast<size_t>(x);
-                    const int32_t mat = g.material[c];
-                    if (mat < 0 || k >= prep[static_cast<size_t>(mat)].size()) {
-                        store(c, nullptr);
-                        continue;
-                    }
-                    const PreparedTerm& pt = prep[static_cast<size_t>(mat)][k];
-                    const approx::TapKernel& taps = pt.term->taps;
-                    const double zc = g.view_z[c];
-                    const double scale = (dir == 0 ? px_per_mm_z : py_per_mm_z) / zc;
-                    std::array<double, 3> out{};
-                    const double* centre = &src[3 * c];
-                    if (taps.support_mm * scale < 0.5) {
-                        // The whole kernel within the centre pixel's bin: the identity times
-                        // the kernel's mass (approx/convolve.h's convention).
-                        for (int ch = 0; ch < 3; ++ch) out[ch] = pt.weight_sum[ch] * centre[ch];
-                        store(c, out.data());
-                        continue;
-                    }
-                    const int pos = dir == 0 ? x : y;
-                    std::array<double, 3> kept{};
-                    bool dropped = false;
-                    const size_t count = taps.offset_mm.size();
-                    for (size_t i = 0; i < count; ++i) {
-                        const double xi =
-                            p.jitter > 0 ? approx::jitter_hash(x, y, static_cast<int>(2 * k) + dir,
-                                                               static_cast<int>(i), p.seed)
-                                         : 0.0;
-                        const double o = approx::jittered_offset_mm(taps, pt.range, i, xi) * scale;
-                        const approx::TapTexels s = approx::tap_texels(pos + o, len);
-                        const int ti[2] = {s.i0, s.i1};
-                        const double tw[2] = {1 - s.t, s.t};
-                        for (int j = 0; j < 2; ++j) {
-                            if (tw[j] == 0) continue;
-                            const size_t q = dir == 0 ? static_cast<size_t>(y) * w + ti[j]
-                                                      : static_cast<size_t>(ti[j]) * w + x;
-                            const double* v = &src[3 * q];
-                            switch (p.mode) {
-                                case SssEdgeMode::kNone:
-                                    for (int ch = 0; ch < 3; ++ch)
-                                        out[ch] += taps.weight[ch][i] * tw[j] * v[ch];
-                                    break;
-                                case SssEdgeMode::kFollowSurface: {
-                                    // [Freude14 Eq. 4.12]: s_c = o_c (1 - t) + i_c t.
-                                    const double dz =
-                                        std::fabs(static_cast<double>(g.view_z[q]) - zc);
-                                    const double t =
-                                        std::min(1.0, p.follow_strength * dz / p.tan_half);
-                                    for (int ch = 0; ch < 3; ++ch)
-                                        out[ch] += taps.weight[ch][i] * tw[j] *
-                                                   (v[ch] * (1 - t) + centre[ch] * t);
-                                    break;
-                                }
-                                case SssEdgeMode::kReject: {
-                                    const double dz =
-                                        std::fabs(static_cast<double>(g.view_z[q]) - zc);
-                                    if (g.material[q] != mat || !(dz <= p.reject_depth)) {
-                                        dropped = true;
-                                        break;
-                                    }
-                                    for (int ch = 0; ch < 3; ++ch) {
-                                        out[ch] += taps.weight[ch][i] * tw[j] * v[ch];
-                                        kept[ch] += taps.weight[ch][i] * tw[j];
-                                    }
-                                    break;
-                                }
-                            }
-                        }
-                    }
-                    if (dropped)
-                        for (int ch = 0; ch < 3; ++ch)
-                            out[ch] = kept[ch] != 0 ? out[ch] * (pt.weight_sum[ch] / kept[ch])
-                                                    : pt.weight_sum[ch] * centre[ch];
-                    store(c, out.data());
-                }
-        });
+    // One 1D pass of term k at positions [begin, end) of a line of len texels, materials at
+    // mat[pos * mstride]: calls store(pos, value) for the medium pixels whose kernel has term k,
+    // store(pos, nullptr) for the others.
+    auto run_line = [&](const auto& line, const auto* fn, const int32_t* mat, ptrdiff_t mstride,
+                        int len, int begin, int end, size_t k, int dir, int index, double per_mm_z,
+                        auto&& store) {
+        for (int pos = begin; pos < end; ++pos) {
+            const int32_t m = mat[pos * mstride];
+            if (m < 0 || k >= prep[static_cast<size_t>(m)].size()) {
+                store(pos, nullptr);
+                continue;
+            }
+            const PreparedTerm& pt = prep[static_cast<size_t>(m)][k];
+            const F4 c = line.texel(pos);
+            const double scale = per_mm_z / c[3];
+            if (pt.term->taps.support_mm * scale < 0.5) {
+                // The whole kernel within the centre pixel's bin: the identity times the
+                // kernel's mass (approx/convolve.h's convention).
+                F4 v{};
+                for (int ch = 0; ch < 3; ++ch)
+                    v[ch] = static_cast<float>(pt.weight_sum[ch] * c[ch]);
+                store(pos, &v);
+                continue;
+            }
+            const bool inside = pos + pt.lo_mm * scale >= 0 && pos + pt.hi_mm * scale < len - 1;
+            const int x = dir == 0 ? pos : index, y = dir == 0 ? index : pos;
+            const F4 v = fn[inside](line, mat, mstride, len, pos, pt, scale, lp, x, y,
+                                    static_cast<int>(2 * k) + dir);
+            store(pos, &v);
+        }
     };
 
+    // The horizontal pass reads a row of R, G, B, z texels (built per row, so it stays in
+    // cache) and writes its result transposed (column-major), so that the vertical pass reads
+    // contiguous memory too. tmp is left uninitialised: its pages are first touched by the
+    // parallel horizontal pass, not by a serial fill.
+    const std::unique_ptr<F4[]> tmp(new F4[n]);
+    advise_huge_pages(tmp.get(), n * sizeof(F4));
+    const int grain = 16;
+    // Blocks of kBlock rows: the horizontal pass writes each column of a block as kBlock
+    // contiguous texels, and notes which block columns hold a medium pixel (busy), so that the
+    // vertical pass skips the rest (it would store nothing there).
+    constexpr int kBlock = 16;
+    const int blocks = (h + kBlock - 1) / kBlock;
+    std::vector<uint8_t> busy(static_cast<size_t>(blocks) * w, 0);
     for (size_t k = 0; k < rank; ++k) {
-        // Horizontal: pixels without term k hold their input.
-        pass(in, k, 0, [&](size_t c, const double* v) {
-            for (int ch = 0; ch < 3; ++ch) tmp[3 * c + ch] = v ? v[ch] : in[3 * c + ch];
-        });
-        // Vertical, summed with the term's signs.
-        pass(tmp, k, 1, [&](size_t c, const double* v) {
-            if (!v) return;
-            const int32_t mat = g.material[c];
-            const SssTerm& t = *prep[static_cast<size_t>(mat)][k].term;
-            for (int ch = 0; ch < 3; ++ch) acc[3 * c + ch] += t.sign[ch] * v[ch];
-        });
+        // Horizontal, written transposed: pixels without term k hold their input.
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, blocks, 1), [&](const tbb::blocked_range<int>& r) {
+                std::vector<F4> buf(static_cast<size_t>(w), F4{});
+                std::vector<F4> block(static_cast<size_t>(w) * kBlock, F4{});
+                for (int b = r.begin(); b < r.end(); ++b) {
+                    const int y0 = b * kBlock, y1 = std::min(h, y0 + kBlock);
+                    for (int y = y0; y < y1; ++y) {
+                        const size_t row = static_cast<size_t>(y) * w;
+                        for (int x = 0; x < w; ++x) {
+                            const float* e = &g.irradiance[3 * (row + x)];
+                            buf[static_cast<size_t>(x)] = F4{e[0], e[1], e[2], g.view_z[row + x]};
+                        }
+                        if (k == 0) {
+                            uint8_t* bz = &busy[static_cast<size_t>(b) * w];
+                            for (int x = 0; x < w; ++x)
+                                bz[x] |= static_cast<uint8_t>(g.material[row + x] >= 0);
+                        }
+                        const ColumnLine line{buf.data()};
+                        run_line(line, column_fn, &g.material[row], 1, w, 0, w, k, 0, y,
+                                 px_per_mm_z, [&](int x, const F4* v) {
+                                     F4& dst = block[static_cast<size_t>(x) * kBlock + (y - y0)];
+                                     const F4 src = buf[static_cast<size_t>(x)];
+                                     dst = v ? *v : src;
+                                     dst[3] = src[3];
+                                 });
+                    }
+                    for (int x = 0; x < w; ++x)
+                        std::memcpy(&tmp[static_cast<size_t>(x) * h + y0],
+                                    &block[static_cast<size_t>(x) * kBlock],
+                                    static_cast<size_t>(y1 - y0) * sizeof(F4));
+                }
+            });
+        // Vertical, over the columns, summed with the term's signs into the output (term 0
+        // sets it: a material without terms gives 0, as an empty sum).
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, w, grain), [&](const tbb::blocked_range<int>& r) {
+                for (int x = r.begin(); x < r.end(); ++x) {
+                    const ColumnLine line{&tmp[static_cast<size_t>(x) * h]};
+                    for (int b = 0; b < blocks; ++b) {
+                        if (!busy[static_cast<size_t>(b) * w + x]) continue;
+                        run_line(line, column_fn, &g.material[static_cast<size_t>(x)], w, h,
+                                 b * kBlock, std::min(h, (b + 1) * kBlock), k, 1, x, py_per_mm_z,
+                                 [&](int y, const F4* v) {
+                                     const size_t c = static_cast<size_t>(y) * w + x;
+                                     const int32_t m = g.material[c];
+                                     if (!v) {
+                                         if (k == 0 && m >= 0)
+                                             for (int ch = 0; ch < 3; ++ch) out[3 * c + ch] = 0;
+                                         return;
+                                     }
+                                     const SssTerm& t = *prep[static_cast<size_t>(m)][k].term;
+                                     for (int ch = 0; ch < 3; ++ch) {
+                                         const float sv = static_cast<float>(t.sign[ch]) * (*v)[ch];
+                                         out[3 * c + ch] = k == 0 ? sv : out[3 * c + ch] + sv;
+                                     }
+                                 });
+                    }
+                }
+            });
     }
-
-    std::vector<float> out(3 * n);
-    for (size_t c = 0; c < n; ++c)
-        for (int ch = 0; ch < 3; ++ch)
-            out[3 * c + ch] =
-                static_cast<float>(g.material[c] < 0 ? in[3 * c + ch] : acc[3 * c + ch]);
     return out;
 }
 

@@ -36,8 +36,9 @@
 // Pixels with material -1 (no medium) pass their input through. Between the two passes of a term
 // they hold their input too, which is what kNone then bleeds into the medium.
 //
-// Threads: rows in parallel (oneTBB); each output pixel is computed on its own from the previous
-// pass, so results are bit-identical for any thread count.
+// Threads: rows (horizontal pass) and columns (vertical pass) in parallel (oneTBB); each output
+// pixel is computed on its own from the previous pass, so results are bit-identical for any
+// thread count.
 #pragma once
 
 #include "approx/convolve.h"
