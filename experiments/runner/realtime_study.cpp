@@ -35,6 +35,15 @@ std::string fmt(double v, int digits = 6) {
     return b;
 }
 
+/// A CSV field: quoted where it holds a comma or a quote (model specs do:
+/// "manual:table_a1,unit=mm").
+std::string csv_field(const std::string& v) {
+    if (v.find_first_of(",\"") == std::string::npos) return v;
+    std::string q = "\"";
+    for (char c : v) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+}
+
 /// A model's label as a metric name part (no dots).
 std::string metric_label(const std::string& label) {
     std::string s = label;
@@ -427,8 +436,8 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
             return std::sqrt(std::max(0.0, (e[0].ms + e[1].ms + e[2].ms) / 3.0));
         };
         auto sweep_row = [&](const Score& sc) {
-            sweep << scene.name << "," << sc.model << "," << sc.label << "," << sc.taps << ","
-                  << fmt(sc.jitter) << "," << fmt(rgb(sc.vs_reference)) << ","
+            sweep << scene.name << "," << csv_field(sc.model) << "," << sc.label << "," << sc.taps
+                  << "," << fmt(sc.jitter) << "," << fmt(rgb(sc.vs_reference)) << ","
                   << fmt(rgb(sc.vs_volpath)) << "," << fmt(sc.sss_ms) << "," << fmt(sc.frame_ms)
                   << "\n";
         };
@@ -468,12 +477,13 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
             const NoiseCorrectedRms total =
                 score(first.image, "radiance", vp->image, "radiance", mask, c, vp_dof);
             decomposition << scene.name << "," << kChannelNames[c] << "," << mask.size() << ","
-                          << fmt(ss.signal[static_cast<size_t>(c)]) << "," << ss.scores[0].model
-                          << "," << fmt(ss.scores[0].vs_reference[static_cast<size_t>(c)].rms)
-                          << "," << fmt(scr.rms) << "," << fmt(scr.rms_se) << ","
-                          << fmt(spec_err.rms) << "," << fmt(spec_err.rms_se) << ","
-                          << fmt(surf.rms) << "," << fmt(surf.rms_se) << "," << fmt(total.rms)
-                          << "," << fmt(total.rms_se) << "\n";
+                          << fmt(ss.signal[static_cast<size_t>(c)]) << ","
+                          << csv_field(ss.scores[0].model) << ","
+                          << fmt(ss.scores[0].vs_reference[static_cast<size_t>(c)].rms) << ","
+                          << fmt(scr.rms) << "," << fmt(scr.rms_se) << "," << fmt(spec_err.rms)
+                          << "," << fmt(spec_err.rms_se) << "," << fmt(surf.rms) << ","
+                          << fmt(surf.rms_se) << "," << fmt(total.rms) << "," << fmt(total.rms_se)
+                          << "\n";
             const std::string base = scene.name + ".reference." + kChannelNames[c];
             metrics.push_back({base + ".rms_vs_volpath", "1", scr.rms, scr.rms_se, true, 0});
         }
@@ -583,10 +593,11 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                     const NoiseCorrectedRms& r = sc.vs_reference[static_cast<size_t>(c)];
                     const NoiseCorrectedRms& v = sc.vs_volpath[static_cast<size_t>(c)];
                     const double sig = ss.signal[static_cast<size_t>(c)];
-                    table << ss.scene << "," << sc.model << "," << sc.label << "," << sc.taps << ","
-                          << kChannelNames[c] << "," << ss.pixels << "," << fmt(r.rms) << ","
-                          << fmt(r.rms_se) << "," << fmt(table_max > 0 ? r.rms / table_max : 0)
-                          << "," << fmt(scene_max > 0 ? r.rms / scene_max : 0) << ","
+                    table << ss.scene << "," << csv_field(sc.model) << "," << sc.label << ","
+                          << sc.taps << "," << kChannelNames[c] << "," << ss.pixels << ","
+                          << fmt(r.rms) << "," << fmt(r.rms_se) << ","
+                          << fmt(table_max > 0 ? r.rms / table_max : 0) << ","
+                          << fmt(scene_max > 0 ? r.rms / scene_max : 0) << ","
                           << fmt(sig > 0 ? r.rms / sig : 0) << "," << fmt(v.rms) << ","
                           << fmt(v.rms_se) << "," << fmt(v.raw_rms) << "," << fmt(v.noise_rms)
                           << "," << fmt(sc.sss_ms) << "," << fmt(sc.frame_ms) << ","
