@@ -2,6 +2,8 @@
 
 #include "approx/kernel2d.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -182,8 +184,9 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const
     ImageLayer& material = img.add_layer("material", 1);
     ImageLayer* sub_se = scattered_se.empty() ? nullptr : &img.add_layer("subsurface.stderr", 3);
     const double inv = 1.0 / (static_cast<double>(s) * s);
-    std::vector<int> votes(scene.materials.size() + 1);
-    for (int y = 0; y < H; ++y)
+    // Rows in parallel: every pixel is computed on its own (bit-identical for any thread count).
+    tbb::parallel_for(0, H, [&](int y) {
+        std::vector<int> votes(scene.materials.size() + 1);
         for (int x = 0; x < W; ++x) {
             std::array<double, 3> L{}, sub{}, spec{}, irr{}, surf{}, tr{}, nrm{}, var{};
             std::fill(votes.begin(), votes.end(), 0);
@@ -229,6 +232,7 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const
             const auto best = std::max_element(votes.begin(), votes.end());
             material.at(x, y, 0) = static_cast<float>(best - votes.begin() - 1);
         }
+    });
     res.times.push_back({"composite", ms_since(t0)});
     auto& md = img.metadata();
     md["ssslab.engine"] = "realtime";
