@@ -115,10 +115,6 @@ double srgb_encode(double v) {
     return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
 }
 
-unsigned char to_byte(double linear) {
-    return static_cast<unsigned char>(std::lround(srgb_encode(linear) * 255.0));
-}
-
 // A structural check through OpenEXRCore, before the C++ reader: the headers, and the leader
 // (position and declared size) of every chunk of every level, are validated against the file
 // without decoding anything. OpenEXR 3.1's C++ reader trusts declared sizes and allocates them
@@ -207,6 +203,10 @@ struct FileChannel {
 };
 
 }  // namespace
+
+unsigned char srgb8(double linear) {
+    return static_cast<unsigned char>(std::lround(srgb_encode(linear) * 255.0));
+}
 
 // --- ImageLayer, LayeredImage ---------------------------------------------------------------
 
@@ -499,7 +499,7 @@ void write_png_preview(const LayeredImage& image, const std::string& layer, cons
     for (int y = 0; y < l.height(); ++y)
         for (int x = 0; x < l.width(); ++x)
             for (int k = 0; k < 3; ++k)
-                rgb[o++] = to_byte(scale * l.at(x, y, src[static_cast<size_t>(k)]));
+                rgb[o++] = srgb8(scale * l.at(x, y, src[static_cast<size_t>(k)]));
     check_parent_directory(path, "write_png_preview");
     write_file_atomic(path, encode_png_rgb8(l.width(), l.height(), rgb));
 }

@@ -128,6 +128,10 @@ void write_exr(const LayeredImage& image, const std::string& path);
 /// (deep data, subsampled channels, a channel name in two parts, more than 2^31 samples).
 LayeredImage read_exr(const std::string& path);
 
+/// A linear value as an 8-bit sRGB code, the encoding of write_png_preview below (clamped to
+/// [0, 1], NaN and negatives 0).
+unsigned char srgb8(double linear);
+
 /// Write an 8-bit sRGB PNG preview of one layer: each value is scaled by 2^exposure, clamped to
 /// [0, 1] (NaN -> 0), encoded with the sRGB transfer curve (IEC 61966-2-1: 12.92 v for
 /// v <= 0.0031308, else 1.055 v^(1/2.4) - 0.055) and rounded to the nearest of 0..255. The

@@ -1,6 +1,7 @@
 #include "realtime/frame.h"
 
 #include "approx/kernel2d.h"
+#include "core/error.h"
 
 #include <tbb/parallel_for.h>
 
@@ -20,6 +21,15 @@ double ms_since(Clock::time_point t0) {
 }
 
 }  // namespace
+
+void check_drawable(const Scene& scene) {
+    for (const SceneMaterial& m : scene.materials)
+        if (m.kind == SceneMaterial::Kind::kMedium && !m.density_file.empty())
+            throw InputError(m.where, "density_vdb",
+                             "the real-time renderer draws homogeneous media only (one kernel per "
+                             "material); material \"" +
+                                 m.name + "\" reads its density from " + m.density_file);
+}
 
 const char* to_string(SssMethod m) {
     switch (m) {

@@ -79,6 +79,10 @@ struct FrameOptions {
     SssReferenceOptions reference;
 };
 
+/// Checks what the real-time renderer supports beyond Scene's own validation: homogeneous media
+/// only (one kernel per material). Throws InputError located at the offending material.
+void check_drawable(const Scene& scene);
+
 /// Edge parameters in a scene's units: follow-surface strength 3.6 per mm of depth difference
 /// (the separable-sss demo's C SSS_w = 300 x 0.012, its scene unit read as a mm) and rejection
 /// beyond 1 mm of depth difference, as world units of the scene.

@@ -103,12 +103,7 @@ std::string raster_toml(const RasterArgs& a, const Scene& scene, const realtime:
 
 int run_raster(const RasterArgs& a) {
     const Scene scene = read_scene(a.scene);
-    for (const SceneMaterial& m : scene.materials)
-        if (m.kind == SceneMaterial::Kind::kMedium && !m.density_file.empty())
-            throw InputError(m.where, "density_vdb",
-                             "the real-time renderer draws homogeneous media only (one kernel per "
-                             "material); material \"" +
-                                 m.name + "\" reads its density from " + m.density_file);
+    realtime::check_drawable(scene);
     const fs::path out = a.common.out.empty()
                              ? fs::path("results") / "raster" / (scene.name + ".exr")
                              : fs::path(a.common.out);

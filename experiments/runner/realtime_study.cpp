@@ -132,8 +132,8 @@ double percentile(std::vector<double> v, double q) {
     return v[k];
 }
 
-/// sRGB PNG of an RGB layer times `gain`, optionally cropped to [x0, x0 + cw) x [y0, y0 + ch)
-/// and magnified `zoom` times (nearest neighbour).
+/// sRGB PNG (core/film_image.h srgb8, as the previews) of an RGB layer times `gain`, optionally
+/// cropped to [x0, x0 + cw) x [y0, y0 + ch) and magnified `zoom` times (nearest neighbour).
 std::string png_of(const ImageLayer& l, double gain, int x0 = 0, int y0 = 0, int cw = 0, int ch = 0,
                    int zoom = 1) {
     if (cw <= 0) cw = l.width();
@@ -142,13 +142,9 @@ std::string png_of(const ImageLayer& l, double gain, int x0 = 0, int y0 = 0, int
     std::vector<unsigned char> rgb(static_cast<size_t>(W) * static_cast<size_t>(H) * 3);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x)
-            for (int c = 0; c < 3; ++c) {
-                double v = gain * l.at(x0 + x / zoom, y0 + y / zoom, c);
-                v = std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 0.0;
-                v = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+            for (int c = 0; c < 3; ++c)
                 rgb[(static_cast<size_t>(y) * static_cast<size_t>(W) + static_cast<size_t>(x)) * 3 +
-                    static_cast<size_t>(c)] = static_cast<unsigned char>(std::lround(255.0 * v));
-            }
+                    static_cast<size_t>(c)] = srgb8(gain * l.at(x0 + x / zoom, y0 + y / zoom, c));
     return encode_png_rgb8(W, H, rgb);
 }
 
@@ -165,25 +161,11 @@ ImageLayer& abs_difference(LayeredImage& out, const ImageLayer& a, const ImageLa
 RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_dir) {
     RealtimeStudySpec s;
     s.enabled = true;
-    const auto scenes = t.string_list("scenes");
-    if (scenes.empty()) t.fail("scenes", "expected at least one scene file");
-    std::set<std::string> names;
-    for (size_t i = 0; i < scenes.size(); ++i) {
-        const fs::path p = fs::path(scenes[i]).is_absolute() ? fs::path(scenes[i])
-                                                             : fs::path(config_dir) / scenes[i];
-        if (!fs::exists(p)) t.fail_item("scenes", i, "no scene file " + p.string());
-        const Scene sc = read_scene(p.string());
+    // Both renderers draw every scene: the path tracer's reference and the real-time frames.
+    s.scenes = read_scene_files(t, config_dir, [](const Scene& sc) {
         volpath::check_renderable(sc);
-        for (const SceneMaterial& m : sc.materials)
-            if (m.kind == SceneMaterial::Kind::kMedium && !m.density_file.empty())
-                t.fail_item("scenes", i,
-                            "scene \"" + sc.name +
-                                "\" has a heterogeneous medium; the real-time renderer draws "
-                                "homogeneous media only");
-        if (!names.insert(sc.name).second)
-            t.fail_item("scenes", i, "two scenes are named \"" + sc.name + "\"");
-        s.scenes.push_back(p.lexically_normal().string());
-    }
+        realtime::check_drawable(sc);
+    });
     auto read_models = [&](const char* key, std::vector<std::string> fallback) {
         const std::vector<std::string> m = t.optional_string_list(key).value_or(fallback);
         std::set<std::string> labels;

@@ -208,23 +208,30 @@ std::optional<Rendered> render_node(RenderNode& n, const RenderStudyContext& ctx
 
 }  // namespace
 
-RenderStudySpec read_render_study(ConfigTable& t, const std::string& config_dir) {
-    RenderStudySpec s;
-    s.enabled = true;
+std::vector<std::string> read_scene_files(ConfigTable& t, const std::string& config_dir,
+                                          const std::function<void(const Scene&)>& check) {
     const auto scenes = t.string_list("scenes");
     if (scenes.empty()) t.fail("scenes", "expected at least one scene file");
     std::set<std::string> names;
+    std::vector<std::string> out;
     for (size_t i = 0; i < scenes.size(); ++i) {
         const std::string& f = scenes[i];
         const fs::path p = fs::path(f).is_absolute() ? fs::path(f) : fs::path(config_dir) / f;
         if (!fs::exists(p)) t.fail_item("scenes", i, "no scene file " + p.string());
         const Scene sc = read_scene(p.string());
-        volpath::check_renderable(sc);
+        check(sc);
         if (!names.insert(sc.name).second)
             t.fail_item("scenes", i,
                         "two scenes are named \"" + sc.name + "\" (they name the output files)");
-        s.scenes.push_back(p.lexically_normal().string());
+        out.push_back(p.lexically_normal().string());
     }
+    return out;
+}
+
+RenderStudySpec read_render_study(ConfigTable& t, const std::string& config_dir) {
+    RenderStudySpec s;
+    s.enabled = true;
+    s.scenes = read_scene_files(t, config_dir, volpath::check_renderable);
     if (auto v = t.optional_integer("spp", Range::closed(2, 1e9))) s.budget.samples = *v;
     if (auto v = t.optional_number("seconds", Range::left_open(0, 1e7))) s.budget.seconds = *v;
     if (!s.budget.any()) t.fail("spp", "give a budget: spp = <samples per pixel> or seconds = <s>");

@@ -33,6 +33,7 @@
 
 #include <atomic>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,6 +51,12 @@ struct RenderStudySpec {
     double quick_factor = 0.125;
     int quick_size = 64;
 };
+
+/// The scene files of a study's `scenes` key (relative to `config_dir`), each read, validated
+/// and passed to `check` (which throws InputError for what the study cannot use), their names
+/// unique (they name the output files). Resolved paths, in order.
+std::vector<std::string> read_scene_files(ConfigTable& t, const std::string& config_dir,
+                                          const std::function<void(const Scene&)>& check);
 
 /// Parse [outputs.render] (`config_dir` resolves the scene paths); every scene is read and
 /// validated here, so a bad scene fails the config with the scene file's line.

@@ -434,6 +434,18 @@ void print_plan(const ExperimentRun& r, std::ostream& os, bool verbose) {
     os << " report\n";
 }
 
+// What the scene studies (render, realtime) take of a run.
+RenderStudyContext study_context(const ExperimentRun& r, const RunOptions& o) {
+    RenderStudyContext ctx;
+    ctx.seed = r.exp.seed;
+    ctx.quick = r.quick;
+    ctx.threads = o.threads;
+    ctx.quiet = o.quiet;
+    ctx.checkpoint_seconds = o.checkpoint_seconds;
+    ctx.cancel = o.cancel;
+    return ctx;
+}
+
 bool compute_nodes(ExperimentRun& r, const RunOptions& o) {
     ArtifactCache cache(o.results_root / "cache");
     std::mutex io;
@@ -693,13 +705,7 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
         report.studies.push_back(std::move(so));
     }
     if (r.exp.render.enabled) {
-        RenderStudyContext ctx;
-        ctx.seed = r.exp.seed;
-        ctx.quick = r.quick;
-        ctx.threads = o.threads;
-        ctx.quiet = o.quiet;
-        ctx.checkpoint_seconds = o.checkpoint_seconds;
-        ctx.cancel = o.cancel;
+        const RenderStudyContext ctx = study_context(r, o);
         fs::create_directories(stage / "render");
         RenderStudyResult rr = run_render_study(r.exp.render, ctx, cache, stage, r.metrics);
         if (rr.interrupted) {
@@ -712,13 +718,7 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
         report.render_html = std::move(rr.html);
     }
     if (r.exp.realtime.enabled) {
-        RenderStudyContext ctx;
-        ctx.seed = r.exp.seed;
-        ctx.quick = r.quick;
-        ctx.threads = o.threads;
-        ctx.quiet = o.quiet;
-        ctx.checkpoint_seconds = o.checkpoint_seconds;
-        ctx.cancel = o.cancel;
+        const RenderStudyContext ctx = study_context(r, o);
         RealtimeStudyResult rr =
             run_realtime_study(r.exp.realtime, ctx, cache, o.results_root, stage, r.metrics);
         if (rr.interrupted) {
