@@ -185,6 +185,7 @@ SceneShape read_shape(ConfigTable& t, const std::string& base_dir,
     }
     s.material = it->second;
     const MeshCheck check = check_mesh(s.mesh);
+    s.closed = check.closed();
     if (check.nonfinite_vertices > 0)
         t.fail(s.type == "mesh" ? "file" : "type",
                "vertex " + std::to_string(check.first_nonfinite_vertex) +

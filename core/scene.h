@@ -30,6 +30,7 @@
 #include "core/vec3.h"
 
 #include <array>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -83,6 +84,9 @@ struct SceneShape {
     /// type = "sphere" without rotation or non-uniform scale: the exact sphere (renderers may
     /// intersect it analytically instead of its tessellation).
     bool exact_sphere = false;
+    /// check_mesh(mesh).closed() as read_scene found it; unset for a shape built in code (a
+    /// renderer that needs it then checks the mesh itself).
+    std::optional<bool> closed;
     Vec3 center{};
     double radius = 0;
     SourceLocation where;

@@ -3,6 +3,7 @@
 #include "approx/kernel2d.h"
 #include "core/error.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -18,6 +19,82 @@ using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// Pass 4 with s x s samples a pixel: the box filter of every layer (radiance only unless
+// all_layers), the material the pixel's samples mostly show.
+void composite_supersampled(const Scene& scene, const RasterizedFrame& frame, const GBuffer& g,
+                            const std::vector<int>& dense,
+                            const std::vector<const FrameMaterial*>& used,
+                            const std::vector<float>& scattered,
+                            const std::vector<float>& scattered_se, bool all_layers,
+                            LayeredImage& img) {
+    const int s = frame.raster.supersample;
+    const int W = frame.raster.width, H = frame.raster.height;
+    ImageLayer& radiance = img.add_layer("radiance", 3);
+    // Without all_layers the other layers are scratch images, not added to the result.
+    LayeredImage scratch(all_layers ? 1 : W, all_layers ? 1 : H);
+    LayeredImage& out = all_layers ? img : scratch;
+    ImageLayer& subsurface = out.add_layer("subsurface", 3);
+    ImageLayer& specular = out.add_layer("specular", 3);
+    ImageLayer& depth = out.add_layer("depth", 1);
+    ImageLayer& normal = out.add_layer("normal", {"X", "Y", "Z"});
+    ImageLayer& irradiance = out.add_layer("irradiance", 3);
+    ImageLayer& surface = out.add_layer("surface", 3);
+    ImageLayer& translucency = out.add_layer("translucency", 3);
+    ImageLayer& material = out.add_layer("material", 1);
+    ImageLayer* sub_se =
+        scattered_se.empty() || !all_layers ? nullptr : &out.add_layer("subsurface.stderr", 3);
+    const double inv = 1.0 / (static_cast<double>(s) * s);
+    // Rows in parallel: every pixel is computed on its own (bit-identical for any thread count).
+    tbb::parallel_for(0, H, [&](int y) {
+        std::vector<int> votes(scene.materials.size() + 1);
+        for (int x = 0; x < W; ++x) {
+            std::array<double, 3> L{}, sub{}, spec{}, irr{}, surf{}, tr{}, nrm{}, var{};
+            std::fill(votes.begin(), votes.end(), 0);
+            for (int j = 0; j < s; ++j)
+                for (int i = 0; i < s; ++i) {
+                    const size_t k = frame.raster.sample_index(x * s + i, y * s + j);
+                    const std::int32_t m = g.material[k];
+                    ++votes[static_cast<size_t>(m + 1)];
+                    const int d = m >= 0 ? dense[static_cast<size_t>(m)] : -1;
+                    for (size_t c = 0; c < 3; ++c) {
+                        double ss = 0;
+                        if (d >= 0) {
+                            const double a = used[static_cast<size_t>(d)]->albedo[c];
+                            const double ew = g.exit_weight[k];
+                            ss = ew * (a * scattered[3 * k + c] + g.translucency[3 * k + c]);
+                            if (!scattered_se.empty()) {
+                                const double e = ew * a * scattered_se[3 * k + c];
+                                var[c] += e * e;
+                            }
+                        }
+                        sub[c] += ss;
+                        spec[c] += g.specular[3 * k + c];
+                        surf[c] += g.surface[3 * k + c];
+                        irr[c] += g.irradiance[3 * k + c];
+                        tr[c] += g.translucency[3 * k + c];
+                        nrm[c] += g.normal[3 * k + c];
+                        L[c] += ss + g.specular[3 * k + c] + g.surface[3 * k + c];
+                    }
+                }
+            for (int c = 0; c < 3; ++c) {
+                const size_t cc = static_cast<size_t>(c);
+                radiance.at(x, y, c) = static_cast<float>(L[cc] * inv);
+                subsurface.at(x, y, c) = static_cast<float>(sub[cc] * inv);
+                specular.at(x, y, c) = static_cast<float>(spec[cc] * inv);
+                irradiance.at(x, y, c) = static_cast<float>(irr[cc] * inv);
+                surface.at(x, y, c) = static_cast<float>(surf[cc] * inv);
+                translucency.at(x, y, c) = static_cast<float>(tr[cc] * inv);
+                normal.at(x, y, c) = static_cast<float>(nrm[cc] * inv);
+                if (sub_se) sub_se->at(x, y, c) = static_cast<float>(std::sqrt(var[cc]) * inv);
+            }
+            depth.at(x, y, 0) =
+                static_cast<float>(frame.raster.depth[frame.raster.pixel_index(x, y)]);
+            const auto best = std::max_element(votes.begin(), votes.end());
+            material.at(x, y, 0) = static_cast<float>(best - votes.begin() - 1);
+        }
+    });
 }
 
 }  // namespace
@@ -71,10 +148,17 @@ FrameMaterial make_frame_material(const RadialProfile& profile, const approx::Mo
 
 RasterizedFrame rasterize_frame(const Scene& scene, const FrameOptions& o) {
     RasterizedFrame f;
+    rasterize_frame(scene, o, f);
+    return f;
+}
+
+void rasterize_frame(const Scene& scene, const FrameOptions& o, RasterizedFrame& f) {
+    f.media_in_view.clear();
+    f.lit_in_view.clear();
     const int w = o.width > 0 ? o.width : scene.camera.width;
     const int h = o.height > 0 ? o.height : scene.camera.height;
     const auto t0 = Clock::now();
-    f.raster = rasterize(scene, o.raster, w, h);
+    rasterize(scene, o.raster, w, h, f.raster);
     f.ms = ms_since(t0);
     f.camera = RasterCamera::from_scene(scene.camera, w, h);
     std::vector<char> seen(scene.materials.size(), 0);
@@ -86,7 +170,6 @@ RasterizedFrame rasterize_frame(const Scene& scene, const FrameOptions& o) {
         if (scene.materials[m].kind == SceneMaterial::Kind::kMedium)
             f.media_in_view.push_back(static_cast<int>(m));
     }
-    return f;
 }
 
 double FrameResult::total_ms() const {
@@ -98,10 +181,16 @@ double FrameResult::total_ms() const {
 LitFrame light_frame(const Scene& scene, const RasterizedFrame& frame, const FrameOptions& o,
                      const std::vector<SlabTransmittance>& slabs) {
     LitFrame lit;
-    const auto t0 = Clock::now();
-    lit.gbuffer = shade(scene, frame.camera, frame.raster, o.lighting, slabs, &lit.stats);
-    lit.ms = ms_since(t0);
+    light_frame(scene, frame, o, lit, slabs);
     return lit;
+}
+
+void light_frame(const Scene& scene, const RasterizedFrame& frame, const FrameOptions& o,
+                 LitFrame& lit, const std::vector<SlabTransmittance>& slabs) {
+    const auto t0 = Clock::now();
+    lit.stats = {};
+    shade(scene, frame.camera, frame.raster, o.lighting, slabs, &lit.stats, lit.gbuffer);
+    lit.ms = ms_since(t0);
 }
 
 FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame,
@@ -183,67 +272,63 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const
     const int s = frame.raster.supersample;
     const int W = frame.raster.width, H = frame.raster.height;
     LayeredImage& img = res.image = LayeredImage(W, H);
-    ImageLayer& radiance = img.add_layer("radiance", 3);
-    ImageLayer& subsurface = img.add_layer("subsurface", 3);
-    ImageLayer& specular = img.add_layer("specular", 3);
-    ImageLayer& depth = img.add_layer("depth", 1);
-    ImageLayer& normal = img.add_layer("normal", {"X", "Y", "Z"});
-    ImageLayer& irradiance = img.add_layer("irradiance", 3);
-    ImageLayer& surface = img.add_layer("surface", 3);
-    ImageLayer& translucency = img.add_layer("translucency", 3);
-    ImageLayer& material = img.add_layer("material", 1);
-    ImageLayer* sub_se = scattered_se.empty() ? nullptr : &img.add_layer("subsurface.stderr", 3);
-    const double inv = 1.0 / (static_cast<double>(s) * s);
-    // Rows in parallel: every pixel is computed on its own (bit-identical for any thread count).
-    tbb::parallel_for(0, H, [&](int y) {
-        std::vector<int> votes(scene.materials.size() + 1);
-        for (int x = 0; x < W; ++x) {
-            std::array<double, 3> L{}, sub{}, spec{}, irr{}, surf{}, tr{}, nrm{}, var{};
-            std::fill(votes.begin(), votes.end(), 0);
-            for (int j = 0; j < s; ++j)
-                for (int i = 0; i < s; ++i) {
-                    const size_t k = frame.raster.sample_index(x * s + i, y * s + j);
-                    const std::int32_t m = g.material[k];
-                    ++votes[static_cast<size_t>(m + 1)];
-                    const int d = m >= 0 ? dense[static_cast<size_t>(m)] : -1;
-                    for (size_t c = 0; c < 3; ++c) {
-                        double ss = 0;
-                        if (d >= 0) {
-                            const double a = used[static_cast<size_t>(d)]->albedo[c];
-                            const double ew = g.exit_weight[k];
-                            ss = ew * (a * scattered[3 * k + c] + g.translucency[3 * k + c]);
-                            if (!scattered_se.empty()) {
-                                const double e = ew * a * scattered_se[3 * k + c];
-                                var[c] += e * e;
-                            }
-                        }
-                        sub[c] += ss;
-                        spec[c] += g.specular[3 * k + c];
-                        surf[c] += g.surface[3 * k + c];
-                        irr[c] += g.irradiance[3 * k + c];
-                        tr[c] += g.translucency[3 * k + c];
-                        nrm[c] += g.normal[3 * k + c];
-                        L[c] += ss + g.specular[3 * k + c] + g.surface[3 * k + c];
-                    }
-                }
-            for (int c = 0; c < 3; ++c) {
-                const size_t cc = static_cast<size_t>(c);
-                radiance.at(x, y, c) = static_cast<float>(L[cc] * inv);
-                subsurface.at(x, y, c) = static_cast<float>(sub[cc] * inv);
-                specular.at(x, y, c) = static_cast<float>(spec[cc] * inv);
-                irradiance.at(x, y, c) = static_cast<float>(irr[cc] * inv);
-                surface.at(x, y, c) = static_cast<float>(surf[cc] * inv);
-                translucency.at(x, y, c) = static_cast<float>(tr[cc] * inv);
-                normal.at(x, y, c) = static_cast<float>(nrm[cc] * inv);
-                if (sub_se) sub_se->at(x, y, c) = static_cast<float>(std::sqrt(var[cc]) * inv);
+    // The subsurface term of sample k, channel c (and its variance's share for the reference).
+    auto subsurface_of = [&](std::size_t k, std::size_t c) -> float {
+        const std::int32_t m = g.material[k];
+        const int d = m >= 0 ? dense[static_cast<std::size_t>(m)] : -1;
+        if (d < 0) return 0.f;
+        const double a = used[static_cast<std::size_t>(d)]->albedo[c];
+        return static_cast<float>(g.exit_weight[k] *
+                                  (a * scattered[3 * k + c] + g.translucency[3 * k + c]));
+    };
+    if (s == 1) {
+        // One sample a pixel: the layers are the G-buffer's own arrays; only radiance and
+        // subsurface are computed.
+        ImageLayer& radiance = img.add_layer("radiance", 3);
+        ImageLayer* subsurface = o.all_layers ? &img.add_layer("subsurface", 3) : nullptr;
+        const std::span<float> L = radiance.pixels();
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t k = r.begin(); k != r.end(); ++k)
+                                  for (std::size_t c = 0; c < 3; ++c) {
+                                      const float ss = subsurface_of(k, c);
+                                      if (subsurface) subsurface->pixels()[3 * k + c] = ss;
+                                      L[3 * k + c] =
+                                          ss + g.specular[3 * k + c] + g.surface[3 * k + c];
+                                  }
+                          });
+        if (o.all_layers) {
+            img.add_layer("specular", 3, g.specular);
+            std::vector<float> depth(n), material(n);
+            for (std::size_t k = 0; k < n; ++k) {
+                depth[k] = static_cast<float>(frame.raster.depth[k]);
+                material[k] = static_cast<float>(g.material[k]);
             }
-            depth.at(x, y, 0) =
-                static_cast<float>(frame.raster.depth[frame.raster.pixel_index(x, y)]);
-            const auto best = std::max_element(votes.begin(), votes.end());
-            material.at(x, y, 0) = static_cast<float>(best - votes.begin() - 1);
+            img.add_layer("depth", 1, std::move(depth));
+            img.add_layer("normal", {"X", "Y", "Z"}, g.normal);
+            img.add_layer("irradiance", 3, g.irradiance);
+            img.add_layer("surface", 3, g.surface);
+            img.add_layer("translucency", 3, g.translucency);
+            img.add_layer("material", 1, std::move(material));
+            if (!scattered_se.empty()) {
+                ImageLayer& se = img.add_layer("subsurface.stderr", 3);
+                for (std::size_t k = 0; k < n; ++k) {
+                    const std::int32_t m = g.material[k];
+                    const int d = m >= 0 ? dense[static_cast<std::size_t>(m)] : -1;
+                    if (d < 0) continue;
+                    for (std::size_t c = 0; c < 3; ++c)
+                        se.pixels()[3 * k + c] = static_cast<float>(
+                            g.exit_weight[k] * used[static_cast<std::size_t>(d)]->albedo[c] *
+                            scattered_se[3 * k + c]);
+                }
+            }
         }
-    });
-    res.times.push_back({"composite", ms_since(t0)});
+        res.times.push_back({"composite", ms_since(t0)});
+    } else {
+        composite_supersampled(scene, frame, g, dense, used, scattered, scattered_se, o.all_layers,
+                               img);
+        res.times.push_back({"composite", ms_since(t0)});
+    }
     auto& md = img.metadata();
     md["ssslab.engine"] = "realtime";
     md["ssslab.scene"] = scene.name;

@@ -77,6 +77,9 @@ struct FrameOptions {
     /// unit_mm are set from the scene and camera.
     SssParams sss;
     SssReferenceOptions reference;
+    /// false: pass 4 writes the radiance layer only (what a game presents: `ssslab bench
+    /// --realtime` times its frames so); true: every layer of the file comment.
+    bool all_layers = true;
 };
 
 /// Checks what the real-time renderer supports beyond Scene's own validation: homogeneous media
@@ -103,6 +106,8 @@ struct RasterizedFrame {
     std::vector<int> lit_in_view;    ///< every scene material covering a sample
 };
 RasterizedFrame rasterize_frame(const Scene& scene, const FrameOptions& o);
+/// The same into `out`, reusing its storage (a renderer drawing frame after frame).
+void rasterize_frame(const Scene& scene, const FrameOptions& o, RasterizedFrame& out);
 
 struct PassTime {
     std::string pass;  ///< "raster", "shadow maps", "lighting", "sss", "composite"
@@ -119,6 +124,9 @@ struct LitFrame {
 /// `slabs` (by scene material) feed translucency and may be empty.
 LitFrame light_frame(const Scene& scene, const RasterizedFrame& frame, const FrameOptions& o,
                      const std::vector<SlabTransmittance>& slabs = {});
+/// The same into `out`, reusing its G-buffer's storage.
+void light_frame(const Scene& scene, const RasterizedFrame& frame, const FrameOptions& o,
+                 LitFrame& out, const std::vector<SlabTransmittance>& slabs = {});
 
 struct FrameResult {
     LayeredImage image{1, 1};

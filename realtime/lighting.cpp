@@ -21,8 +21,10 @@
 #include <cstdlib>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <numbers>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 
 namespace ssslab::realtime {
@@ -194,9 +196,30 @@ double BoundaryTransmittance::exit_weight(double mu_o) const {
     return c_ > 0 ? (*this)(mu_o) / (kPi * c_) : 0.0;
 }
 
+const BoundaryTransmittance& tabulated_boundary(double eta, double alpha, int cosines, int q) {
+    // Never evicted: a handful of tables of 65 doubles. The lock is held while a new table is
+    // built, so that two threads asking for the same one build it once.
+    static std::mutex mutex;
+    static std::map<std::tuple<double, double, int, int>, BoundaryTransmittance> tables;
+    const std::lock_guard<std::mutex> lock(mutex);
+    const auto key = std::make_tuple(eta, alpha, cosines, q);
+    auto it = tables.find(key);
+    if (it == tables.end())
+        it = tables.emplace(key, BoundaryTransmittance(eta, alpha, cosines, q)).first;
+    return it->second;
+}
+
 GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& frame,
               const LightingOptions& o, const std::vector<SlabTransmittance>& slabs,
               LightingStats* stats) {
+    GBuffer g;
+    shade(scene, camera, frame, o, slabs, stats, g);
+    return g;
+}
+
+void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& frame,
+           const LightingOptions& o, const std::vector<SlabTransmittance>& slabs,
+           LightingStats* stats, GBuffer& out) {
     using clock = std::chrono::steady_clock;
     const auto t_start = clock::now();
     const int ss = frame.supersample;
@@ -211,36 +234,32 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
         o.transmittance_cosines < 2 || o.transmittance_quadrature < 1)
         throw std::invalid_argument("lighting: options out of range");
 
-    GBuffer g;
+    GBuffer& g = out;
     g.width = W;
     g.height = H;
-    g.view_z.assign(N, std::numeric_limits<float>::infinity());
-    g.ray_t.assign(N, 0.f);
-    g.normal.assign(3 * N, 0.f);
-    g.shape.assign(N, -1);
-    g.material.assign(N, -1);
-    g.irradiance.assign(3 * N, 0.f);
-    g.exit_weight.assign(N, 0.f);
-    g.specular.assign(3 * N, 0.f);
-    g.surface.assign(3 * N, 0.f);
-    g.thickness.assign(N, 0.f);
-    g.translucency.assign(3 * N, 0.f);
+    // Sized only: the first pass below writes every entry of every array (a reused G-buffer of
+    // the same size keeps its storage and is not cleared twice).
+    g.view_z.resize(N);
+    g.ray_t.resize(N);
+    g.normal.resize(3 * N);
+    g.shape.resize(N);
+    g.material.resize(N);
+    g.irradiance.resize(3 * N);
+    g.exit_weight.resize(N);
+    g.specular.resize(3 * N);
+    g.surface.resize(3 * N);
+    g.thickness.resize(N);
+    g.translucency.resize(3 * N);
 
-    // Boundaries: one transmittance per (eta, alpha) of the scene's media.
-    std::map<std::pair<double, double>, BoundaryTransmittance> boundaries;
+    // Boundaries: one transmittance per (eta, alpha) of the scene's media, tabulated once per
+    // process (as an engine precomputes its lookup tables at load time, not every frame).
     std::vector<const BoundaryTransmittance*> mat_T(scene.materials.size(), nullptr);
     for (std::size_t m = 0; m < scene.materials.size(); ++m) {
         const SceneMaterial& sm = scene.materials[m];
         if (sm.kind != SceneMaterial::Kind::kMedium) continue;
         const double eta = sm.medium.eta, alpha = eta == 1.0 ? 0.0 : sm.roughness;
-        auto it = boundaries.find({eta, alpha});
-        if (it == boundaries.end())
-            it = boundaries
-                     .emplace(std::make_pair(eta, alpha),
-                              BoundaryTransmittance(eta, alpha, o.transmittance_cosines,
-                                                    o.transmittance_quadrature))
-                     .first;
-        mat_T[m] = &it->second;
+        mat_T[m] =
+            &tabulated_boundary(eta, alpha, o.transmittance_cosines, o.transmittance_quadrature);
     }
     auto slab_of = [&](int m) -> const SlabTransmittance* {
         if (m < 0 || static_cast<std::size_t>(m) >= slabs.size()) return nullptr;
@@ -248,104 +267,158 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
         return s.thickness_mm.empty() || s.transmittance.empty() ? nullptr : &s;
     };
 
-    // Receivers and what the camera sees directly.
-    std::vector<Receiver> rec(N);
-    std::vector<RGB> surf(N, RGB{}), irr(N, RGB{}), spec(N, RGB{}), transl(N, RGB{});
-    std::vector<double> thick(N, 0.0);
-    tbb::parallel_for(0, H, [&](int sy) {
-        for (int sx = 0; sx < W; ++sx) {
-            const std::size_t i = frame.sample_index(sx, sy);
-            const Vec3 d = camera.ray_direction((sx + 0.5) / ss, (sy + 0.5) / ss);
-            const int s = frame.shape[i];
-            const double t_geo = s >= 0 ? frame.ray_t[i] : kInf;
-            // Sphere lights are not rasterized (nor in volpath's BVH): the nearest in front.
-            double tl = kInf;
-            const SceneLight* hit_light = nullptr;
-            for (const SceneLight& l : scene.lights)
-                if (l.type == LightType::kSphere) {
-                    const double t = hit_sphere(camera.position, d, l.position, l.radius);
-                    if (t < tl) tl = t, hit_light = &l;
-                }
-            if (hit_light && tl < t_geo) {
-                surf[i] = hit_light->color;
-            } else if (s < 0) {
-                for (const SceneLight& l : scene.lights) {
-                    if (l.type == LightType::kEnvironment)
-                        for (std::size_t c = 0; c < 3; ++c) surf[i][c] += l.color[c];
-                    if (l.type == LightType::kDirectional && l.angular_radius_deg > 0) {
-                        const double a = l.angular_radius_deg * kPi / 180;
-                        if (dot(d, l.direction) >= std::cos(a))
-                            for (std::size_t c = 0; c < 3; ++c)
-                                surf[i][c] += l.color[c] / (kPi * std::sin(a) * std::sin(a));
-                    }
-                }
-            }
-            if (s < 0) continue;
-            g.view_z[i] = static_cast<float>(frame.view_z[i]);
-            g.ray_t[i] = static_cast<float>(frame.ray_t[i]);
-            const SceneShape& sh = scene.shapes[static_cast<std::size_t>(s)];
-            const auto& tri = sh.mesh.triangles[frame.triangle[i]];
-            const Vec3 &v0 = sh.mesh.positions[tri[0]], &v1 = sh.mesh.positions[tri[1]],
-                       &v2 = sh.mesh.positions[tri[2]];
-            // Facet normal as volpath/embree_scene.cpp computes it (double precision).
-            const Vec3 n = normalize(cross(v1 - v0, v2 - v0));
-            g.shape[i] = s;
-            g.material[i] = sh.material;
-            for (int c = 0; c < 3; ++c)
-                g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(n[c]);
-            if (hit_light && tl < t_geo) continue;  // a sphere light in front: nothing to light
-            Receiver& r = rec[i];
-            const auto [b1, b2] = frame.barycentric[i];
-            r.p = v0 * (1 - b1 - b2) + v1 * b1 + v2 * b2;
-            r.n = n;
-            r.wo = -d;
-            r.shape = s;
-            r.material = sh.material;
-            const SceneMaterial& m = scene.materials[static_cast<std::size_t>(sh.material)];
-            if (m.kind == SceneMaterial::Kind::kDiffuse) {
-                r.kind = Kind::kDiffuse;
-                r.ns = dot(n, r.wo) < 0 ? -n : n;
-            } else if (dot(n, r.wo) > 0) {  // a medium seen from outside
-                r.kind = Kind::kMedium;
-                r.ns = n;
-                const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(sh.material)];
-                g.exit_weight[i] = static_cast<float>(T.exit_weight(dot(n, r.wo)));
-                if (T.alpha() == 0) {
-                    // Mirror: F times what the reflected ray sees of the sphere lights, the
-                    // environment and the suns (unoccluded).
-                    const Vec3 rd = n * (2 * dot(n, r.wo)) - r.wo;
-                    const double F = dielectric::fresnel_dielectric(dot(n, r.wo), T.eta());
-                    double tb = kInf;
-                    const SceneLight* sl = nullptr;
+    // Receivers and what the camera sees directly. A receiver (position, normals, direction
+    // to the camera) is not stored: each pass over the light samples recomputes it from the
+    // raster frame (a few dozen flops against ~100 bytes a sample of memory traffic), and only
+    // its kind is kept.
+    std::vector<Kind> kind(N, Kind::kNone);
+    // The camera rays of RasterCamera::ray_direction, its ndc coordinates computed once per
+    // column and row (the same expressions: the same directions to the bit).
+    std::vector<double> ndc_x(static_cast<std::size_t>(W)), ndc_y(static_cast<std::size_t>(H));
+    for (int sx = 0; sx < W; ++sx)
+        ndc_x[static_cast<std::size_t>(sx)] =
+            (2 * ((sx + 0.5) / ss) / camera.width - 1) * camera.tan_half * camera.aspect;
+    for (int sy = 0; sy < H; ++sy)
+        ndc_y[static_cast<std::size_t>(sy)] =
+            (1 - 2 * ((sy + 0.5) / ss) / camera.height) * camera.tan_half;
+    auto ray = [&](int sx, int sy) {
+        return normalize(camera.forward + camera.right * ndc_x[static_cast<std::size_t>(sx)] +
+                         camera.up * ndc_y[static_cast<std::size_t>(sy)]);
+    };
+    auto receiver_at = [&](std::size_t i, int sx, int sy) {
+        Receiver r;
+        const Vec3 d = ray(sx, sy);
+        const int s = frame.shape[i];
+        const SceneShape& sh = scene.shapes[static_cast<std::size_t>(s)];
+        const auto& tri = sh.mesh.triangles[frame.triangle[i]];
+        const Vec3 &v0 = sh.mesh.positions[tri[0]], &v1 = sh.mesh.positions[tri[1]],
+                   &v2 = sh.mesh.positions[tri[2]];
+        // Facet normal as volpath/embree_scene.cpp computes it (double precision).
+        r.n = normalize(cross(v1 - v0, v2 - v0));
+        const auto [b1, b2] = frame.barycentric[i];
+        r.p = v0 * (1 - b1 - b2) + v1 * b1 + v2 * b2;
+        r.wo = -d;
+        r.shape = s;
+        r.material = sh.material;
+        r.kind = kind[i];
+        r.ns = r.kind == Kind::kDiffuse && dot(r.n, r.wo) < 0 ? -r.n : r.n;
+        return r;
+    };
+    const Box receivers = tbb::parallel_reduce(
+        tbb::blocked_range<int>(0, H), Box{},
+        [&](const tbb::blocked_range<int>& rows, Box box) {
+            for (int sy = rows.begin(); sy != rows.end(); ++sy)
+                for (int sx = 0; sx < W; ++sx) {
+                    const std::size_t i = frame.sample_index(sx, sy);
+                    const Vec3 d = ray(sx, sy);
+                    const int s = frame.shape[i];
+                    const double t_geo = s >= 0 ? frame.ray_t[i] : kInf;
+                    // Sphere lights are not rasterized (nor in volpath's BVH): the nearest in
+                    // front.
+                    double tl = kInf;
+                    const SceneLight* hit_light = nullptr;
                     for (const SceneLight& l : scene.lights)
                         if (l.type == LightType::kSphere) {
-                            const double t = hit_sphere(r.p, rd, l.position, l.radius);
-                            if (t < tb) tb = t, sl = &l;
+                            const double t = hit_sphere(camera.position, d, l.position, l.radius);
+                            if (t < tl) tl = t, hit_light = &l;
                         }
-                    RGB Lr{};
-                    if (sl) {
-                        Lr = sl->color;
-                    } else {
+                    RGB surf{};
+                    if (hit_light && tl < t_geo) {
+                        surf = hit_light->color;
+                    } else if (s < 0) {
                         for (const SceneLight& l : scene.lights) {
                             if (l.type == LightType::kEnvironment)
-                                for (std::size_t c = 0; c < 3; ++c) Lr[c] += l.color[c];
+                                for (std::size_t c = 0; c < 3; ++c) surf[c] += l.color[c];
                             if (l.type == LightType::kDirectional && l.angular_radius_deg > 0) {
                                 const double a = l.angular_radius_deg * kPi / 180;
-                                if (dot(rd, l.direction) >= std::cos(a))
+                                if (dot(d, l.direction) >= std::cos(a))
                                     for (std::size_t c = 0; c < 3; ++c)
-                                        Lr[c] += l.color[c] / (kPi * std::sin(a) * std::sin(a));
+                                        surf[c] += l.color[c] / (kPi * std::sin(a) * std::sin(a));
                             }
                         }
                     }
-                    for (std::size_t c = 0; c < 3; ++c) spec[i][c] = F * Lr[c];
+                    for (std::size_t c = 0; c < 3; ++c) {
+                        g.surface[3 * i + c] = static_cast<float>(surf[c]);
+                        g.normal[3 * i + c] = 0.f;
+                        g.irradiance[3 * i + c] = 0.f;
+                        g.specular[3 * i + c] = 0.f;
+                        g.translucency[3 * i + c] = 0.f;
+                    }
+                    g.view_z[i] = std::numeric_limits<float>::infinity();
+                    g.ray_t[i] = 0.f;
+                    g.shape[i] = -1;
+                    g.material[i] = -1;
+                    g.exit_weight[i] = 0.f;
+                    g.thickness[i] = 0.f;
+                    if (s < 0) continue;
+                    g.view_z[i] = static_cast<float>(frame.view_z[i]);
+                    g.ray_t[i] = static_cast<float>(frame.ray_t[i]);
+                    const SceneShape& sh = scene.shapes[static_cast<std::size_t>(s)];
+                    g.shape[i] = s;
+                    g.material[i] = sh.material;
+                    const SceneMaterial& m = scene.materials[static_cast<std::size_t>(sh.material)];
+                    const bool light_in_front = hit_light && tl < t_geo;
+                    if (!light_in_front) {
+                        if (m.kind == SceneMaterial::Kind::kDiffuse) {
+                            kind[i] = Kind::kDiffuse;
+                        } else {
+                            kind[i] = Kind::kMedium;  // provisional: seen from outside below
+                        }
+                    }
+                    const Receiver r = receiver_at(i, sx, sy);
+                    for (int c = 0; c < 3; ++c)
+                        g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(r.n[c]);
+                    if (light_in_front) continue;  // a sphere light in front: nothing to light
+                    if (r.kind == Kind::kMedium && !(dot(r.n, r.wo) > 0)) {
+                        kind[i] = Kind::kNone;  // a medium seen from inside: not lit here
+                        continue;
+                    }
+                    box.add(r.p);
+                    if (r.kind != Kind::kMedium) continue;
+                    const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(sh.material)];
+                    g.exit_weight[i] = static_cast<float>(T.exit_weight(dot(r.n, r.wo)));
+                    if (T.alpha() == 0) {
+                        // Mirror: F times what the reflected ray sees of the sphere lights, the
+                        // environment and the suns (unoccluded).
+                        const Vec3 rd = r.n * (2 * dot(r.n, r.wo)) - r.wo;
+                        const double F = dielectric::fresnel_dielectric(dot(r.n, r.wo), T.eta());
+                        double tb = kInf;
+                        const SceneLight* sl = nullptr;
+                        for (const SceneLight& l : scene.lights)
+                            if (l.type == LightType::kSphere) {
+                                const double t = hit_sphere(r.p, rd, l.position, l.radius);
+                                if (t < tb) tb = t, sl = &l;
+                            }
+                        RGB Lr{};
+                        if (sl) {
+                            Lr = sl->color;
+                        } else {
+                            for (const SceneLight& l : scene.lights) {
+                                if (l.type == LightType::kEnvironment)
+                                    for (std::size_t c = 0; c < 3; ++c) Lr[c] += l.color[c];
+                                if (l.type == LightType::kDirectional && l.angular_radius_deg > 0) {
+                                    const double a = l.angular_radius_deg * kPi / 180;
+                                    if (dot(rd, l.direction) >= std::cos(a))
+                                        for (std::size_t c = 0; c < 3; ++c)
+                                            Lr[c] += l.color[c] / (kPi * std::sin(a) * std::sin(a));
+                                }
+                            }
+                        }
+                        for (std::size_t c = 0; c < 3; ++c)
+                            g.specular[3 * i + c] = static_cast<float>(F * Lr[c]);
+                    }
                 }
+            return box;
+        },
+        [](Box a, const Box& b) {
+            if (!b.empty()) {
+                a.add(b.lo);
+                a.add(b.hi);
             }
-        }
-    });
+            return a;
+        });
 
-    Box receivers, casters;
-    for (const Receiver& r : rec)
-        if (r.kind != Kind::kNone) receivers.add(r.p);
+    Box casters;
     for (const SceneShape& s : scene.shapes) {
         const auto b = s.mesh.bounds();
         if (b[0].x <= b[1].x) {
@@ -506,6 +579,7 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
     };
 
     const double near = 1e-6 * scene_size;
+    ShadowMap sm;  // one map at a time, its storage reused from map to map
     double shadow_ms = 0;
     int maps = 0;
     for (const LightSample& s : samples) {
@@ -513,7 +587,9 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
             tbb::blocked_range<std::size_t>(0, N, 4096), false,
             [&](const tbb::blocked_range<std::size_t>& br, bool acc) {
                 for (std::size_t i = br.begin(); i != br.end() && !acc; ++i)
-                    acc = reaches(s, rec[i]);
+                    if (kind[i] != Kind::kNone)
+                        acc = reaches(
+                            s, receiver_at(i, static_cast<int>(i % W), static_cast<int>(i / W)));
                 return acc;
             },
             [](bool a, bool b) { return a || b; });
@@ -530,10 +606,9 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
             std::any_of(slabs.begin(), slabs.end(),
                         [](const SlabTransmittance& t) { return !t.thickness_mm.empty(); });
         for (std::size_t vi = 0; vi < views.size(); ++vi) {
-            ShadowMap sm;
             if (need_map) {
                 const auto t0 = clock::now();
-                sm = render_shadow_map(scene, views[vi]);
+                render_shadow_map(scene, views[vi], sm);
                 shadow_ms += std::chrono::duration<double, std::milli>(clock::now() - t0).count();
                 ++maps;
             }
@@ -541,8 +616,9 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
                 tbb::blocked_range<std::size_t>(0, N, 1024),
                 [&](const tbb::blocked_range<std::size_t>& br) {
                     for (std::size_t i = br.begin(); i != br.end(); ++i) {
-                        const Receiver& r = rec[i];
-                        if (r.kind == Kind::kNone) continue;
+                        if (kind[i] == Kind::kNone) continue;
+                        const Receiver r =
+                            receiver_at(i, static_cast<int>(i % W), static_cast<int>(i / W));
                         // Cube faces: a receiver belongs to the first face it projects into.
                         auto in_view = [&](const ShadowView& v) {
                             const ClipVertex c = v.to_clip(r.p);
@@ -570,16 +646,19 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
                                 d_thick = std::max(0.0, lk.point_depth - lk.map_depth_smooth) *
                                           lk.distance_per_depth;
                         }
-                        if (s.thickness_view) thick[i] = std::max(0.0, d_thick);
+                        if (s.thickness_view)
+                            g.thickness[i] = static_cast<float>(std::max(0.0, d_thick));
                         if (!s.lights) continue;
                         if (cs > 0) {
                             bool lit = true;
                             if (o.shadows) {
-                                const ClipVertex c0 = views[vi].to_clip(r.p);
-                                const double texel = views[vi].texel_size(c0.w);
+                                const ShadowView& v = views[vi];
+                                // texel_size at the point's depth (to_clip(p).w).
+                                const double texel = v.texel_size(
+                                    v.orthographic ? 0.0 : dot(r.p - v.origin, v.forward));
                                 const Vec3 nl = dot(r.n, wi) >= 0 ? r.n : -r.n;
                                 const ShadowMap::Lookup lk =
-                                    sm.lookup(r.p + nl * (o.normal_offset_texels * texel));
+                                    sm.lookup(r.p + nl * (o.normal_offset_texels * texel), false);
                                 lit = !lk.inside ||
                                       lk.point_depth <= lk.map_depth + o.depth_bias_texels * texel;
                             }
@@ -588,12 +667,14 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
                                 const auto& alb =
                                     scene.materials[static_cast<std::size_t>(r.material)].albedo;
                                 for (std::size_t c = 0; c < 3; ++c)
-                                    surf[i][c] += alb[c] / kPi * E[c] * cs;
+                                    g.surface[3 * i + c] +=
+                                        static_cast<float>(alb[c] / kPi * E[c] * cs);
                             } else {
                                 const BoundaryTransmittance& T =
                                     *mat_T[static_cast<std::size_t>(r.material)];
                                 const double t = T(cs);
-                                for (std::size_t c = 0; c < 3; ++c) irr[i][c] += t * E[c] * cs;
+                                for (std::size_t c = 0; c < 3; ++c)
+                                    g.irradiance[3 * i + c] += static_cast<float>(t * E[c] * cs);
                                 if (T.alpha() > 0) {
                                     Vec3 bs, bt;
                                     basis(r.n, bs, bt);
@@ -603,14 +684,16 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
                                     const double f = dielectric::rough_dielectric_f(
                                         local(r.wo), local(wi), T.eta(), T.alpha(),
                                         dielectric::TransportMode::kRadiance);
-                                    for (std::size_t c = 0; c < 3; ++c) spec[i][c] += f * cs * E[c];
+                                    for (std::size_t c = 0; c < 3; ++c)
+                                        g.specular[3 * i + c] += static_cast<float>(f * cs * E[c]);
                                 }
                             }
                         } else if (r.kind == Kind::kMedium && d_thick >= 0) {
                             if (const SlabTransmittance* st = slab_of(r.material)) {
                                 const auto Ts = st->at(d_thick * scene.unit_mm);
                                 for (std::size_t c = 0; c < 3; ++c)
-                                    transl[i][c] += E[c] * (-cs) * Ts[c];
+                                    g.translucency[3 * i + c] +=
+                                        static_cast<float>(E[c] * (-cs) * Ts[c]);
                             }
                         }
                     }
@@ -618,15 +701,6 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
         }
     }
 
-    for (std::size_t i = 0; i < N; ++i) {
-        g.thickness[i] = static_cast<float>(thick[i]);
-        for (std::size_t c = 0; c < 3; ++c) {
-            g.surface[3 * i + c] = static_cast<float>(surf[i][c]);
-            g.irradiance[3 * i + c] = static_cast<float>(irr[i][c]);
-            g.specular[3 * i + c] = static_cast<float>(spec[i][c]);
-            g.translucency[3 * i + c] = static_cast<float>(transl[i][c]);
-        }
-    }
     if (stats) {
         stats->shadow_maps = maps;
         stats->light_samples = static_cast<int>(samples.size());
@@ -634,7 +708,6 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
         stats->shading_ms =
             std::chrono::duration<double, std::milli>(clock::now() - t_start).count() - shadow_ms;
     }
-    return g;
 }
 
 }  // namespace ssslab::realtime

@@ -134,6 +134,11 @@ class BoundaryTransmittance {
     std::vector<double> table_;  // GGX: T at mu = k / (n - 1)
 };
 
+/// The table of BoundaryTransmittance(eta, alpha, cosines, quadrature), built on first use and
+/// kept for the life of the process (thread-safe; the reference stays valid).
+const BoundaryTransmittance& tabulated_boundary(double eta, double alpha, int cosines = 65,
+                                                int quadrature = 64);
+
 struct LightingStats {
     int shadow_maps = 0;
     double shadow_ms = 0, shading_ms = 0;
@@ -148,5 +153,10 @@ struct LightingStats {
 GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& frame,
               const LightingOptions& o, const std::vector<SlabTransmittance>& slabs = {},
               LightingStats* stats = nullptr);
+/// The same into `out`, whose arrays keep their storage when the size is unchanged (a renderer
+/// reuses its G-buffer frame after frame).
+void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& frame,
+           const LightingOptions& o, const std::vector<SlabTransmittance>& slabs,
+           LightingStats* stats, GBuffer& out);
 
 }  // namespace ssslab::realtime

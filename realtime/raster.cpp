@@ -292,13 +292,19 @@ RasterMesh project(const RasterCamera& camera, const TriangleMesh& mesh, bool cu
 
 RasterFrame rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
                       const RasterOptions& o) {
+    RasterFrame f;
+    rasterize(camera, meshes, o, f);
+    return f;
+}
+
+void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
+               const RasterOptions& o, RasterFrame& f) {
     if (camera.width < 1 || camera.height < 1 || o.supersample < 1 || o.tile_size < 1 ||
         static_cast<long long>(camera.width) * o.supersample > kMaxSide ||
         static_cast<long long>(camera.height) * o.supersample > kMaxSide)
         throw std::invalid_argument(
             "rasterize: image size, supersampling or tile size out of range");
     if (!(o.near > 0)) throw std::invalid_argument("rasterize: the near plane must be > 0");
-    RasterFrame f;
     f.width = camera.width;
     f.height = camera.height;
     f.supersample = o.supersample;
@@ -311,6 +317,13 @@ RasterFrame rasterize(const RasterCamera& camera, std::span<const RasterMesh> me
         f.triangle.assign(samples, std::numeric_limits<std::uint32_t>::max());
         f.barycentric.assign(samples, {0.0, 0.0});
         f.fragments.assign(samples, 0);
+    } else {
+        f.ray_t.clear();
+        f.triangle.clear();
+        f.barycentric.clear();
+        f.fragments.clear();
+        f.coverage.clear();
+        f.depth.clear();
     }
 
     // Geometry: fixed blocks of triangles set up in parallel, concatenated in submission order.
@@ -359,10 +372,19 @@ RasterFrame rasterize(const RasterCamera& camera, std::span<const RasterMesh> me
                 draw<false>(*s, x0, y0, x1, y1, o.depth_test, o.orthographic, f);
         }
     });
-    if (o.depth_only) return f;
+    if (o.depth_only) return;
 
     // Ray distances per sample, box-filtered pixels.
     const int ss = o.supersample;
+    // RasterCamera::ray_length_per_depth's ndc coordinates, once per column and row (the same
+    // expressions: the same lengths to the bit).
+    std::vector<double> ndc_x(static_cast<std::size_t>(ws)), ndc_y(static_cast<std::size_t>(hs));
+    for (int sx = 0; sx < ws; ++sx)
+        ndc_x[static_cast<std::size_t>(sx)] =
+            (2 * ((sx + 0.5) / ss) / camera.width - 1) * camera.tan_half * camera.aspect;
+    for (int sy = 0; sy < hs; ++sy)
+        ndc_y[static_cast<std::size_t>(sy)] =
+            (1 - 2 * ((sy + 0.5) / ss) / camera.height) * camera.tan_half;
     f.coverage.assign(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height), 0);
     f.depth.assign(f.coverage.size(), 0);
     tbb::parallel_for(0, f.height, [&](int y) {
@@ -374,9 +396,13 @@ RasterFrame rasterize(const RasterCamera& camera, std::span<const RasterMesh> me
                     const int sx = x * ss + i, sy = y * ss + j;
                     const std::size_t k = f.sample_index(sx, sy);
                     if (f.shape[k] < 0) continue;
-                    const double px = (sx + 0.5) / ss, py = (sy + 0.5) / ss;
-                    f.ray_t[k] = o.orthographic ? f.view_z[k]
-                                                : f.view_z[k] * camera.ray_length_per_depth(px, py);
+                    f.ray_t[k] =
+                        o.orthographic
+                            ? f.view_z[k]
+                            : f.view_z[k] *
+                                  length(camera.forward +
+                                         camera.right * ndc_x[static_cast<std::size_t>(sx)] +
+                                         camera.up * ndc_y[static_cast<std::size_t>(sy)]);
                     ++covered;
                     sum_t += f.ray_t[k];
                 }
@@ -385,16 +411,23 @@ RasterFrame rasterize(const RasterCamera& camera, std::span<const RasterMesh> me
             f.depth[p] = sum_t / (ss * ss);
         }
     });
-    return f;
 }
 
 RasterFrame rasterize(const Scene& scene, const RasterOptions& o, int width, int height) {
+    RasterFrame f;
+    rasterize(scene, o, width, height, f);
+    return f;
+}
+
+void rasterize(const Scene& scene, const RasterOptions& o, int width, int height,
+               RasterFrame& out) {
     const RasterCamera camera = RasterCamera::from_scene(scene.camera, width, height);
     std::vector<RasterMesh> meshes;
     meshes.reserve(scene.shapes.size());
     for (const SceneShape& s : scene.shapes)
-        meshes.push_back(project(camera, s.mesh, o.cull_closed && check_mesh(s.mesh).closed()));
-    return rasterize(camera, meshes, o);
+        meshes.push_back(project(
+            camera, s.mesh, o.cull_closed && (s.closed ? *s.closed : check_mesh(s.mesh).closed())));
+    rasterize(camera, meshes, o, out);
 }
 
 }  // namespace ssslab::realtime

@@ -127,6 +127,13 @@ RasterFrame rasterize(const RasterCamera& camera, std::span<const RasterMesh> me
 /// the shapes whose mesh is closed (check_mesh) are culled when options.cull_closed.
 RasterFrame rasterize(const Scene& scene, const RasterOptions& options = {}, int width = 0,
                       int height = 0);
+/// The same into `out`, whose arrays keep their storage when the size is unchanged: a renderer
+/// that draws frame after frame reuses its render targets instead of faulting in fresh pages
+/// (at 1080p about 100 MB a frame).
+void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
+               const RasterOptions& options, RasterFrame& out);
+void rasterize(const Scene& scene, const RasterOptions& options, int width, int height,
+               RasterFrame& out);
 
 /// Fixed point of the snapped raster coordinates: 8 fractional bits (1/256 pixel).
 inline constexpr int kSubpixelBits = 8;

@@ -131,7 +131,7 @@ std::vector<ShadowView> fit_point(const Vec3& position, const Box& receivers, do
     return out;
 }
 
-ShadowMap::Lookup ShadowMap::lookup(const Vec3& p) const {
+ShadowMap::Lookup ShadowMap::lookup(const Vec3& p, bool smooth) const {
     Lookup r;
     const ClipVertex c = view.to_clip(p);
     double u = c.x, w = c.y;
@@ -150,6 +150,7 @@ ShadowMap::Lookup ShadowMap::lookup(const Vec3& p) const {
     r.map_depth = depth[i];
     r.map_depth_smooth = r.map_depth;
     r.shape = shape[i];
+    if (!smooth) return r;
     // Bilinear between the texel centres around (fx, fy).
     const double gx = fx - 0.5, gy = fy - 0.5;
     const int x0 = static_cast<int>(std::floor(gx)), y0 = static_cast<int>(std::floor(gy));
@@ -173,16 +174,22 @@ ShadowMap::Lookup ShadowMap::lookup(const Vec3& p) const {
 }
 
 ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view, std::size_t band_texels) {
+    ShadowMap sm;
+    render_shadow_map(scene, view, sm, band_texels);
+    return sm;
+}
+
+void render_shadow_map(const Scene& scene, const ShadowView& view, ShadowMap& sm,
+                       std::size_t band_texels) {
     std::vector<std::vector<ClipVertex>> clip(scene.shapes.size());
     for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
         clip[k].reserve(scene.shapes[k].mesh.positions.size());
         for (const Vec3& p : scene.shapes[k].mesh.positions) clip[k].push_back(view.to_clip(p));
     }
-    ShadowMap sm;
     sm.view = view;
     const std::size_t S = static_cast<std::size_t>(view.size);
-    sm.depth.assign(S * S, std::numeric_limits<float>::infinity());
-    sm.shape.assign(S * S, -1);
+    sm.depth.resize(S * S);  // every texel is written by its band below
+    sm.shape.resize(S * S);
     // Horizontal bands of at most 2^22 texels, each rasterized on its own (depth only), so that
     // the rasterizer's frame (12 bytes a texel) stays below 51 MB for any map size. A band of rows
     // [r0, r1) is the map's clip space stretched in y: y' = (y - yc w) / hh (w = 1 when
@@ -193,6 +200,10 @@ ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view, std::siz
     o.orthographic = view.orthographic;
     // Orthographic: the origin lies in front of every caster, so the near plane clips nothing.
     o.near = view.near;
+    // The band's frame: scratch of the calling thread, kept between calls (maps of one size
+    // then reuse its storage instead of faulting in up to 50 MB of fresh pages per map).
+    static thread_local RasterFrame f;
+    std::vector<RasterMesh> meshes(scene.shapes.size());
     for (int r0 = 0; r0 < view.size; r0 += rows) {
         const int r1 = std::min(view.size, r0 + rows);
         const double top = 1 - 2.0 * r0 / view.size, bottom = 1 - 2.0 * r1 / view.size;
@@ -200,7 +211,6 @@ ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view, std::siz
         RasterCamera cam;  // only its size matters for a frame of clip-space meshes
         cam.width = view.size;
         cam.height = r1 - r0;
-        std::vector<RasterMesh> meshes(scene.shapes.size());
         for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
             RasterMesh& m = meshes[k];
             m.vertices.resize(clip[k].size());
@@ -211,7 +221,7 @@ ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view, std::siz
             m.triangles = scene.shapes[k].mesh.triangles;
             m.cull_back_faces = false;
         }
-        const RasterFrame f = rasterize(cam, meshes, o);
+        rasterize(cam, meshes, o, f);
         for (int y = 0; y < r1 - r0; ++y)
             for (int x = 0; x < view.size; ++x) {
                 const std::size_t i = f.sample_index(x, y);
@@ -221,7 +231,6 @@ ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view, std::siz
                 sm.shape[j] = f.shape[i];
             }
     }
-    return sm;
 }
 
 }  // namespace ssslab::realtime

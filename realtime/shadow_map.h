@@ -63,7 +63,7 @@ std::vector<ShadowView> fit_point(const Vec3& position, const Box& receivers, do
 /// A rasterized shadow map: depth of the first surface along the view's forward axis (+inf
 /// where none) and its shape, per texel (row-major, y down), as float and int32 (8 bytes a
 /// texel; rasterized depth-only in bands of at most 2^22 texels, so the rasterizer's 12-byte
-/// frame adds at most 51 MB while one is drawn).
+/// frame adds at most 51 MB while one is drawn, kept per thread for the next map).
 struct ShadowMap {
     ShadowView view;
     std::vector<float> depth;
@@ -81,12 +81,17 @@ struct ShadowMap {
         double distance_per_depth = 1;  ///< distance along the light's ray per unit depth
     };
     /// The texel a world point falls into (nearest texel; the shadow test does not filter).
-    Lookup lookup(const Vec3& p) const;
+    /// `smooth` false: a shadow test's lookup (inside, point_depth, map_depth, shape only;
+    /// map_depth_smooth = map_depth and distance_per_depth = 1 are not computed).
+    Lookup lookup(const Vec3& p, bool smooth = true) const;
 };
 
 /// The scene's shapes rasterized into the view (both sides of every triangle), band by band.
 /// `band_texels`: the most texels rasterized at once (the map is the same for any value).
 ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view,
                             std::size_t band_texels = std::size_t{1} << 22);
+/// The same into `out` (its arrays keep their storage when the size is unchanged).
+void render_shadow_map(const Scene& scene, const ShadowView& view, ShadowMap& out,
+                       std::size_t band_texels = std::size_t{1} << 22);
 
 }  // namespace ssslab::realtime
