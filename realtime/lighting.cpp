@@ -285,16 +285,30 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         return normalize(camera.forward + camera.right * ndc_x[static_cast<std::size_t>(sx)] +
                          camera.up * ndc_y[static_cast<std::size_t>(sy)]);
     };
-    auto receiver_at = [&](std::size_t i, int sx, int sy) {
+    // Facet normals as volpath/embree_scene.cpp computes them (double precision), once per
+    // triangle rather than once per sample and light.
+    std::vector<std::vector<Vec3>> facet(scene.shapes.size());
+    for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
+        const TriangleMesh& m = scene.shapes[k].mesh;
+        facet[k].resize(m.triangles.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.triangles.size(), 4096),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t t = r.begin(); t != r.end(); ++t) {
+                                  const auto& tri = m.triangles[t];
+                                  const Vec3 &v0 = m.positions[tri[0]], &v1 = m.positions[tri[1]],
+                                             &v2 = m.positions[tri[2]];
+                                  facet[k][t] = normalize(cross(v1 - v0, v2 - v0));
+                              }
+                          });
+    }
+    auto receiver_at = [&](std::size_t i, const Vec3& d) {
         Receiver r;
-        const Vec3 d = ray(sx, sy);
         const int s = frame.shape[i];
         const SceneShape& sh = scene.shapes[static_cast<std::size_t>(s)];
         const auto& tri = sh.mesh.triangles[frame.triangle[i]];
         const Vec3 &v0 = sh.mesh.positions[tri[0]], &v1 = sh.mesh.positions[tri[1]],
                    &v2 = sh.mesh.positions[tri[2]];
-        // Facet normal as volpath/embree_scene.cpp computes it (double precision).
-        r.n = normalize(cross(v1 - v0, v2 - v0));
+        r.n = facet[static_cast<std::size_t>(s)][frame.triangle[i]];
         const auto [b1, b2] = frame.barycentric[i];
         r.p = v0 * (1 - b1 - b2) + v1 * b1 + v2 * b2;
         r.wo = -d;
@@ -365,7 +379,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                             kind[i] = Kind::kMedium;  // provisional: seen from outside below
                         }
                     }
-                    const Receiver r = receiver_at(i, sx, sy);
+                    const Receiver r = receiver_at(i, d);
                     for (int c = 0; c < 3; ++c)
                         g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(r.n[c]);
                     if (light_in_front) continue;  // a sphere light in front: nothing to light
@@ -588,8 +602,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
             [&](const tbb::blocked_range<std::size_t>& br, bool acc) {
                 for (std::size_t i = br.begin(); i != br.end() && !acc; ++i)
                     if (kind[i] != Kind::kNone)
-                        acc = reaches(
-                            s, receiver_at(i, static_cast<int>(i % W), static_cast<int>(i / W)));
+                        acc = reaches(s, receiver_at(i, ray(static_cast<int>(i % W),
+                                                            static_cast<int>(i / W))));
                 return acc;
             },
             [](bool a, bool b) { return a || b; });
@@ -618,7 +632,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                     for (std::size_t i = br.begin(); i != br.end(); ++i) {
                         if (kind[i] == Kind::kNone) continue;
                         const Receiver r =
-                            receiver_at(i, static_cast<int>(i % W), static_cast<int>(i / W));
+                            receiver_at(i, ray(static_cast<int>(i % W), static_cast<int>(i / W)));
                         // Cube faces: a receiver belongs to the first face it projects into.
                         auto in_view = [&](const ShadowView& v) {
                             const ClipVertex c = v.to_clip(r.p);
