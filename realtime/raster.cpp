@@ -76,6 +76,17 @@ std::int64_t floor_div(std::int64_t a, std::int64_t b) {
     return (a % b != 0 && ((a < 0) != (b < 0))) ? q - 1 : q;
 }
 
+// v resized to n entries, all `value`, filled in parallel (a 1080p frame clears ~90 MB).
+template <class T>
+void fill(std::vector<T>& v, std::size_t n, const T& value) {
+    v.resize(n);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, std::size_t{1} << 16),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          std::fill(v.begin() + static_cast<std::ptrdiff_t>(r.begin()),
+                                    v.begin() + static_cast<std::ptrdiff_t>(r.end()), value);
+                      });
+}
+
 struct Viewport {
     int ws, hs;    // sample grid
     double guard;  // |x / w|, |y / w| <= guard keeps snapped coordinates in range
@@ -310,13 +321,13 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
     f.supersample = o.supersample;
     const int ws = f.sample_width(), hs = f.sample_height();
     const std::size_t samples = static_cast<std::size_t>(ws) * static_cast<std::size_t>(hs);
-    f.view_z.assign(samples, std::numeric_limits<double>::infinity());
-    f.shape.assign(samples, -1);
+    fill(f.view_z, samples, std::numeric_limits<double>::infinity());
+    fill(f.shape, samples, std::int32_t{-1});
     if (!o.depth_only) {
-        f.ray_t.assign(samples, 0.0);
-        f.triangle.assign(samples, std::numeric_limits<std::uint32_t>::max());
-        f.barycentric.assign(samples, {0.0, 0.0});
-        f.fragments.assign(samples, 0);
+        f.ray_t.resize(samples);  // written for every sample below
+        fill(f.triangle, samples, std::numeric_limits<std::uint32_t>::max());
+        fill(f.barycentric, samples, std::array<double, 2>{0.0, 0.0});
+        fill(f.fragments, samples, 0u);
     } else {
         f.ray_t.clear();
         f.triangle.clear();
@@ -385,8 +396,9 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
     for (int sy = 0; sy < hs; ++sy)
         ndc_y[static_cast<std::size_t>(sy)] =
             (1 - 2 * ((sy + 0.5) / ss) / camera.height) * camera.tan_half;
-    f.coverage.assign(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height), 0);
-    f.depth.assign(f.coverage.size(), 0);
+    // Every entry is written below.
+    f.coverage.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
+    f.depth.resize(f.coverage.size());
     tbb::parallel_for(0, f.height, [&](int y) {
         for (int x = 0; x < f.width; ++x) {
             int covered = 0;
@@ -395,7 +407,10 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
                 for (int i = 0; i < ss; ++i) {
                     const int sx = x * ss + i, sy = y * ss + j;
                     const std::size_t k = f.sample_index(sx, sy);
-                    if (f.shape[k] < 0) continue;
+                    if (f.shape[k] < 0) {
+                        f.ray_t[k] = 0;
+                        continue;
+                    }
                     f.ray_t[k] =
                         o.orthographic
                             ? f.view_z[k]
