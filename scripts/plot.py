@@ -493,12 +493,14 @@ def efficiency_plot(root, p):
 
 def error_vs_time_plot(root, p):
     """Per scene: the RGB RMS error of every frame against the screen-space reference (left) and
-    the path tracer (right, +-1 SE bars) on a log axis, against the frame time. A line per swept
-    model through its tap counts (solid: no jitter, dashed: jittered), the table's models of one
+    the path tracer (right, +-1 SE bars) on a log axis, against the time of p["x"] (a column:
+    sss_ms, the SSS pass, or frame_ms, the whole frame) on a log axis. A line per swept model
+    through its tap counts (solid: no jitter, dashed: jittered), the table's models of one
     family (the part of the spec before ':') at the table's tap count joined by a dotted line,
     the rest as single markers."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
     rows = [x for x in read_csv(os.path.join(root, p["csv"])) if x["scene"] == p["scene"]]
-    xkey = "frame_ms" if rows and "frame_ms" in rows[0] else "sss_ms"
+    xkey = p.get("x", "sss_ms")
     taps = int(p["taps"])
 
     def f(x, k):
@@ -548,11 +550,12 @@ def error_vs_time_plot(root, p):
     notes = []
     panels = [("rms_vs_reference_rgb", "against the screen-space 2D reference (separability)"),
               ("rms_vs_volpath_rgb", "against the path tracer (noise-corrected, +-1 SE)")]
+    handles = {}  # label -> what drew it first (a series may be drawn in one panel only)
     for a, (key, title) in zip(ax, panels):
         ys = []
         dropped = 0
         for label, pts, colour, ls, marker, ann, offset in series:
-            keep = [(x, t) for x, t in zip(pts, ann) if f(x, key) > 0]
+            keep = [(x, t) for x, t in zip(pts, ann) if f(x, key) > 0 and f(x, xkey) > 0]
             dropped += len(pts) - len(keep)
             if not keep:
                 continue
@@ -562,29 +565,46 @@ def error_vs_time_plot(root, p):
             ys += yv
             # On a log axis a bar reaching zero runs off the bottom (the limits follow the points).
             lo = [min(s, 0.999 * y) for s, y in zip(se, yv)]
-            a.errorbar(xv, yv, yerr=[lo, se] if any(se) else None, color=colour, ls=ls,
-                       marker=marker, ms=4, lw=1.2, capsize=2, elinewidth=0.8, label=label)
+            bars = a.errorbar(xv, yv, yerr=[lo, se] if any(se) else None, color=colour, ls=ls,
+                              marker=marker, ms=4, lw=1.2, capsize=2, elinewidth=0.7,
+                              label=label)
+            for b in bars[1] + bars[2]:  # caps and bars fainter than the points and lines
+                b.set_alpha(0.35)
+            handles.setdefault(label, bars)
             for xx, yy, (_, t) in zip(xv, yv, keep):
                 if t:
                     a.annotate(t, (xx, yy), xytext=offset, textcoords="offset points",
                                fontsize=6, color=colour)
         a.set_yscale("log")
+        a.set_xscale("log")
+        # Times as plain numbers at 1, 2 and 5 times the powers of ten (a pass's times span a
+        # decade or two: the default labels only the powers).
+        a.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        a.xaxis.set_major_formatter(FuncFormatter(lambda v, _: "%g" % v))
+        a.xaxis.set_minor_formatter(NullFormatter())
         if ys:
             a.set_ylim(min(ys) / 2, max(ys) * 2)
         a.set_title(title)
         a.set_xlabel("frame time [ms]" if xkey == "frame_ms" else "SSS pass time [ms]")
         a.grid(alpha=0.3, which="both")
         if dropped:
-            notes.append("%d of its frames score zero %s (not drawn on the log axis)." %
+            notes.append("%d of its frames score zero %s (not drawn on the log axes)." %
                          (dropped, "against the path tracer: within its noise"
                           if key == "rms_vs_volpath_rgb" else "against the reference"))
     ax[0].set_ylabel("RMS error (RGB), radiance")
-    ax[1].legend(fontsize=7)
-    share = [f(x, "sss_ms") / f(x, "frame_ms") for x in rows if f(x, "frame_ms") > 0]
-    if share and xkey == "frame_ms":
-        notes.append("The SSS pass takes %.2g to %.2g %% of these frame times." %
-                     (100 * min(share), 100 * max(share)))
-    fig.suptitle("%s: error against frame time" % p["scene"])
+    order = [q[0] for q in series if q[0] in handles]
+    if order:
+        ax[1].legend([handles[q] for q in order], order, fontsize=7, loc="best")
+    frames = [x for x in rows if f(x, "frame_ms") > 0]
+    if frames:
+        rest = [f(x, "frame_ms") - f(x, "sss_ms") for x in frames]
+        share = [f(x, "sss_ms") / f(x, "frame_ms") for x in frames]
+        notes.append("The rest of these frames (raster, shadow maps and lighting, the same for "
+                     "every model, and the composite) took %.4g to %.4g ms: the SSS pass is "
+                     "%.2g to %.2g %% of the frame time." %
+                     (min(rest), max(rest), 100 * min(share), 100 * max(share)))
+    fig.suptitle("%s: error against %s" %
+                 (p["scene"], "frame time" if xkey == "frame_ms" else "SSS pass time"))
     save(fig, root, p["out"], {"notes": notes, "x": xkey, "series": [q[0] for q in series]})
 
 
