@@ -491,6 +491,123 @@ def efficiency_plot(root, p):
     save(fig, root, p["out"], {"notes": notes})
 
 
+def error_vs_time_plot(root, p):
+    """Per scene: the RGB RMS error of every frame against the screen-space reference (left) and
+    the path tracer (right, +-1 SE bars) on a log axis, against the time of p["x"] (a column:
+    sss_ms, the SSS pass, or frame_ms, the whole frame) on a log axis. A line per swept model
+    through its tap counts (solid: no jitter, dashed: jittered), the table's models of one
+    family (the part of the spec before ':') at the table's tap count joined by a dotted line,
+    the rest as single markers."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+    rows = [x for x in read_csv(os.path.join(root, p["csv"])) if x["scene"] == p["scene"]]
+    xkey = p.get("x", "sss_ms")
+    taps = int(p["taps"])
+
+    def f(x, k):
+        v = x.get(k, "")
+        return float(v) if v not in ("", None) else 0.0
+
+    models = []
+    for x in rows:
+        if x["model"] not in models:
+            models.append(x["model"])
+    swept = [m for m in models
+             if len(set(int(x["taps"]) for x in rows if x["model"] == m)) > 1
+             or any(f(x, "jitter") > 0 for x in rows if x["model"] == m)]
+    table = [x for x in rows if int(x["taps"]) == taps and f(x, "jitter") == 0]
+    families = []
+    for x in table:
+        fam = x["model"].split(":")[0]
+        if fam not in families:
+            families.append(fam)
+    groups = {fam: [x for x in table if x["model"].split(":")[0] == fam] for fam in families}
+    cmap = plt.get_cmap("tab10")
+    series = []  # (label, rows, colour, line style, marker, annotation per row)
+    for i, m in enumerate(swept):
+        jitters = sorted(set(f(x, "jitter") for x in rows if x["model"] == m))
+        for j in jitters:
+            pts = sorted([x for x in rows if x["model"] == m and f(x, "jitter") == j],
+                         key=lambda x: int(x["taps"]))
+            series.append(("%s%s" % (m, ", jitter %g" % j if j > 0 else ""), pts, cmap(i % 10),
+                           "--" if j > 0 else "-", "o", [x["taps"] for x in pts],
+                           (3, -9) if j > 0 else (3, 3)))
+    k = len(swept)
+    for fam in families:
+        g = groups[fam]
+        if len(g) >= 2:
+            params = [x["model"].split(":", 1)[1] if ":" in x["model"] else x["model"] for x in g]
+            # "rank=2", "n=3": the parameter beside its point (a value alone would read as taps)
+            short = [q if len(q) <= 8 else q.split("=", 1)[-1] for q in params]
+            last = params[-1].split("=", 1)[-1]
+            series.append(("%s:%s .. %s (%d taps)" % (fam, params[0], last, taps), g,
+                           cmap(k % 10), ":", "s", short, (-4, 5)))
+            k += 1
+        elif g[0]["model"] not in swept:
+            series.append((g[0]["model"], g, cmap(k % 10), "none", "D", [""], (0, 0)))
+            k += 1
+
+    fig, ax = plt.subplots(1, 2, figsize=(13, 5), constrained_layout=True)
+    notes = []
+    panels = [("rms_vs_reference_rgb", "against the screen-space 2D reference (separability)"),
+              ("rms_vs_volpath_rgb", "against the path tracer (noise-corrected, +-1 SE)")]
+    handles = {}  # label -> what drew it first (a series may be drawn in one panel only)
+    for a, (key, title) in zip(ax, panels):
+        ys = []
+        dropped = 0
+        for label, pts, colour, ls, marker, ann, offset in series:
+            keep = [(x, t) for x, t in zip(pts, ann) if f(x, key) > 0 and f(x, xkey) > 0]
+            dropped += len(pts) - len(keep)
+            if not keep:
+                continue
+            xv = [f(x, xkey) for x, _ in keep]
+            yv = [f(x, key) for x, _ in keep]
+            se = [f(x, key + "_se") for x, _ in keep]
+            ys += yv
+            # On a log axis a bar reaching zero runs off the bottom (the limits follow the points).
+            lo = [min(s, 0.999 * y) for s, y in zip(se, yv)]
+            bars = a.errorbar(xv, yv, yerr=[lo, se] if any(se) else None, color=colour, ls=ls,
+                              marker=marker, ms=4, lw=1.2, capsize=2, elinewidth=0.7,
+                              label=label)
+            for b in bars[1] + bars[2]:  # caps and bars fainter than the points and lines
+                b.set_alpha(0.35)
+            handles.setdefault(label, bars)
+            for xx, yy, (_, t) in zip(xv, yv, keep):
+                if t:
+                    a.annotate(t, (xx, yy), xytext=offset, textcoords="offset points",
+                               fontsize=6, color=colour)
+        a.set_yscale("log")
+        a.set_xscale("log")
+        # Times as plain numbers at 1, 2 and 5 times the powers of ten (a pass's times span a
+        # decade or two: the default labels only the powers).
+        a.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        a.xaxis.set_major_formatter(FuncFormatter(lambda v, _: "%g" % v))
+        a.xaxis.set_minor_formatter(NullFormatter())
+        if ys:
+            a.set_ylim(min(ys) / 2, max(ys) * 2)
+        a.set_title(title)
+        a.set_xlabel("frame time [ms]" if xkey == "frame_ms" else "SSS pass time [ms]")
+        a.grid(alpha=0.3, which="both")
+        if dropped:
+            notes.append("%d of its frames score zero %s (not drawn on the log axes)." %
+                         (dropped, "against the path tracer: within its noise"
+                          if key == "rms_vs_volpath_rgb" else "against the reference"))
+    ax[0].set_ylabel("RMS error (RGB), radiance")
+    order = [q[0] for q in series if q[0] in handles]
+    if order:
+        ax[1].legend([handles[q] for q in order], order, fontsize=7, loc="best")
+    frames = [x for x in rows if f(x, "frame_ms") > 0]
+    if frames:
+        rest = [f(x, "frame_ms") - f(x, "sss_ms") for x in frames]
+        share = [f(x, "sss_ms") / f(x, "frame_ms") for x in frames]
+        notes.append("The rest of these frames (raster, shadow maps and lighting, the same for "
+                     "every model, and the composite) took %.4g to %.4g ms: the SSS pass is "
+                     "%.2g to %.2g %% of the frame time." %
+                     (min(rest), max(rest), 100 * min(share), 100 * max(share)))
+    fig.suptitle("%s: error against %s" %
+                 (p["scene"], "frame time" if xkey == "frame_ms" else "SSS pass time"))
+    save(fig, root, p["out"], {"notes": notes, "x": xkey, "series": [q[0] for q in series]})
+
+
 def main():
     with open(sys.argv[1]) as f:
         spec = json.load(f)
@@ -500,7 +617,8 @@ def main():
         {"profile": profile_plot, "convergence": convergence_plot,
          "singular_values": singular_values_plot,
          "kernel_slices": kernel_slices_plot, "z_histogram": z_histogram_plot,
-         "pencil": pencil_plot, "efficiency": efficiency_plot}[p["kind"]](root, p)
+         "pencil": pencil_plot, "efficiency": efficiency_plot,
+         "error_vs_time": error_vs_time_plot}[p["kind"]](root, p)
 
 
 if __name__ == "__main__":

@@ -24,43 +24,7 @@ using realtime::FrameOptions;
 using realtime::SssMethod;
 
 // A medium sphere on a diffuse floor under a sphere light and a dim environment, in mm.
-constexpr const char* kScene = R"(
-[scene]
-name = "ball"
-[camera]
-position = [0, 8, 40]
-target = [0, 4, 0]
-fov_y_deg = 30
-width = 48
-height = 40
-[[lights]]
-type = "sphere"
-position = [20, 40, 20]
-radius = 3
-radiance = [40, 40, 40]
-[[lights]]
-type = "environment"
-radiance = [0.05, 0.05, 0.05]
-[[materials]]
-name = "jelly"
-preset = "Skin1"
-roughness = 0.3
-[[materials]]
-name = "floor"
-type = "diffuse"
-albedo = [0.5, 0.5, 0.5]
-[[shapes]]
-type = "sphere"
-radius = 4
-subdivisions = 4
-translate = [0, 4.1, 0]
-material = "jelly"
-[[shapes]]
-type = "plane"
-size_x = 100
-size_z = 100
-material = "floor"
-)";
+const std::string kScene = testing::ball_scene(30, 48, 40);
 
 Scene scene_of(const std::string& text) {
     return parse_scene(text, "ball.toml", ".");

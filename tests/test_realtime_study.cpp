@@ -1,11 +1,11 @@
 // [outputs.realtime] (experiments/runner/realtime_study.h): a small experiment end to end through
 // `ssslab run`: the tables a script reads, the metrics `ssslab check` compares, the report's flip
 // viewer driven in headless Chromium, and its config errors.
+#include "experiments/runner/plots.h"
 #include "testing.h"
 
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -18,43 +18,8 @@ namespace {
 namespace fs = std::filesystem;
 using testing::run_ssslab;
 
-constexpr const char* kScene = R"(
-[scene]
-name = "ball"
-[camera]
-position = [0, 8, 40]
-target = [0, 4, 0]
-fov_y_deg = 25
-width = 40
-height = 32
-[[lights]]
-type = "sphere"
-position = [20, 40, 20]
-radius = 3
-radiance = [40, 40, 40]
-[[lights]]
-type = "environment"
-radiance = [0.05, 0.05, 0.05]
-[[materials]]
-name = "jelly"
-preset = "Skin1"
-roughness = 0.3
-[[materials]]
-name = "floor"
-type = "diffuse"
-albedo = [0.5, 0.5, 0.5]
-[[shapes]]
-type = "sphere"
-radius = 4
-subdivisions = 4
-translate = [0, 4.1, 0]
-material = "jelly"
-[[shapes]]
-type = "plane"
-size_x = 100
-size_z = 100
-material = "floor"
-)";
+// The ball of test_frame.cpp (testing.h), a narrower view on a smaller image.
+const std::string kScene = testing::ball_scene(25, 40, 32);
 
 std::string config(const std::string& models) {
     return R"([experiment]
@@ -162,8 +127,66 @@ TEST_F(RealtimeStudy, TablesNameTheirColumnsAndHoldEveryModelAndChannel) {
         EXPECT_TRUE(fs::exists(out() / "realtime" / "ball" / png)) << png;
 }
 
+// Error against the SSS pass time as a figure per scene (scripts/plot.py, "error_vs_time"), in
+// the realtime section with its caption; without matplotlib the section says why there is none.
+TEST_F(RealtimeStudy, ErrorAgainstTimeIsPlottedInTheRealtimeSection) {
+    const std::string html = testing::read_text(out() / "report.html");
+    const size_t realtime = html.find("<h2 id=\"realtime\">");
+    const size_t at = html.find("<h3 id=\"realtime-time\">Error against time</h3>");
+    ASSERT_NE(realtime, std::string::npos);
+    ASSERT_NE(at, std::string::npos);
+    EXPECT_LT(realtime, at);
+    EXPECT_EQ(html.find("<h2", realtime + 1), html.find("<h2 id=\"metrics\">"))
+        << "the figure's heading is inside the realtime section";
+    const std::string sec = html.substr(at, html.find("<h3", at + 1) - at);
+    // The table the figure draws: the RGB errors with their standard errors, and the times.
+    const auto s = csv_rows(testing::read_text(out() / "realtime" / "error_vs_time.csv"));
+    ASSERT_GE(s.size(), 2u);
+    const size_t vp = column(s[0], "rms_vs_volpath_rgb"),
+                 vpse = column(s[0], "rms_vs_volpath_rgb_se"),
+                 refse = column(s[0], "rms_vs_reference_rgb_se"), frame = column(s[0], "frame_ms"),
+                 sss = column(s[0], "sss_ms");
+    for (size_t i = 1; i < s.size(); ++i) {
+        EXPECT_GT(std::stod(s[i][vpse]), 0) << "the path tracer's noise: " << i;
+        EXPECT_GE(std::stod(s[i][refse]), 0);
+        EXPECT_GE(std::stod(s[i][vp]), 0);
+        EXPECT_GT(std::stod(s[i][frame]), std::stod(s[i][sss])) << "the frame holds the pass";
+    }
+    if (runner::find_python().empty()) {
+        EXPECT_NE(sec.find("No plots: no Python with matplotlib"), std::string::npos) << sec;
+        GTEST_SKIP() << "no python3 with matplotlib";
+    }
+    const fs::path stem = out() / "plots" / "realtime_error_vs_time_ball";
+    for (const char* ext : {".png", ".svg", ".json"})
+        ASSERT_TRUE(fs::exists(stem.string() + ext)) << ext << "\n" << sec;
+    const testing::RgbImage png = testing::read_png(stem.string() + ".png");
+    EXPECT_GT(png.width, 800) << "two panels side by side";
+    EXPECT_GT(png.height, 300);
+    EXPECT_EQ(sec.find("No plots"), std::string::npos) << sec;
+    EXPECT_NE(sec.find("<figure><a href=\"plots/realtime_error_vs_time_ball.svg\"><img "
+                       "src=\"plots/realtime_error_vs_time_ball.png\""),
+              std::string::npos)
+        << sec;
+    const size_t cap = sec.find("<figcaption>ball: RMS error of the subsurface layer");
+    ASSERT_NE(cap, std::string::npos) << sec;
+    const std::string caption = sec.substr(cap, sec.find("</figcaption>", cap) - cap);
+    for (const char* what :
+         {"against the SSS pass time", "against the screen-space 2D reference",
+          "against the path tracer", "dashed with jitter 0.33", "points labelled by taps",
+          "The rest of these frames (raster, shadow maps and lighting"})
+        EXPECT_NE(caption.find(what), std::string::npos) << what << "\n" << caption;
+    // What the figure holds (plot.py's JSON beside it): the pass's time on x, a line per swept
+    // model and jitter, the other models, no overlapping texts.
+    const std::string j = testing::read_text(stem.string() + ".json");
+    EXPECT_NE(j.find("\"x\": \"sss_ms\""), std::string::npos) << j;
+    for (const char* series :
+         {"\"svd:rank=1\"", "\"svd:rank=1, jitter 0.33\"", "\"preintegration\""})
+        EXPECT_NE(j.find(series), std::string::npos) << series << "\n" << j;
+    EXPECT_NE(j.find("\"overlapping_texts\": []"), std::string::npos) << j;
+}
+
 TEST_F(RealtimeStudy, TheFlipViewerWorksInHeadlessChromium) {
-    if (std::system("command -v chromium >/dev/null 2>&1") != 0)
+    if (!testing::have_chromium())
         GTEST_SKIP() << "chromium is not installed (scripts/setup.sh installs it)";
     // A copy of the report with a probe that clicks through the viewer and writes what it saw.
     std::string html = testing::read_text(out() / "report.html");
@@ -187,13 +210,8 @@ TEST_F(RealtimeStudy, TheFlipViewerWorksInHeadlessChromium) {
         f << html;
     }
     const fs::path dom = dir_->path() / "dom.html", log = dir_->path() / "chromium.log";
-    const std::string cmd =
-        "chromium --headless=new --no-sandbox --disable-gpu --no-first-run "
-        "--disable-background-networking --disable-component-update --disable-sync "
-        "--virtual-time-budget=10000 --enable-logging=stderr --v=0 --user-data-dir=" +
-        (dir_->path() / "profile").string() + " --dump-dom 'file://" + page.string() + "' >'" +
-        dom.string() + "' 2>'" + log.string() + "'";
-    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    ASSERT_EQ(testing::chromium("--dump-dom", page, dir_->path(), "1280,2000", dom.string()), 0)
+        << testing::read_text(log);
     const std::string d = testing::read_text(dom);
     EXPECT_NE(d.find("data-ready=\"yes\""), std::string::npos);
     EXPECT_NE(d.find("data-seen=\"realtime/ball/svd_rank1.png|realtime/ball/diff_svd_rank1.png|"

@@ -592,21 +592,11 @@ class Report : public ::testing::Test {
     static fs::path out() { return dir_->path() / "results" / "freude14-profiles"; }
     static fs::path report() { return out() / "report.html"; }
 
-    static bool have_chromium() { return std::system("command -v chromium >/dev/null 2>&1") == 0; }
-    // Headless Chromium on a file: `what` is "--dump-dom" (the DOM after the page's scripts, to
-    // `to`) or "--screenshot=<png>".
+    static bool have_chromium() { return testing::have_chromium(); }
+    // testing::chromium with this suite's directory for its profile and log.
     static int chromium(const std::string& what, const fs::path& page, const std::string& size,
                         const std::string& to = "/dev/null") {
-        const std::string flags =
-            "--headless=new --no-sandbox --disable-gpu --disable-quic --no-first-run "
-            "--disable-background-networking --disable-component-update --disable-sync "
-            "--hide-scrollbars --virtual-time-budget=10000 --enable-logging=stderr --v=0 "
-            "--user-data-dir=" +
-            (dir_->path() / "chromium-profile").string();
-        return std::system(("chromium " + flags + " --window-size=" + size + " " + what +
-                            " 'file://" + page.string() + "' >'" + to + "' 2>>'" +
-                            (dir_->path() / "chromium.log").string() + "'")
-                               .c_str());
+        return testing::chromium(what, page, dir_->path(), size, to);
     }
 
     static testing::TempDir* dir_;

@@ -9,6 +9,7 @@
 #include "approx/models.h"
 #include "realtime/sss_pass.h"
 #include "realtime/sss_reference.h"
+#include "testing.h"
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -36,69 +37,19 @@ using realtime::SssParams;
 using realtime::SssReferenceOptions;
 using realtime::SssReferenceResult;
 using Method = SssReferenceOptions::Method;
+// The helpers this file shares with test_sss_pass.cpp (testing.h).
+using testing::analytic_profile;
+using testing::edge_mode_name;
+using testing::flat_gbuffer;
+using testing::kSssEdgeModes;
+using testing::pixel_mm;
+using testing::random_image;
+using testing::rel_diff;
+using testing::skin_kernels;
+using testing::sss_camera;
 
-// The analytic skin-like profile of test_sss_pass.cpp: exp(-r / l1) / r plus exp(-r / l2) / l2
-// per channel, lengths stretched by `scale`.
-RadialProfile analytic_profile(double dr_mm, int nr, double scale = 1.0) {
-    RadialProfile p;
-    p.name = "analytic";
-    p.dr_cm = dr_mm / 10.0;
-    p.nr = nr;
-    const double l1[3] = {0.15, 0.08, 0.05}, l2[3] = {0.8, 0.4, 0.25};  // mm
-    for (int c = 0; c < 3; ++c) {
-        p.rd_per_cm2[c].resize(static_cast<size_t>(nr));
-        p.se_per_cm2[c].assign(static_cast<size_t>(nr), 0.0);
-        for (int k = 0; k < nr; ++k) {
-            const double r = (k + 0.5) * dr_mm / scale;
-            p.rd_per_cm2[c][static_cast<size_t>(k)] =
-                100.0 * (0.05 * std::exp(-r / l1[c]) / r + 0.5 * std::exp(-r / l2[c]) / l2[c]);
-        }
-        p.rd_total[c] = 0.5;
-    }
-    return p;
-}
-
-// Kernels of extent 1.5 mm (0.01 mm cells, n = 150), the profile at half its length.
-std::vector<Kernel2D> skin_kernels() {
-    const RadialProfile p = analytic_profile(0.01, 150, 0.5);
-    std::vector<Kernel2D> k;
-    for (int c = 0; c < 3; ++c) k.emplace_back(p, c, KernelGrid::from_profile(p));
-    return k;
-}
 SssExactKernel exact_kernel(const std::vector<Kernel2D>& k) {
     return SssExactKernel::from_kernels({&k[0], &k[1], &k[2]});
-}
-
-// A camera with tan_half 0.5 and unit_mm 0.05: at view depth z = H a pixel is one world unit,
-// 0.05 mm, so the 1.5 mm kernels span 30 pixels.
-SssParams camera(int w, int h, SssEdgeMode mode) {
-    SssParams p;
-    p.tan_half = 0.5;
-    p.aspect = static_cast<double>(w) / h;
-    p.unit_mm = 0.05;
-    p.mode = mode;
-    return p;
-}
-double pixel_mm(const SssParams& p, int h, double z) {
-    return 2 * p.tan_half * z * p.unit_mm / h;
-}
-
-SssGBuffer from_image(const ImageRGB& e, double z) {
-    SssGBuffer g(e.width, e.height);
-    for (size_t i = 0; i < g.pixels(); ++i) {
-        for (int ch = 0; ch < 3; ++ch) g.irradiance[3 * i + ch] = static_cast<float>(e.c[ch][i]);
-        g.view_z[i] = static_cast<float>(z);
-    }
-    return g;
-}
-
-ImageRGB random_image(int w, int h, double pmm, unsigned seed) {
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    ImageRGB img(w, h, pmm);
-    for (auto& ch : img.c)
-        for (double& v : ch) v = static_cast<float>(u(rng));  // representable in the G-buffer
-    return img;
 }
 
 // A lit disc of radius r px about (cx, cy), 1 inside, 0.1 outside, channels scaled apart.
@@ -115,30 +66,6 @@ SssGBuffer lit_disc(int w, int h, double cx, double cy, double r, double z) {
     return g;
 }
 
-double rel_diff(const std::vector<float>& out, const ImageRGB& ref) {
-    double m = 0, r = 0;
-    const size_t n = ref.c[0].size();
-    for (size_t i = 0; i < n; ++i)
-        for (int ch = 0; ch < 3; ++ch) {
-            m = std::max(m, std::fabs(out[3 * i + ch] - ref.c[ch][i]));
-            r = std::max(r, std::fabs(ref.c[ch][i]));
-        }
-    return m / r;
-}
-double rel_diff(const std::vector<float>& a, const std::vector<float>& b) {
-    double m = 0, r = 0;
-    for (size_t i = 0; i < a.size(); ++i) {
-        m = std::max(m, std::fabs(static_cast<double>(a[i]) - b[i]));
-        r = std::max(r, std::fabs(static_cast<double>(b[i])));
-    }
-    return m / r;
-}
-
-const SssEdgeMode kModes[3] = {SssEdgeMode::kNone, SssEdgeMode::kFollowSurface,
-                               SssEdgeMode::kReject};
-const char* mode_name(SssEdgeMode m) {
-    return m == SssEdgeMode::kNone ? "none" : m == SssEdgeMode::kReject ? "reject" : "follow";
-}
 SssReferenceOptions method(Method m, int samples = 256, std::uint64_t seed = 1) {
     SssReferenceOptions o;
     o.method = m;
@@ -163,9 +90,9 @@ TEST(SssReference, ConstantStaysConstantInEveryModeAndMethod) {
                 g.view_z[i] = static_cast<float>(h + (x < w / 2 ? 0 : step));
                 for (int ch = 0; ch < 3; ++ch) g.irradiance[3 * i + ch] = c[ch];
             }
-        for (SssEdgeMode mode : kModes)
+        for (SssEdgeMode mode : kSssEdgeModes)
             for (Method m : {Method::kExact, Method::kSampled, Method::kAuto}) {
-                SssParams p = camera(w, h, mode);
+                SssParams p = sss_camera(w, h, mode);
                 p.reject_depth = 0.1;
                 const SssReferenceResult r = realtime::sss_reference(g, k, p, method(m, 64));
                 double worst = 0, se = 0;
@@ -174,8 +101,8 @@ TEST(SssReference, ConstantStaysConstantInEveryModeAndMethod) {
                         worst, std::fabs(static_cast<double>(r.irradiance[i]) / c[i % 3] - 1));
                     se = std::max(se, static_cast<double>(r.standard_error[i]));
                 }
-                EXPECT_LT(worst, 1e-6) << mode_name(mode) << " " << static_cast<int>(m);
-                EXPECT_EQ(se, 0.0) << mode_name(mode) << " " << static_cast<int>(m);
+                EXPECT_LT(worst, 1e-6) << edge_mode_name(mode) << " " << static_cast<int>(m);
+                EXPECT_EQ(se, 0.0) << edge_mode_name(mode) << " " << static_cast<int>(m);
                 EXPECT_EQ(r.exact_pixels + r.sampled_pixels, static_cast<std::int64_t>(w * h));
                 if (m == Method::kAuto) {
                     EXPECT_EQ(r.exact_pixels, w * h);  // 61 x 61 taps
@@ -191,17 +118,17 @@ TEST(SssReference, FlatExactEqualsConvolveExact) {
     const std::vector<SssExactKernel> k = {exact_kernel(kk)};
     const int w = 40, h = 32;  // not square: the aspect enters the horizontal scale
     for (double z : {32.0, 23.3, 9.1}) {
-        const SssParams p0 = camera(w, h, SssEdgeMode::kNone);
+        const SssParams p0 = sss_camera(w, h, SssEdgeMode::kNone);
         const ImageRGB e = random_image(w, h, pixel_mm(p0, h, z), 3);
         const ImageRGB ref = approx::convolve_exact(e, {&kk[0], &kk[1], &kk[2]});
-        for (SssEdgeMode mode : kModes) {
+        for (SssEdgeMode mode : kSssEdgeModes) {
             const SssReferenceResult r = realtime::sss_reference(
-                from_image(e, z), k, camera(w, h, mode), method(Method::kExact));
+                flat_gbuffer(e, z), k, sss_camera(w, h, mode), method(Method::kExact));
             const double d = rel_diff(r.irradiance, ref);
             std::printf(
                 "  z %g (pixel %.4f mm), %-6s: max |reference - convolve_exact| / max = "
                 "%.3g\n",
-                z, e.pixel_mm, mode_name(mode), d);
+                z, e.pixel_mm, edge_mode_name(mode), d);
             EXPECT_LT(d, 1e-6);
         }
     }
@@ -216,7 +143,7 @@ TEST(SssReference, FlatExactEqualsAPlainLoopOverTheCells) {
     const std::vector<SssExactKernel> k = {exact_kernel(kk)};
     const int w = 24, h = 20, n = kk[0].n();
     for (int kx : {2, 4}) {
-        SssParams p = camera(w, h, SssEdgeMode::kNone);
+        SssParams p = sss_camera(w, h, SssEdgeMode::kNone);
         p.unit_mm = 0.04;
         // Pixel height 2 tan_half z unit_mm / h = 0.02 mm = 2 cells; width 2 tan_half aspect z
         // unit_mm / w = kx cells.
@@ -242,7 +169,7 @@ TEST(SssReference, FlatExactEqualsAPlainLoopOverTheCells) {
                     ref.at(ch, x, y) = s;
                 }
         const SssReferenceResult r =
-            realtime::sss_reference(from_image(e, z), k, p, method(Method::kExact));
+            realtime::sss_reference(flat_gbuffer(e, z), k, p, method(Method::kExact));
         const double d = rel_diff(r.irradiance, ref);
         std::printf("  pixel = %d x 2 cells: max |reference - plain loop| / max = %.3g\n", kx, d);
         EXPECT_LT(d, 1e-6);
@@ -264,9 +191,9 @@ TEST(SssReference, SeparableKernelAgreesWithSssPass) {
     const std::vector<SssExactKernel> k = {exact_kernel(kk)};
     const int w = 36, h = 30;
     for (double z : {30.0, 17.0}) {
-        const SssParams p = camera(w, h, SssEdgeMode::kNone);
+        const SssParams p = sss_camera(w, h, SssEdgeMode::kNone);
         const double pmm = pixel_mm(p, h, z);
-        const SssGBuffer g = from_image(random_image(w, h, pmm, 6), z);
+        const SssGBuffer g = flat_gbuffer(random_image(w, h, pmm, 6), z);
         // Full resolution: a tap at every pixel offset, weights the 1D kernel resampled to the
         // pixel bins (a = u / (2 sum u): half cell masses), folded at w - 1 as clamp-to-edge does.
         realtime::SssMaterialKernel mk;
@@ -329,7 +256,7 @@ TEST(SssReference, SampledAgreesWithExactByZScores) {
             spot.view_z[i] = static_cast<float>(h);  // 0.05 mm pixels
         }
     const SssGBuffer disc = lit_disc(w, h, 15.5, 16.3, 7.5, h);
-    const SssParams p = camera(w, h, SssEdgeMode::kNone);
+    const SssParams p = sss_camera(w, h, SssEdgeMode::kNone);
     const int counts[4] = {64, 256, 1024, 4096};
     for (int per : {2, 16})
         for (int img = 0; img < 2; ++img) {
@@ -394,8 +321,8 @@ TEST(SssReference, StandardErrorMatchesTheSpreadOverSeeds) {
     SssGBuffer g = lit_disc(w, h, 11.5, 12.2, 6.5, h);
     for (int y = 0; y < h; ++y)
         for (int x = 16; x < w; ++x) g.view_z[static_cast<size_t>(y) * w + x] = h + 0.5f;
-    for (SssEdgeMode mode : kModes) {
-        SssParams p = camera(w, h, mode);
+    for (SssEdgeMode mode : kSssEdgeModes) {
+        SssParams p = sss_camera(w, h, mode);
         p.follow_strength = 0.5;  // s = 0.5 across the step: a blend
         p.reject_depth = 0.2;
         const SssReferenceResult ex = realtime::sss_reference(g, k, p, method(Method::kExact));
@@ -426,7 +353,7 @@ TEST(SssReference, StandardErrorMatchesTheSpreadOverSeeds) {
         std::printf(
             "  %-6s: sum of t^2 over seeds = %.1f for %d pixel channels (z = %.2f); "
             "mean SE^2 / variance over seeds = %.4f\n",
-            mode_name(mode), chi2, dof, (chi2 - dof) / std::sqrt(2.0 * dof), ratio);
+            edge_mode_name(mode), chi2, dof, (chi2 - dof) / std::sqrt(2.0 * dof), ratio);
         ASSERT_GT(dof, 100);
         // t^2 of 99 degrees of freedom has mean 99 / 97: the sum is within 5 sigma of that.
         const double mean_t2 = (seeds - 1.0) / (seeds - 3.0);
@@ -462,14 +389,14 @@ TEST(SssReference, FollowSurfaceAndRejectStopBleeding) {
     for (Method m : {Method::kExact, Method::kSampled}) {
         std::array<double, 3> bleed{};
         for (int mi = 0; mi < 3; ++mi) {
-            SssParams p = camera(w, h, kModes[mi]);
+            SssParams p = sss_camera(w, h, kSssEdgeModes[mi]);
             p.reject_depth = 1.0;
             bleed[mi] = right_half_energy(
                             realtime::sss_reference(g, k, p, method(m, 64)).irradiance, w, h) /
                         lit;
             std::printf("  %-7s %-6s: fraction of the lit half's energy across the step = %.3g\n",
-                        m == Method::kExact ? "exact" : "sampled", mode_name(kModes[mi]),
-                        bleed[mi]);
+                        m == Method::kExact ? "exact" : "sampled",
+                        edge_mode_name(kSssEdgeModes[mi]), bleed[mi]);
         }
         EXPECT_GT(bleed[0], 1e-3);             // mode none bleeds
         EXPECT_LT(bleed[1], 1e-3 * bleed[0]);  // follow-surface: s = 1 across a 100-unit step
@@ -485,11 +412,11 @@ TEST(SssReference, FollowSurfaceAndRejectStopBleeding) {
             }
         const std::vector<SssExactKernel> k2 = {k[0], k[0]};
         const double none = right_half_energy(
-            realtime::sss_reference(me, k2, camera(w, h, SssEdgeMode::kNone), method(m, 64))
+            realtime::sss_reference(me, k2, sss_camera(w, h, SssEdgeMode::kNone), method(m, 64))
                 .irradiance,
             w, h);
         const double rej = right_half_energy(
-            realtime::sss_reference(me, k2, camera(w, h, SssEdgeMode::kReject), method(m, 64))
+            realtime::sss_reference(me, k2, sss_camera(w, h, SssEdgeMode::kReject), method(m, 64))
                 .irradiance,
             w, h);
         std::printf("  %-7s material edge: none %.3g, reject %.3g\n",
@@ -505,15 +432,15 @@ TEST(SssReference, KernelNarrowerThanAPixelIsTheIdentity) {
     const std::vector<SssExactKernel> k = {exact_kernel(skin_kernels())};
     const int w = 32, h = 24;
     const double z = 100.0 * h;  // a pixel is 5 mm: the kernel's support is under 0.3 px
-    const SssGBuffer g = from_image(random_image(w, h, 1.0, 9), z);
-    for (SssEdgeMode mode : kModes)
+    const SssGBuffer g = flat_gbuffer(random_image(w, h, 1.0, 9), z);
+    for (SssEdgeMode mode : kSssEdgeModes)
         for (Method m : {Method::kExact, Method::kSampled, Method::kAuto}) {
             const SssReferenceResult r =
-                realtime::sss_reference(g, k, camera(w, h, mode), method(m, 16));
+                realtime::sss_reference(g, k, sss_camera(w, h, mode), method(m, 16));
             EXPECT_EQ(std::memcmp(r.irradiance.data(), g.irradiance.data(),
                                   g.irradiance.size() * sizeof(float)),
                       0)
-                << mode_name(mode) << " " << static_cast<int>(m);
+                << edge_mode_name(mode) << " " << static_cast<int>(m);
         }
 }
 
@@ -521,11 +448,12 @@ TEST(SssReference, KernelWiderThanTheImage) {
     const std::vector<SssExactKernel> k = {exact_kernel(skin_kernels())};
     const int w = 24, h = 20;
     const double z = h / 50.0;  // a pixel is 0.001 mm: the kernel spans 1500 px
-    for (SssEdgeMode mode : kModes)
+    for (SssEdgeMode mode : kSssEdgeModes)
         for (Method m : {Method::kExact, Method::kSampled, Method::kAuto}) {
-            const SssReferenceResult c = realtime::sss_reference(
-                from_image(ImageRGB(w, h, 1.0, 0.6), z), k, camera(w, h, mode), method(m, 16));
-            for (float v : c.irradiance) EXPECT_NEAR(v, 0.6, 1e-6) << mode_name(mode);
+            const SssReferenceResult c =
+                realtime::sss_reference(flat_gbuffer(ImageRGB(w, h, 1.0, 0.6), z), k,
+                                        sss_camera(w, h, mode), method(m, 16));
+            for (float v : c.irradiance) EXPECT_NEAR(v, 0.6, 1e-6) << edge_mode_name(mode);
             if (m == Method::kAuto) {
                 EXPECT_EQ(c.exact_pixels, w * h);  // clamped: 480 taps
             }
@@ -535,7 +463,7 @@ TEST(SssReference, KernelWiderThanTheImage) {
     ImageRGB dot(w, h, 1.0, 0.0);
     for (int ch = 0; ch < 3; ++ch) dot.at(ch, 11, 9) = 1.0;
     const SssReferenceResult o = realtime::sss_reference(
-        from_image(dot, z), k, camera(w, h, SssEdgeMode::kNone), method(Method::kExact));
+        flat_gbuffer(dot, z), k, sss_camera(w, h, SssEdgeMode::kNone), method(Method::kExact));
     double energy = 0;
     for (float v : o.irradiance) {
         EXPECT_TRUE(std::isfinite(v) && v >= -1e-7f);
@@ -552,7 +480,7 @@ TEST(SssReference, BitIdenticalForOneAndTwoThreadsAndPassThrough) {
     for (int c = 0; c < 3; ++c) kw.emplace_back(wide, c, KernelGrid::from_profile(wide));
     const std::vector<SssExactKernel> k = {exact_kernel(kk), exact_kernel(kw)};
     const int w = 53, h = 37;
-    SssGBuffer g = from_image(random_image(w, h, 1.0, 13), 1.0);
+    SssGBuffer g = flat_gbuffer(random_image(w, h, 1.0, 13), 1.0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const size_t i = static_cast<size_t>(y) * w + x;
@@ -560,15 +488,15 @@ TEST(SssReference, BitIdenticalForOneAndTwoThreadsAndPassThrough) {
             g.material[i] =
                 (x - 26) * (x - 26) + (y - 18) * (y - 18) < 64 ? -1 : (y < h / 2 ? 0 : 1);
         }
-    for (SssEdgeMode mode : kModes) {
-        SssParams p = camera(w, h, mode);
+    for (SssEdgeMode mode : kSssEdgeModes) {
+        SssParams p = sss_camera(w, h, mode);
         p.reject_depth = 3;
         SssReferenceOptions o = method(Method::kAuto, 32, 7);
         o.max_exact_taps = 1200;  // some pixels exact, some sampled
         SssReferenceResult one, two;
         tbb::task_arena(1).execute([&] { one = realtime::sss_reference(g, k, p, o); });
         tbb::task_arena(2).execute([&] { two = realtime::sss_reference(g, k, p, o); });
-        std::printf("  %-6s: %lld exact, %lld sampled pixels\n", mode_name(mode),
+        std::printf("  %-6s: %lld exact, %lld sampled pixels\n", edge_mode_name(mode),
                     static_cast<long long>(one.exact_pixels),
                     static_cast<long long>(one.sampled_pixels));
         EXPECT_GT(one.exact_pixels, 0);
@@ -577,11 +505,11 @@ TEST(SssReference, BitIdenticalForOneAndTwoThreadsAndPassThrough) {
         EXPECT_EQ(std::memcmp(one.irradiance.data(), two.irradiance.data(),
                               one.irradiance.size() * sizeof(float)),
                   0)
-            << mode_name(mode);
+            << edge_mode_name(mode);
         EXPECT_EQ(std::memcmp(one.standard_error.data(), two.standard_error.data(),
                               one.standard_error.size() * sizeof(float)),
                   0)
-            << mode_name(mode);
+            << edge_mode_name(mode);
         size_t through = 0;
         for (size_t i = 0; i < g.pixels(); ++i)
             if (g.material[i] < 0)
@@ -601,7 +529,7 @@ TEST(SssReference, BadInputIsRefused) {
     const std::vector<SssExactKernel> k = {exact_kernel(kk)};
     const int w = 12, h = 10;
     const SssGBuffer g(w, h);
-    const SssParams p = camera(w, h, SssEdgeMode::kNone);
+    const SssParams p = sss_camera(w, h, SssEdgeMode::kNone);
     EXPECT_NO_THROW(realtime::sss_reference(g, k, p));
     SssGBuffer bad = g;
     bad.irradiance.pop_back();
@@ -659,7 +587,7 @@ TEST(SssReference, TimingPrint) {
     // pixels. 128 x 128 unless SSSLAB_REFERENCE_TIMING_SIZE says otherwise, to keep the test fast.
     const char* size_env = std::getenv("SSSLAB_REFERENCE_TIMING_SIZE");
     const int w = size_env ? std::max(16, std::atoi(size_env)) : 128, h = w;
-    SssParams p = camera(w, h, SssEdgeMode::kFollowSurface);
+    SssParams p = sss_camera(w, h, SssEdgeMode::kFollowSurface);
     p.unit_mm = 1;
     const double z = h;
     const SssGBuffer g = lit_disc(w, h, w / 2 - 0.5, h / 2 + 0.5, 0.23 * w, z);

@@ -1,6 +1,10 @@
 #include "testing.h"
 
+#include "approx/image.h"
+#include "approx/kernel2d.h"
+#include "core/profile.h"
 #include "core/quadrature.h"
+#include "realtime/sss_pass.h"
 
 #include <zlib.h>
 
@@ -94,6 +98,156 @@ CommandResult run_ssslab(const std::vector<std::string>& args, const fs::path& c
     r.out = read_text(io / "out");
     r.err = read_text(io / "err");
     return r;
+}
+
+bool have_chromium() {
+    return std::system("command -v chromium >/dev/null 2>&1") == 0;
+}
+
+int chromium(const std::string& what, const fs::path& page, const fs::path& dir,
+             const std::string& size, const std::string& to) {
+    const std::string flags =
+        "--headless=new --no-sandbox --disable-gpu --disable-quic --no-first-run "
+        "--disable-background-networking --disable-component-update --disable-sync "
+        "--hide-scrollbars --virtual-time-budget=10000 --enable-logging=stderr --v=0 "
+        "--user-data-dir=" +
+        shell_quote((dir / "chromium-profile").string());
+    const int status =
+        std::system(("chromium " + flags + " --window-size=" + size + " " + what + " " +
+                     shell_quote("file://" + page.string()) + " >" + shell_quote(to) + " 2>>" +
+                     shell_quote((dir / "chromium.log").string()))
+                        .c_str());
+    if (WIFEXITED(status)) return WEXITSTATUS(status);
+    return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : -1;
+}
+
+std::string ball_scene(double fov_y_deg, int width, int height) {
+    char fov[32];
+    std::snprintf(fov, sizeof fov, "%g", fov_y_deg);
+    return R"(
+[scene]
+name = "ball"
+[camera]
+position = [0, 8, 40]
+target = [0, 4, 0]
+fov_y_deg = )" +
+           std::string(fov) + "\nwidth = " + std::to_string(width) +
+           "\nheight = " + std::to_string(height) + R"(
+[[lights]]
+type = "sphere"
+position = [20, 40, 20]
+radius = 3
+radiance = [40, 40, 40]
+[[lights]]
+type = "environment"
+radiance = [0.05, 0.05, 0.05]
+[[materials]]
+name = "jelly"
+preset = "Skin1"
+roughness = 0.3
+[[materials]]
+name = "floor"
+type = "diffuse"
+albedo = [0.5, 0.5, 0.5]
+[[shapes]]
+type = "sphere"
+radius = 4
+subdivisions = 4
+translate = [0, 4.1, 0]
+material = "jelly"
+[[shapes]]
+type = "plane"
+size_x = 100
+size_z = 100
+material = "floor"
+)";
+}
+
+RadialProfile analytic_profile(double dr_mm, int nr, double scale) {
+    RadialProfile p;
+    p.name = "analytic";
+    p.dr_cm = dr_mm / 10.0;
+    p.nr = nr;
+    const double l1[3] = {0.15, 0.08, 0.05}, l2[3] = {0.8, 0.4, 0.25};  // mm
+    for (int c = 0; c < 3; ++c) {
+        p.rd_per_cm2[c].resize(static_cast<size_t>(nr));
+        p.se_per_cm2[c].assign(static_cast<size_t>(nr), 0.0);
+        for (int k = 0; k < nr; ++k) {
+            const double r = (k + 0.5) * dr_mm / scale;
+            p.rd_per_cm2[c][static_cast<size_t>(k)] =
+                100.0 * (0.05 * std::exp(-r / l1[c]) / r + 0.5 * std::exp(-r / l2[c]) / l2[c]);
+        }
+        p.rd_total[c] = 0.5;
+    }
+    return p;
+}
+
+std::vector<approx::Kernel2D> skin_kernels() {
+    const RadialProfile p = analytic_profile(0.01, 150, 0.5);
+    std::vector<approx::Kernel2D> k;
+    for (int c = 0; c < 3; ++c) k.emplace_back(p, c, approx::KernelGrid::from_profile(p));
+    return k;
+}
+
+realtime::SssParams sss_camera(int w, int h, realtime::SssEdgeMode mode) {
+    realtime::SssParams p;
+    p.tan_half = 0.5;
+    p.aspect = static_cast<double>(w) / h;
+    p.unit_mm = 0.05;
+    p.mode = mode;
+    return p;
+}
+
+double pixel_mm(const realtime::SssParams& p, int h, double z) {
+    return 2 * p.tan_half * z * p.unit_mm / h;
+}
+
+realtime::SssGBuffer flat_gbuffer(const approx::ImageRGB& e, double z) {
+    realtime::SssGBuffer g(e.width, e.height);
+    for (size_t i = 0; i < g.pixels(); ++i) {
+        for (int ch = 0; ch < 3; ++ch) g.irradiance[3 * i + ch] = static_cast<float>(e.c[ch][i]);
+        g.view_z[i] = static_cast<float>(z);
+    }
+    return g;
+}
+
+approx::ImageRGB random_image(int w, int h, double pixel_mm, unsigned seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    approx::ImageRGB img(w, h, pixel_mm);
+    for (auto& ch : img.c)
+        for (double& v : ch) v = static_cast<float>(u(rng));  // representable in the G-buffer
+    return img;
+}
+
+double rel_diff(const std::vector<float>& out, const approx::ImageRGB& ref) {
+    double m = 0, r = 0;
+    const size_t n = ref.c[0].size();
+    for (size_t i = 0; i < n; ++i)
+        for (int ch = 0; ch < 3; ++ch) {
+            m = std::max(m, std::fabs(out[3 * i + ch] - ref.c[ch][i]));
+            r = std::max(r, std::fabs(ref.c[ch][i]));
+        }
+    return m / r;
+}
+
+double rel_diff(const std::vector<float>& a, const std::vector<float>& b) {
+    double m = 0, r = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        m = std::max(m, std::fabs(static_cast<double>(a[i]) - b[i]));
+        r = std::max(r, std::fabs(static_cast<double>(b[i])));
+    }
+    return m / r;
+}
+
+const std::array<realtime::SssEdgeMode, 3> kSssEdgeModes = {realtime::SssEdgeMode::kNone,
+                                                            realtime::SssEdgeMode::kFollowSurface,
+                                                            realtime::SssEdgeMode::kReject};
+
+const char* edge_mode_name(realtime::SssEdgeMode m) {
+    return m == realtime::SssEdgeMode::kNone     ? "none"
+           : m == realtime::SssEdgeMode::kReject ? "reject"
+                                                 : "follow";
 }
 
 std::string gunzip_file(const std::string& path) {

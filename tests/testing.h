@@ -1,11 +1,26 @@
-// Helpers shared by the tests: paths, temporary directories, running the `ssslab` binary,
-// reading gzipped reference data, and the statistics the tests compare with.
+// Helpers shared by the tests: paths, temporary directories, running the `ssslab` binary and
+// headless Chromium, reading gzipped reference data, the statistics the tests compare with, the
+// real-time tests' scene and the screen-space SSS tests' inputs.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
+
+namespace ssslab {
+struct RadialProfile;  // core/profile.h
+namespace approx {
+class Kernel2D;   // approx/kernel2d.h
+struct ImageRGB;  // approx/image.h
+}  // namespace approx
+namespace realtime {  // realtime/sss_pass.h
+struct SssGBuffer;
+struct SssParams;
+enum class SssEdgeMode;
+}  // namespace realtime
+}  // namespace ssslab
 
 namespace ssslab::testing {
 
@@ -61,6 +76,46 @@ struct RgbImage {
 /// Decode a non-interlaced 8-bit greyscale, RGB or RGBA PNG (screenshots of the browser tests);
 /// throws for anything else.
 RgbImage read_png(const std::filesystem::path& path);
+
+/// Whether headless Chromium is installed (the report tests skip without it; scripts/setup.sh
+/// installs it).
+bool have_chromium();
+/// Headless Chromium on a local page, its window `size` ("1280,2000"): `what` is "--dump-dom"
+/// (the DOM after the page's scripts, written to `to`) or "--screenshot='<png>'" (shell text).
+/// Its profile is <dir>/chromium-profile; what it logs (the page's console too) is appended to
+/// <dir>/chromium.log. Returns its exit status (128 + signal if killed).
+int chromium(const std::string& what, const std::filesystem::path& page,
+             const std::filesystem::path& dir, const std::string& size,
+             const std::string& to = "/dev/null");
+
+/// A scene (TOML) of the real-time tests, in mm: a Skin1 medium sphere ("jelly", radius 4) on a
+/// diffuse floor under a sphere light and a dim environment, seen from (0, 8, 40) with the given
+/// vertical field of view and image size.
+std::string ball_scene(double fov_y_deg, int width, int height);
+
+// The screen-space SSS tests (realtime/sss_pass.h, realtime/sss_reference.h):
+/// The analytic skin-like profile: 100 (0.05 exp(-r / l1) / r + 0.5 exp(-r / l2) / l2) per
+/// channel (l1 = 0.15, 0.08, 0.05 mm; l2 = 0.8, 0.4, 0.25 mm), on `nr` bins of `dr_mm`, lengths
+/// stretched by `scale`; R_d = 0.5 per channel.
+RadialProfile analytic_profile(double dr_mm, int nr, double scale = 1.0);
+/// Its kernels of extent 1.5 mm (0.01 mm cells, n = 150), the profile at half its length, one
+/// per channel.
+std::vector<approx::Kernel2D> skin_kernels();
+/// A camera with tan_half 0.5 and unit_mm 0.05: at view depth z = h a pixel is one world unit,
+/// 0.05 mm, so skin_kernels() span 30 pixels.
+realtime::SssParams sss_camera(int w, int h, realtime::SssEdgeMode mode);
+/// The height in mm of a pixel at view depth z.
+double pixel_mm(const realtime::SssParams& p, int h, double z);
+/// A flat G-buffer: the image as irradiance, every pixel at view depth z, material 0.
+realtime::SssGBuffer flat_gbuffer(const approx::ImageRGB& e, double z);
+/// Irradiance uniform in [0, 1) per pixel and channel (values a float holds exactly).
+approx::ImageRGB random_image(int w, int h, double pixel_mm, unsigned seed);
+/// max |out - ref| over max |ref|; `out` RGB interleaved as the pass writes it.
+double rel_diff(const std::vector<float>& out, const approx::ImageRGB& ref);
+double rel_diff(const std::vector<float>& a, const std::vector<float>& b);
+/// Every edge mode, and its name for messages ("none", "follow", "reject").
+extern const std::array<realtime::SssEdgeMode, 3> kSssEdgeModes;
+const char* edge_mode_name(realtime::SssEdgeMode m);
 
 /// Factor for Monte Carlo sample counts: 1 by default, SSSLAB_TEST_SCALE for the slow variants.
 double test_scale();

@@ -99,17 +99,8 @@ std::string find_python() {
 
 PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const ArtifactCache& cache,
                       bool quiet) {
-    PlotResult out;
     const Experiment& e = r.exp;
-    struct Item {
-        std::string json, key;  // spec entry; cache key
-    };
-    std::vector<Item> items;  // parallel to out.plots
-    auto add = [&](const std::string& json, const std::vector<std::string>& inputs) {
-        std::string content = std::string(plot_script()) + "\n" + json;
-        for (const auto& in : inputs) content += "\n" + in + "\n" + read_file(dir / in);
-        items.push_back({json, hash_hex(content)});
-    };
+    std::vector<PlotRequest> requests;
     if (e.profile_plots.enabled) {
         for (const auto& m : e.materials) {
             double mfp = 0;
@@ -123,7 +114,6 @@ PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const Artifac
                << ", \"unit\": \"" << unit_name(e.profiles.unit) << "\""
                << ", \"linear_range\": " << e.profile_plots.linear_range_mfp * mfp * len
                << ", \"out\": " << json_string(stem) << "}";
-            add(js.str(), {csv});
             std::ostringstream caption;
             caption << m.label
                     << ": R_d(r) near zero on a linear scale, out to where every channel has "
@@ -132,7 +122,7 @@ PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const Artifac
                     << " mean free paths of the least attenuating channel), over the whole grid "
                        "on a log scale (as Freude 2014 Fig. 6.1), and 2 pi r R_d(r), whose area "
                        "is the total diffuse reflectance. Bands: +-2 standard errors.";
-            out.plots.push_back({"profiles", m.label, stem, caption.str()});
+            requests.push_back({js.str(), {csv}, {"profiles", m.label, stem, caption.str()}});
         }
     }
     if (e.convergence.enabled) {
@@ -144,7 +134,6 @@ PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const Artifac
             js << "{\"kind\": \"convergence\", \"history\": " << json_string(h)
                << ", \"snapshots\": " << json_string(sn) << ", \"title\": " << json_string(m)
                << ", \"out\": " << json_string(stem) << "}";
-            add(js.str(), {h, sn});
             std::ostringstream caption;
             caption << m << ": error against wall time of the progressive estimates (after every "
                     << "batch) relative to an independent reference run with "
@@ -153,7 +142,7 @@ PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const Artifac
                        "reference's own noise floor, and the efficiency 1/(relative variance x "
                        "time), which is flat for a well-behaved estimator. These runs had every "
                        "core to themselves.";
-            out.plots.push_back({"convergence", m, stem, caption.str()});
+            requests.push_back({js.str(), {h, sn}, {"convergence", m, stem, caption.str()}});
         }
     }
     for (const auto& st : e.kernel_studies) {
@@ -165,10 +154,11 @@ PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const Artifac
                << json_string(sdir + "singular_values.csv")
                << ", \"title\": " << json_string(st.name) << ", \"out\": " << json_string(stem)
                << "}";
-            add(js.str(), {sdir + "singular_values.csv"});
-            out.plots.push_back({"study:" + st.name, "singular values", stem,
+            requests.push_back({js.str(),
+                                {sdir + "singular_values.csv"},
+                                {"study:" + st.name, "singular values", stem,
                                  "The leading singular values of each channel's 2D kernel, "
-                                 "divided by the first (as Freude14 Fig. 5.1)."});
+                                 "divided by the first (as Freude14 Fig. 5.1)."}});
         }
         if (st.kernel_plots)
             for (const auto& m : st.materials) {
@@ -178,15 +168,29 @@ PlotResult make_plots(const ExperimentRun& r, const fs::path& dir, const Artifac
                    << ", \"material\": " << json_string(m)
                    << ", \"title\": " << json_string(m + " (" + st.name + ")")
                    << ", \"out\": " << json_string(stem) << "}";
-                add(js.str(), {sdir + "slices.csv"});
-                out.plots.push_back({"study:" + st.name, m + " kernels", stem,
+                requests.push_back({js.str(),
+                                    {sdir + "slices.csv"},
+                                    {"study:" + st.name, m + " kernels", stem,
                                      m + ": the 2D kernels along the main axis (top) and the "
                                          "diagonal (bottom) per channel, ground truth dotted (as "
-                                         "Freude14 Fig. 6.2)."});
+                                         "Freude14 Fig. 6.2)."}});
             }
     }
-    for (const PlotRequest& q : engine_plots(r)) {
-        add(q.json, q.inputs);
+    for (PlotRequest& q : engine_plots(r)) requests.push_back(std::move(q));
+    return draw_plots(requests, dir, cache, quiet);
+}
+
+PlotResult draw_plots(const std::vector<PlotRequest>& requests, const fs::path& dir,
+                      const ArtifactCache& cache, bool quiet) {
+    PlotResult out;
+    struct Item {
+        std::string json, key;  // spec entry; cache key
+    };
+    std::vector<Item> items;  // parallel to out.plots
+    for (const PlotRequest& q : requests) {
+        std::string content = std::string(plot_script()) + "\n" + q.json;
+        for (const auto& in : q.inputs) content += "\n" + in + "\n" + read_file(dir / in);
+        items.push_back({q.json, hash_hex(content)});
         out.plots.push_back(q.file);
     }
     if (out.plots.empty()) return out;

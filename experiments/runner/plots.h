@@ -10,7 +10,7 @@ namespace ssslab::runner {
 struct ExperimentRun;
 
 struct PlotFile {
-    std::string section;  ///< "profiles" or "convergence"
+    std::string section;  ///< where the report shows it: "profiles", "convergence", "realtime", ...
     std::string title;
     std::string stem;  ///< plots/<name>, without extension (PNG and SVG exist)
     std::string caption;
@@ -22,12 +22,20 @@ struct PlotResult {
 };
 
 class ArtifactCache;
+struct PlotRequest;  ///< engines.h: a spec for plot.py, the tables it reads, its report entry
 
-/// Draw the plots the experiment asks for into <dir>/plots/ (CSV inputs already in <dir>). A plot
-/// is an artifact too, keyed by the plot script, its options and the content of its input
-/// tables: one drawn before is copied from the cache. Never throws for a missing or failing
-/// plotting tool: the report then says why there are no plots.
+/// Draw the plots the experiment asks for into <dir>/plots/ (CSV inputs already in <dir>), with
+/// draw_plots. The real-time study draws its own (realtime_study.h): its report section is
+/// written before these.
 PlotResult make_plots(const ExperimentRun& r, const std::filesystem::path& dir,
+                      const ArtifactCache& cache, bool quiet);
+
+/// Draw `requests` into <dir>/plots/ (their input tables, relative to <dir>, already there), in
+/// one Python process. A plot is an artifact too, keyed by the plot script, its spec and the
+/// content of its input tables: one drawn before is copied from the cache. Never throws for a
+/// missing or failing plotting tool: the result then has no plots and says why (`problem`).
+/// The captions carry the notes plot.py writes beside each figure.
+PlotResult draw_plots(const std::vector<PlotRequest>& requests, const std::filesystem::path& dir,
                       const ArtifactCache& cache, bool quiet);
 
 /// A Python interpreter that can import matplotlib: $SSSLAB_PYTHON, Debian's /usr/bin/python3,

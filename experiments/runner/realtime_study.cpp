@@ -7,6 +7,8 @@
 #include "core/image_compare.h"
 #include "core/png.h"
 #include "core/scene.h"
+#include "experiments/runner/engines.h"
+#include "experiments/runner/plots.h"
 #include "experiments/runner/realtime_inputs.h"
 #include "experiments/runner/report.h"
 #include "experiments/runner/runner.h"
@@ -244,8 +246,8 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
     table << "scene,model,label,taps,channel,pixels,rms_vs_reference,rms_vs_reference_se,"
              "norm_table,norm_scene,rel_rms_vs_reference,rms_vs_volpath,rms_vs_volpath_se,"
              "raw_rms_vs_volpath,volpath_noise_rms,sss_ms,frame_ms,kernel_build_s\n";
-    sweep << "scene,model,label,taps,jitter,rms_vs_reference_rgb,rms_vs_volpath_rgb,sss_ms,"
-             "frame_ms\n";
+    sweep << "scene,model,label,taps,jitter,rms_vs_reference_rgb,rms_vs_reference_rgb_se,"
+             "rms_vs_volpath_rgb,rms_vs_volpath_rgb_se,sss_ms,frame_ms\n";
     decomposition << "scene,channel,pixels,reference_signal_rms,separability_model,separability,"
                      "screen_space,screen_space_se,specular,specular_se,surfaces,surfaces_se,total,"
                      "total_se\n";
@@ -413,15 +415,26 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
             frames.emplace(sc.label, std::move(f));
         }
         // Error against frame time: the sweep models over tap counts, with and without jitter;
-        // and every table model at its taps (ranks, d'Eon counts).
+        // and every table model at its taps (ranks, d'Eon counts). The RGB error is the root of
+        // the channels' mean squared error; its standard error by the delta method as
+        // noise_corrected_rms's, from the mean of the channels' standard errors of D^2 (their
+        // errors are correlated, the same paths carry all three: the mean bounds the sum's).
+        struct Rgb {
+            double rms, rms_se;
+        };
         auto rgb = [](const std::array<NoiseCorrectedRms, 3>& e) {
-            return std::sqrt(std::max(0.0, (e[0].ms + e[1].ms + e[2].ms) / 3.0));
+            const double ms = (e[0].ms + e[1].ms + e[2].ms) / 3.0;
+            const double ms_se = (e[0].ms_se + e[1].ms_se + e[2].ms_se) / 3.0;
+            const double rms = std::sqrt(std::max(0.0, ms));
+            return Rgb{
+                rms, rms > 0 ? std::min(ms_se / (2.0 * rms), std::sqrt(ms_se)) : std::sqrt(ms_se)};
         };
         auto sweep_row = [&](const Score& sc) {
+            const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
             sweep << scene.name << "," << csv_field(sc.model) << "," << sc.label << "," << sc.taps
-                  << "," << fmt(sc.jitter) << "," << fmt(rgb(sc.vs_reference)) << ","
-                  << fmt(rgb(sc.vs_volpath)) << "," << fmt(sc.sss_ms) << "," << fmt(sc.frame_ms)
-                  << "\n";
+                  << "," << fmt(sc.jitter) << "," << fmt(ref_rgb.rms) << "," << fmt(ref_rgb.rms_se)
+                  << "," << fmt(vp_rgb.rms) << "," << fmt(vp_rgb.rms_se) << "," << fmt(sc.sss_ms)
+                  << "," << fmt(sc.frame_ms) << "\n";
         };
         for (const Score& sc : ss.scores) sweep_row(sc);
         std::vector<double> jitters = {0.0};
@@ -545,8 +558,8 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                         << esc(e.name) << ".png\" alt=\"cut-out " << esc(e.caption)
                         << "\"><br><img src=\"realtime/" << esc(scene.name) << "/cutdiff_"
                         << esc(e.name) << ".png\" alt=\"difference " << esc(e.caption) << "\"><br>"
-                        << esc(e.caption) << "</td>";
-            viewers << "</tr></table>\n</div>\n";
+                        << esc(e.caption) << "</figure>";
+            viewers << "</div>\n</div>\n";
         }
         if (!ctx.quiet)
             std::printf(
@@ -619,6 +632,37 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
     write_file_atomic(dir / "decomposition.csv", decomposition.str());
     write_file_atomic(dir / "thesis_table_6_4.csv", thesis.str());
 
+    // Error against time, a figure per scene (scripts/plot.py "error_vs_time"), drawn here:
+    // this section is written before the report's other plots are. Against the SSS pass's time:
+    // the frame's other passes are the same for every model (raster and lighting are measured
+    // once per scene) and take nearly all of a frame of this software renderer.
+    std::vector<PlotRequest> plot_requests;
+    for (const SceneScores& ss : all) {
+        const std::string stem = "plots/realtime_error_vs_time_" + ss.scene;
+        std::ostringstream js, caption;
+        js << "{\"kind\": \"error_vs_time\", \"csv\": \"realtime/error_vs_time.csv\", \"scene\": "
+           << json_string(ss.scene) << ", \"taps\": " << spec.taps
+           << ", \"x\": \"sss_ms\", \"out\": " << json_string(stem) << "}";
+        caption << ss.scene << ": RMS error of the subsurface layer over the " << ss.pixels
+                << " medium pixels (RGB: the root of the channels' mean squared error) against the "
+                   "SSS pass time on this machine, both axes logarithmic. Not against the whole "
+                   "frame time: the rest of the frame (raster, shadow maps and lighting, measured "
+                   "once for the scene, and the composite) is the same work for every model and "
+                   "in this software renderer far longer than the pass (the last sentence gives "
+                   "both). Left against the screen-space 2D reference (the "
+                   "separability error), right against the path tracer (noise-corrected, error "
+                   "bars +-1 standard error). A line per swept model through its tap counts "
+                   "(points labelled by taps), solid without jitter, dashed with jitter "
+                << fmt(spec.jitter, 3) << "; the table's models of one family at " << spec.taps
+                << " taps (SVD ranks, d'Eon's numbers of Gaussians) joined by a dotted line, "
+                   "points labelled by that parameter; other models as single markers.";
+        plot_requests.push_back(
+            {js.str(),
+             {"realtime/error_vs_time.csv"},
+             {"realtime", ss.scene + ": error against SSS pass time", stem, caption.str()}});
+    }
+    const PlotResult plots = draw_plots(plot_requests, stage, cache, ctx.quiet);
+
     // The report section.
     html << "<h2 id=\"realtime\">Real-time renderer against the ground truth</h2>\n<p>Each "
             "scene rasterized and shaded with shadow maps (realtime/frame.h), its subsurface "
@@ -663,6 +707,16 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
     csv_table(html, decomposition.str(),
               "The error decomposition (realtime/decomposition.csv): separability, the "
               "screen-space assumption, lighting, total");
+    html << "<h3 id=\"realtime-time\">Error against time</h3>\n<p>Every model of the "
+            "table at "
+         << spec.taps
+         << " taps, and the swept models over their tap counts with and without jitter: the "
+            "error against the time the SSS pass took, per scene (the frame times are in the "
+            "table). Table: <a "
+            "href=\"realtime/error_vs_time.csv\">realtime/error_vs_time.csv</a>.</p>\n";
+    if (!plots.problem.empty())
+        html << "<p class=\"note\">No plots: " << esc(plots.problem) << "</p>\n";
+    figures(html, plots, "realtime");
     csv_table(html, sweep.str(), "Error against frame time (realtime/error_vs_time.csv)");
     html << viewers.str();
     html << "<script>\n(function () {\n"

@@ -32,7 +32,10 @@
 // Table 6.4 (the largest per-channel error of the table is 1; per scene too).
 //
 // results/<name>/realtime/: table_6_4.csv, error_vs_time.csv, decomposition.csv,
-// thesis_table_6_4.csv (Freude14's numbers beside ours), and with images <scene>/*.png.
+// thesis_table_6_4.csv (Freude14's numbers beside ours), and with images <scene>/*.png; per scene
+// results/<name>/plots/realtime_error_vs_time_<scene>.{png,svg}: the RGB error against the
+// screen-space reference and against the path tracer (+-1 SE) over the SSS pass time, log axes
+// (scripts/plot.py "error_vs_time", drawn with plots.h draw_plots and shown in the section).
 #pragma once
 
 #include "core/batch_runner.h"
