@@ -5,11 +5,15 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -44,8 +48,8 @@ SssMaterialKernel make_material_kernel(const std::array<const approx::SeparableK
 
 namespace {
 
-void check(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
-           const SssParams& p) {
+void check_arrays(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
+                  const SssParams& p) {
     if (g.width < 1 || g.height < 1) throw std::invalid_argument("sss_pass: empty G-buffer");
     const size_t n = g.pixels();
     if (g.irradiance.size() != 3 * n || g.view_z.size() != n || g.material.size() != n)
@@ -68,27 +72,6 @@ void check(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
                 if (t.taps.weight[ch].size() != t.taps.offset_mm.size())
                     throw std::invalid_argument("sss_pass: weights and offsets differ in length");
         }
-    // The first bad pixel (the lowest index, whatever the thread count), found in parallel.
-    auto bad = [&](size_t i) {
-        const int32_t m = g.material[i];
-        return m < -1 || m >= static_cast<int32_t>(materials.size()) ||
-               (m >= 0 && !(g.view_z[i] > 0 && std::isfinite(g.view_z[i])));
-    };
-    const size_t first = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, n, 16384), n,
-        [&](const tbb::blocked_range<size_t>& r, size_t found) {
-            for (size_t i = r.begin(); i < r.end() && i < found; ++i)
-                if (bad(i)) return i;
-            return found;
-        },
-        [](size_t a, size_t b) { return std::min(a, b); });
-    if (first < n) {
-        const int32_t m = g.material[first];
-        if (m < -1 || m >= static_cast<int32_t>(materials.size()))
-            throw std::invalid_argument("sss_pass: material index " + std::to_string(m) +
-                                        " without a kernel");
-        throw std::invalid_argument("sss_pass: a medium pixel has no positive finite depth");
-    }
 }
 
 // A texel of a pass's input: R, G, B and the view z in the fourth lane, so that one 16-byte
@@ -123,9 +106,10 @@ struct LineParams {
 // column of the horizontal pass's result (R, G, B, z texels, contiguous).
 struct ColumnLine {
     const F4* t;
-    F4 texel(int q) const { return t[q]; }
-    const F4* at(int q) const { return t + q; }
-    float depth(int q) const { return t[q][3]; }
+    int first = 0;  ///< the position of t[0]
+    F4 texel(int q) const { return t[q - first]; }
+    const F4* at(int q) const { return t + (q - first); }
+    float depth(int q) const { return t[q - first][3]; }
 };
 
 // One output pixel of a 1D pass of term pt at position pos of a line (a row, or a column of the
@@ -137,11 +121,104 @@ struct ColumnLine {
 // vectorises), then one 16-byte load per texel and the weighted sums.
 constexpr size_t kChunk = 32;
 
+// The common case in its own loop: a tap that needs no clamping, no jitter, follow-surface or
+// no edge rule. One 32-byte load fetches both texels of a tap (i1 = i0 + 1 inside), as
+// (q0 | q1), and the per-texel weights are computed in the same lanes, so a tap costs a few
+// 8-wide operations. The arithmetic is filter_pixel's, operation for operation (the same
+// roundings in the same order, even taps in one accumulator and odd in the other), so both give
+// the same bits; compiled for AVX2 too, chosen at run time (the results do not depend on it).
+typedef float F8 __attribute__((vector_size(32)));
+typedef int32_t I8 __attribute__((vector_size(32)));
+
+template <bool Follow>
+__attribute__((always_inline)) inline F4 fast_pixel_body(const F4* tc, int pos, const double* off,
+                                                         const F4* wt, size_t count, double scale,
+                                                         float follow) {
+    const F4 centre = tc[0];
+    const float zc = centre[3];
+    F4 acc0{}, acc1{}, extra0{}, extra1{};
+    const F8 zc8 = F8{} + zc, follow8 = F8{} + follow, one8 = F8{} + 1.0f;
+    for (size_t begin = 0; begin < count; begin += kChunk) {
+        const size_t m = std::min(kChunk, count - begin);
+        int rel[kChunk];
+        float a1s[kChunk];
+        // approx::tap_texels's rule inside the line: i0 = floor(s), t = s - i0.
+        for (size_t j = 0; j < m; ++j) {
+            const double sp = pos + off[begin + j] * scale;
+            const int i0 = static_cast<int>(sp);
+            rel[j] = i0 - pos;
+            a1s[j] = static_cast<float>(sp - i0);
+        }
+        auto tap = [&](size_t j, F4 & ac, F4 & ex) __attribute__((always_inline)) {
+            F8 q;
+            std::memcpy(&q, tc + rel[j], sizeof q);  // (q0 | q1)
+            const float a1 = a1s[j], a0 = 1 - a1;
+            F8 a = {a0, a0, a0, a0, a1, a1, a1, a1};
+            const F4 w = wt[begin + j];
+            if constexpr (Follow) {
+                // [Freude14 Eq. 4.12]: s = min(1, follow |z - z_c|) per texel, its share to
+                // the centre.
+                const F8 z = __builtin_shufflevector(q, q, 3, 3, 3, 3, 7, 7, 7, 7);
+                F8 k = z - zc8;
+                I8 bits;
+                std::memcpy(&bits, &k, sizeof bits);
+                bits &= 0x7fffffff;
+                std::memcpy(&k, &bits, sizeof k);
+                k = follow8 * k;
+                const F8 t = k < one8 ? k : one8;  // NaN and inf: 1, as std::min(1, k)
+                const F8 bb = a * t;
+                a *= one8 - t;
+                const F4 b4 = __builtin_shufflevector(bb, bb, 0, 1, 2, 3) +
+                              __builtin_shufflevector(bb, bb, 4, 5, 6, 7);
+                ex += w * b4;
+            } else {
+                (void)ex;
+            }
+            const F8 pq = a * q;
+            ac += w * (__builtin_shufflevector(pq, pq, 0, 1, 2, 3) +
+                       __builtin_shufflevector(pq, pq, 4, 5, 6, 7));
+        };
+        size_t j = 0;
+        for (; j + 1 < m; j += 2) {
+            tap(j, acc0, extra0);
+            tap(j + 1, acc1, extra1);
+        }
+        if (j < m) tap(j, acc0, extra0);
+    }
+    F4 out = acc0 + acc1;
+    if constexpr (Follow) out += (extra0 + extra1) * centre;
+    return out;
+}
+
+__attribute__((target_clones("avx2", "default"))) F4 fast_pixel_follow(const F4* tc, int pos,
+                                                                       const double* off,
+                                                                       const F4* wt, size_t count,
+                                                                       double scale, float follow) {
+    return fast_pixel_body<true>(tc, pos, off, wt, count, scale, follow);
+}
+__attribute__((target_clones("avx2", "default"))) F4 fast_pixel_none(const F4* tc, int pos,
+                                                                     const double* off,
+                                                                     const F4* wt, size_t count,
+                                                                     double scale, float follow) {
+    return fast_pixel_body<false>(tc, pos, off, wt, count, scale, follow);
+}
+
 template <SssEdgeMode M, bool Jitter, bool Inside, class Line>
 F4 filter_pixel(const Line& line, const int32_t* mat, ptrdiff_t mstride, int len, int pos,
                 const PreparedTerm& pt, double scale, const LineParams& lp, int x, int y,
                 int pass) {
     const approx::TapKernel& taps = pt.term->taps;
+    if constexpr (Inside && !Jitter && M != SssEdgeMode::kReject) {
+        (void)mat;
+        (void)mstride;
+        (void)len;
+        (void)x;
+        (void)y;
+        (void)pass;
+        return (M == SssEdgeMode::kFollowSurface ? fast_pixel_follow : fast_pixel_none)(
+            line.at(pos), pos, taps.offset_mm.data(), pt.weight.data(), taps.offset_mm.size(),
+            scale, lp.follow);
+    }
     const F4 centre = line.texel(pos);
     const float zc = centre[3];
     const int32_t mc = mat[pos * mstride];
@@ -294,16 +371,143 @@ void advise_huge_pages(void* p, size_t bytes) {
 #endif
 }
 
+// The medium's bounding box [x0, x1] x [y0, y1] (x0 > x1: no medium pixel) and the rows
+// [ry0, ry1] and columns [cx0, cx1] its taps can read.
+struct Extent {
+    int x0 = INT_MAX, x1 = INT_MIN, y0 = INT_MAX, y1 = INT_MIN;
+    double sx_lo = 0, sx_hi = 0, sy_lo = 0, sy_hi = 0;  ///< extreme tap positions, pixels
+    int cx0 = 0, cx1 = -1, ry0 = 0, ry1 = -1;
+    size_t first_bad = SIZE_MAX;  ///< the lowest index of a bad pixel
+    void join(const Extent& o) {
+        x0 = std::min(x0, o.x0);
+        x1 = std::max(x1, o.x1);
+        y0 = std::min(y0, o.y0);
+        y1 = std::max(y1, o.y1);
+        sx_lo = std::min(sx_lo, o.sx_lo);
+        sx_hi = std::max(sx_hi, o.sx_hi);
+        sy_lo = std::min(sy_lo, o.sy_lo);
+        sy_hi = std::max(sy_hi, o.sy_hi);
+        first_bad = std::min(first_bad, o.first_bad);
+    }
+};
+
+// The pixel checks (the first bad pixel, the lowest index whatever the thread count, is
+// reported) and the extent, in one parallel scan. A tap of a term of material m at pixel pos
+// lands at pos + o scale with o within reach_mm[m] and scale = per_mm_z / z, as run_line
+// computes them (monotonic in o), so it reads texels within [floor(lo), floor(hi) + 1].
+Extent scan_pixels(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
+                   const std::vector<std::array<double, 2>>& reach_mm, double px_per_mm_z,
+                   double py_per_mm_z) {
+    const int w = g.width, h = g.height;
+    Extent e = tbb::parallel_reduce(
+        tbb::blocked_range<int>(0, h, 8), Extent{},
+        [&](const tbb::blocked_range<int>& r, Extent acc) {
+            for (int y = r.begin(); y < r.end(); ++y) {
+                const size_t row = static_cast<size_t>(y) * w;
+                if (row >= acc.first_bad) break;
+                for (int x = 0; x < w; ++x) {
+                    const int32_t m = g.material[row + x];
+                    if (m == -1) continue;
+                    const float z = g.view_z[row + x];
+                    if (m < -1 || m >= static_cast<int32_t>(materials.size()) ||
+                        !(z > 0 && std::isfinite(z))) {
+                        acc.first_bad = std::min(acc.first_bad, row + x);
+                        break;
+                    }
+                    acc.x0 = std::min(acc.x0, x);
+                    acc.x1 = std::max(acc.x1, x);
+                    acc.y0 = std::min(acc.y0, y);
+                    acc.y1 = std::max(acc.y1, y);
+                    const std::array<double, 2>& o = reach_mm[static_cast<size_t>(m)];
+                    const double sx = px_per_mm_z / z, sy = py_per_mm_z / z;
+                    acc.sx_lo = std::min(acc.sx_lo, x + o[0] * sx);
+                    acc.sx_hi = std::max(acc.sx_hi, x + o[1] * sx);
+                    acc.sy_lo = std::min(acc.sy_lo, y + o[0] * sy);
+                    acc.sy_hi = std::max(acc.sy_hi, y + o[1] * sy);
+                }
+            }
+            return acc;
+        },
+        [](Extent a, const Extent& b) {
+            a.join(b);
+            return a;
+        });
+    if (e.first_bad < g.pixels()) {
+        const int32_t m = g.material[e.first_bad];
+        if (m < -1 || m >= static_cast<int32_t>(materials.size()))
+            throw std::invalid_argument("sss_pass: material index " + std::to_string(m) +
+                                        " without a kernel");
+        throw std::invalid_argument("sss_pass: a medium pixel has no positive finite depth");
+    }
+    if (e.x0 > e.x1) return e;
+    // Texel indices, clamped to the image (a margin of a texel each side).
+    auto index = [](double s, int len) {
+        const double c = std::clamp(std::floor(s), 0.0, static_cast<double>(len - 1));
+        return static_cast<int>(c);
+    };
+    e.cx0 = std::min(e.x0, std::max(0, index(e.sx_lo, w) - 1));
+    e.cx1 = std::max(e.x1, std::min(w - 1, index(e.sx_hi, w) + 2));
+    e.ry0 = std::min(e.y0, std::max(0, index(e.sy_lo, h) - 1));
+    e.ry1 = std::max(e.y1, std::min(h - 1, index(e.sy_hi, h) + 2));
+    return e;
+}
+
+// A scratch image of F4 texels, taken from a small process-wide pool and given back on
+// destruction: kept between calls, so that a frame's pass neither page-faults nor zero-fills
+// its 16 bytes a pixel (left uninitialised: every texel read is written first).
+class Scratch {
+  public:
+    explicit Scratch(size_t n) {
+        {
+            const std::lock_guard<std::mutex> lock(mutex());
+            auto& pool = free_list();
+            for (size_t i = 0; i < pool.size(); ++i)
+                if (pool[i].second >= n) {
+                    buf_ = std::move(pool[i]);
+                    pool.erase(pool.begin() + static_cast<ptrdiff_t>(i));
+                    return;
+                }
+        }
+        buf_.first.reset(new F4[n]);
+        buf_.second = n;
+        advise_huge_pages(buf_.first.get(), n * sizeof(F4));
+    }
+    ~Scratch() {
+        const std::lock_guard<std::mutex> lock(mutex());
+        auto& pool = free_list();
+        pool.push_back(std::move(buf_));
+        // At most two kept (concurrent calls), the largest.
+        std::sort(pool.begin(), pool.end(),
+                  [](const auto& a, const auto& b) { return a.second > b.second; });
+        if (pool.size() > 2) pool.resize(2);
+    }
+    Scratch(const Scratch&) = delete;
+    Scratch& operator=(const Scratch&) = delete;
+    F4* data() { return buf_.first.get(); }
+
+  private:
+    using Buffer = std::pair<std::unique_ptr<F4[]>, size_t>;
+    static std::mutex& mutex() {
+        static std::mutex m;
+        return m;
+    }
+    static std::vector<Buffer>& free_list() {
+        static std::vector<Buffer> pool;
+        return pool;
+    }
+    Buffer buf_;
+};
+
 }  // namespace
 
 std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
                             const SssParams& p) {
-    check(g, materials, p);
+    check_arrays(g, materials, p);
     const int w = g.width, h = g.height;
-    const size_t n = g.pixels();
     const bool jitter = p.jitter > 0;
 
     std::vector<std::vector<PreparedTerm>> prep(materials.size());
+    std::vector<std::array<double, 2>> reach_mm(materials.size(), {0.0, 0.0});
     size_t rank = 0;
     for (size_t m = 0; m < materials.size(); ++m) {
         rank = std::max(rank, materials[m].terms.size());
@@ -328,6 +532,8 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
                 pt.lo_mm = std::min(pt.lo_mm, lo);
                 pt.hi_mm = std::max(pt.hi_mm, hi);
             }
+            reach_mm[m][0] = std::min(reach_mm[m][0], pt.lo_mm);
+            reach_mm[m][1] = std::max(reach_mm[m][1], pt.hi_mm);
             prep[m].push_back(std::move(pt));
         }
     }
@@ -342,8 +548,14 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
     const double py_per_mm_z = h / (2.0 * p.tan_half * p.unit_mm);
     const double px_per_mm_z = w / (2.0 * p.tan_half * p.aspect * p.unit_mm);
 
+    // The pixels checked, and the region the pass touches: the medium's bounding box, and the
+    // rows and columns its taps can read (the horizontal pass runs on those rows only, and the
+    // vertical pass reads nothing else).
+    const Extent ext = scan_pixels(g, materials, reach_mm, px_per_mm_z, py_per_mm_z);
+
     // The output starts as the input (what material -1 keeps).
     std::vector<float> out(g.irradiance);
+    if (ext.x0 > ext.x1) return out;  // no medium pixel
 
     // One 1D pass of term k at positions [begin, end) of a line of len texels, materials at
     // mat[pos * mstride]: calls store(pos, value) for the medium pixels whose kernel has term k,
@@ -379,47 +591,53 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
 
     // The horizontal pass reads a row of R, G, B, z texels (built per row, so it stays in
     // cache) and writes its result transposed (column-major), so that the vertical pass reads
-    // contiguous memory too. tmp is left uninitialised: its pages are first touched by the
-    // parallel horizontal pass, not by a serial fill.
-    const std::unique_ptr<F4[]> tmp(new F4[n]);
-    advise_huge_pages(tmp.get(), n * sizeof(F4));
+    // contiguous memory too: columns x0..x1 of the box, rows ry0..ry1 (hr of them). The
+    // scratch image is kept between calls (no page faults, no zero fill).
+    const int bw = ext.x1 - ext.x0 + 1, hr = ext.ry1 - ext.ry0 + 1;
+    Scratch tmp_s(static_cast<size_t>(bw) * hr);
+    F4* const tmp = tmp_s.data();
     const int grain = 16;
-    // Blocks of kBlock rows: the horizontal pass writes each column of a block as kBlock
-    // contiguous texels, and notes which block columns hold a medium pixel (busy), so that the
-    // vertical pass skips the rest (it would store nothing there).
+    // Blocks of kBlock rows from ry0: the horizontal pass writes each column of a block as
+    // kBlock contiguous texels, and notes which block columns hold a medium pixel (busy), so
+    // that the vertical pass skips the rest (it would store nothing there).
     constexpr int kBlock = 16;
-    const int blocks = (h + kBlock - 1) / kBlock;
-    std::vector<uint8_t> busy(static_cast<size_t>(blocks) * w, 0);
+    const int blocks = (hr + kBlock - 1) / kBlock;
+    std::vector<uint8_t> busy(static_cast<size_t>(blocks) * bw, 0);
     for (size_t k = 0; k < rank; ++k) {
         // Horizontal, written transposed: pixels without term k hold their input.
         tbb::parallel_for(
             tbb::blocked_range<int>(0, blocks, 1), [&](const tbb::blocked_range<int>& r) {
-                std::vector<F4> buf(static_cast<size_t>(w), F4{});
-                std::vector<F4> block(static_cast<size_t>(w) * kBlock, F4{});
+                thread_local std::vector<F4> buf_tl, block_tl;
+                if (buf_tl.size() < static_cast<size_t>(w)) buf_tl.resize(static_cast<size_t>(w));
+                if (block_tl.size() < static_cast<size_t>(bw) * kBlock)
+                    block_tl.resize(static_cast<size_t>(bw) * kBlock);
+                F4* const buf = buf_tl.data();
+                F4* const block = block_tl.data();
                 for (int b = r.begin(); b < r.end(); ++b) {
-                    const int y0 = b * kBlock, y1 = std::min(h, y0 + kBlock);
+                    const int y0 = ext.ry0 + b * kBlock, y1 = std::min(ext.ry1 + 1, y0 + kBlock);
                     for (int y = y0; y < y1; ++y) {
                         const size_t row = static_cast<size_t>(y) * w;
-                        for (int x = 0; x < w; ++x) {
+                        for (int x = ext.cx0; x <= ext.cx1; ++x) {
                             const float* e = &g.irradiance[3 * (row + x)];
-                            buf[static_cast<size_t>(x)] = F4{e[0], e[1], e[2], g.view_z[row + x]};
+                            buf[x] = F4{e[0], e[1], e[2], g.view_z[row + x]};
                         }
                         if (k == 0) {
-                            uint8_t* bz = &busy[static_cast<size_t>(b) * w];
-                            for (int x = 0; x < w; ++x)
-                                bz[x] |= static_cast<uint8_t>(g.material[row + x] >= 0);
+                            uint8_t* bz = &busy[static_cast<size_t>(b) * bw];
+                            for (int x = 0; x < bw; ++x)
+                                bz[x] |= static_cast<uint8_t>(g.material[row + ext.x0 + x] >= 0);
                         }
-                        const ColumnLine line{buf.data()};
-                        run_line(line, column_fn, &g.material[row], 1, w, 0, w, k, 0, y,
-                                 px_per_mm_z, [&](int x, const F4* v) {
-                                     F4& dst = block[static_cast<size_t>(x) * kBlock + (y - y0)];
-                                     const F4 src = buf[static_cast<size_t>(x)];
+                        const ColumnLine line{buf};
+                        run_line(line, column_fn, &g.material[row], 1, w, ext.x0, ext.x1 + 1, k, 0,
+                                 y, px_per_mm_z, [&](int x, const F4* v) {
+                                     F4& dst =
+                                         block[static_cast<size_t>(x - ext.x0) * kBlock + (y - y0)];
+                                     const F4 src = buf[x];
                                      dst = v ? *v : src;
                                      dst[3] = src[3];
                                  });
                     }
-                    for (int x = 0; x < w; ++x)
-                        std::memcpy(&tmp[static_cast<size_t>(x) * h + y0],
+                    for (int x = 0; x < bw; ++x)
+                        std::memcpy(&tmp[static_cast<size_t>(x) * hr + (y0 - ext.ry0)],
                                     &block[static_cast<size_t>(x) * kBlock],
                                     static_cast<size_t>(y1 - y0) * sizeof(F4));
                 }
@@ -427,13 +645,23 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
         // Vertical, over the columns, summed with the term's signs into the output (term 0
         // sets it: a material without terms gives 0, as an empty sum).
         tbb::parallel_for(
-            tbb::blocked_range<int>(0, w, grain), [&](const tbb::blocked_range<int>& r) {
-                for (int x = r.begin(); x < r.end(); ++x) {
-                    const ColumnLine line{&tmp[static_cast<size_t>(x) * h]};
+            tbb::blocked_range<int>(0, bw, grain), [&](const tbb::blocked_range<int>& r) {
+                for (int xb = r.begin(); xb < r.end(); ++xb) {
+                    const int x = ext.x0 + xb;
+                    const ColumnLine line{&tmp[static_cast<size_t>(xb) * hr], ext.ry0};
+                    // The taps reach far along the column, in no order a hardware prefetcher
+                    // follows: the next column is fetched while this one is filtered.
+                    if (xb + 1 < bw) {
+                        const char* next =
+                            reinterpret_cast<const char*>(&tmp[static_cast<size_t>(xb + 1) * hr]);
+                        for (size_t o = 0; o < static_cast<size_t>(hr) * sizeof(F4); o += 64)
+                            __builtin_prefetch(next + o);
+                    }
                     for (int b = 0; b < blocks; ++b) {
-                        if (!busy[static_cast<size_t>(b) * w + x]) continue;
-                        run_line(line, column_fn, &g.material[static_cast<size_t>(x)], w, h,
-                                 b * kBlock, std::min(h, (b + 1) * kBlock), k, 1, x, py_per_mm_z,
+                        if (!busy[static_cast<size_t>(b) * bw + xb]) continue;
+                        const int y0 = ext.ry0 + b * kBlock;
+                        run_line(line, column_fn, &g.material[static_cast<size_t>(x)], w, h, y0,
+                                 std::min(ext.ry1 + 1, y0 + kBlock), k, 1, x, py_per_mm_z,
                                  [&](int y, const F4* v) {
                                      const size_t c = static_cast<size_t>(y) * w + x;
                                      const int32_t m = g.material[c];
