@@ -11,6 +11,7 @@
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -498,6 +499,159 @@ class Scratch {
     Buffer buf_;
 };
 
+// ---- Rotated axes [JimenezSupp Figs. S.6, S.7] ------------------------------------------------
+
+// The angle of a pixel's first pass axis, in [0, pi): a hash of the pixel and the seed (pass
+// index -1, which the jitter does not use). Not [0, pi / 2), although the pair of axes repeats
+// with that period: the two passes are not interchangeable (the second reads the neighbours'
+// first), and each must take every direction for the mean over angles to be isotropic.
+double rotation_angle(int x, int y, uint32_t seed) {
+    return std::numbers::pi / 2 * (approx::jitter_hash(x, y, -1, -1, seed) + 1);
+}
+
+// One output pixel of a 1D pass of term pt along the axis (ax, ay) pixels per mm at pixel
+// (x, y) of a w x h row-major image of R, G, B, z texels: each tap at o mm is sampled at
+// (x + o ax, y + o ay) bilinearly from its four texels (approx::tap_texels's rule along each
+// axis, so clamp-to-edge), and the edge rule of sss_pass.h is applied to each of the four with
+// its own depth and material and weight (1 - t_x)(1 - t_y), t_x (1 - t_y), (1 - t_x) t_y or
+// t_x t_y.
+template <SssEdgeMode M>
+F4 filter_pixel_2d(const F4* src, const int32_t* mat, int w, int h, int x, int y, double ax,
+                   double ay, const PreparedTerm& pt, const LineParams& lp, bool jitter, int pass) {
+    const approx::TapKernel& taps = pt.term->taps;
+    const size_t ci = static_cast<size_t>(y) * w + x;
+    const F4 centre = src[ci];
+    const float zc = centre[3];
+    const int32_t mc = mat[ci];
+    F4 acc{}, extra{};  // extra: follow's centre weight, reject's kept weight
+    bool dropped = false;
+    for (size_t i = 0; i < taps.offset_mm.size(); ++i) {
+        double o = taps.offset_mm[i];
+        if (jitter)
+            o = approx::jittered_offset_mm(
+                taps, pt.range, i, approx::jitter_hash(x, y, pass, static_cast<int>(i), lp.seed));
+        const approx::TapTexels tx = approx::tap_texels(x + o * ax, w);
+        const approx::TapTexels ty = approx::tap_texels(y + o * ay, h);
+        const float fx = static_cast<float>(tx.t), fy = static_cast<float>(ty.t);
+        const size_t r0 = static_cast<size_t>(ty.i0) * w, r1 = static_cast<size_t>(ty.i1) * w;
+        const size_t q[4] = {r0 + tx.i0, r0 + tx.i1, r1 + tx.i0, r1 + tx.i1};
+        const float a[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+        F4 sum{};
+        float b = 0;
+        for (int c = 0; c < 4; ++c) {
+            float wc = a[c];
+            const F4 v = src[q[c]];
+            if constexpr (M == SssEdgeMode::kFollowSurface) {
+                // [Freude14 Eq. 4.12] per texel: v (1 - s) + centre s.
+                const float k = lp.follow * std::fabs(v[3] - zc);
+                const float sv = k < 1.0f ? k : 1.0f;  // NaN and inf: 1
+                b += wc * sv;
+                wc *= 1 - sv;
+            } else if constexpr (M == SssEdgeMode::kReject) {
+                const bool keep = mat[q[c]] == mc && std::fabs(v[3] - zc) <= lp.reject_depth;
+                dropped |= !keep && wc != 0;
+                wc = keep ? wc : 0.0f;
+                b += wc;
+            }
+            sum += wc * v;
+        }
+        acc += pt.weight[i] * sum;
+        if constexpr (M != SssEdgeMode::kNone) extra += pt.weight[i] * b;
+    }
+    F4 out = acc;
+    if constexpr (M == SssEdgeMode::kFollowSurface) out += extra * centre;
+    if constexpr (M == SssEdgeMode::kReject) {
+        if (dropped)
+            for (int ch = 0; ch < 3; ++ch)
+                out[ch] = extra[ch] != 0
+                              ? static_cast<float>(out[ch] * (pt.weight_sum[ch] / extra[ch]))
+                              : static_cast<float>(pt.weight_sum[ch] * centre[ch]);
+    }
+    return out;
+}
+
+using Pixel2DFn = F4 (*)(const F4*, const int32_t*, int, int, int, int, double, double,
+                         const PreparedTerm&, const LineParams&, bool, int);
+
+// The pass with rotated axes (SssParams::rotate): per term, the first 1D pass along each
+// pixel's (cos a, sin a), the second along its (-sin a, cos a), on the plane of the medium in
+// mm, so in pixels (cos a px, sin a py) and (-sin a px, cos a py) per mm with px, py the
+// horizontal and vertical scales of Eq. 4.11 at the centre's depth. Rows in parallel, each
+// pixel on its own: bit-identical for any thread count.
+void rotated_pass(const SssGBuffer& g, const std::vector<std::vector<PreparedTerm>>& prep,
+                  size_t rank, const SssParams& p, const LineParams& lp, double px_per_mm_z,
+                  double py_per_mm_z, std::vector<float>& out) {
+    const int w = g.width, h = g.height;
+    const size_t n = g.pixels();
+    const bool jitter = p.jitter > 0;
+    Pixel2DFn fn = filter_pixel_2d<SssEdgeMode::kReject>;
+    if (p.mode == SssEdgeMode::kNone) fn = filter_pixel_2d<SssEdgeMode::kNone>;
+    if (p.mode == SssEdgeMode::kFollowSurface) fn = filter_pixel_2d<SssEdgeMode::kFollowSurface>;
+    Scratch in_s(n), tmp_s(n);
+    F4* const in = in_s.data();
+    F4* const tmp = tmp_s.data();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16384),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i < r.end(); ++i) {
+                              const float* e = &g.irradiance[3 * i];
+                              in[i] = F4{e[0], e[1], e[2], g.view_z[i]};
+                          }
+                      });
+    const int32_t* mat = g.material.data();
+    // The pass of term k along axis dir (0: the first, 1: the second) at pixel (x, y), from src;
+    // false where the pixel has no term k.
+    auto pixel = [&](const F4* src, int x, int y, size_t k, int dir, F4& v) {
+        const size_t i = static_cast<size_t>(y) * w + x;
+        const int32_t m = mat[i];
+        if (m < 0 || k >= prep[static_cast<size_t>(m)].size()) return false;
+        const PreparedTerm& pt = prep[static_cast<size_t>(m)][k];
+        const F4 c = src[i];
+        const double a = rotation_angle(x, y, p.seed);
+        const double ca = std::cos(a), sa = std::sin(a);
+        const double px = px_per_mm_z / c[3], py = py_per_mm_z / c[3];
+        const double ax = dir == 0 ? ca * px : -sa * px, ay = dir == 0 ? sa * py : ca * py;
+        if (pt.term->taps.support_mm * std::max(std::fabs(ax), std::fabs(ay)) < 0.5) {
+            // Every tap within the centre pixel's bin: the identity times the mass.
+            v = F4{};
+            for (int ch = 0; ch < 3; ++ch) v[ch] = static_cast<float>(pt.weight_sum[ch] * c[ch]);
+            return true;
+        }
+        v = fn(src, mat, w, h, x, y, ax, ay, pt, lp, jitter, static_cast<int>(2 * k) + dir);
+        return true;
+    };
+    for (size_t k = 0; k < rank; ++k) {
+        tbb::parallel_for(tbb::blocked_range<int>(0, h, 4), [&](const tbb::blocked_range<int>& r) {
+            for (int y = r.begin(); y < r.end(); ++y)
+                for (int x = 0; x < w; ++x) {
+                    const size_t i = static_cast<size_t>(y) * w + x;
+                    F4 v;
+                    if (!pixel(in, x, y, k, 0, v)) v = in[i];  // held between the passes
+                    v[3] = in[i][3];
+                    tmp[i] = v;
+                }
+        });
+        tbb::parallel_for(tbb::blocked_range<int>(0, h, 4), [&](const tbb::blocked_range<int>& r) {
+            for (int y = r.begin(); y < r.end(); ++y)
+                for (int x = 0; x < w; ++x) {
+                    const size_t i = static_cast<size_t>(y) * w + x;
+                    const int32_t m = mat[i];
+                    if (m < 0) continue;  // passes its input through
+                    F4 v;
+                    if (!pixel(tmp, x, y, k, 1, v)) {
+                        if (k == 0)
+                            for (int ch = 0; ch < 3; ++ch) out[3 * i + ch] = 0;
+                        continue;
+                    }
+                    const SssTerm& t = *prep[static_cast<size_t>(m)][k].term;
+                    for (int ch = 0; ch < 3; ++ch) {
+                        const float sv = static_cast<float>(t.sign[ch]) * v[ch];
+                        out[3 * i + ch] = k == 0 ? sv : out[3 * i + ch] + sv;
+                    }
+                }
+        });
+    }
+}
+
 }  // namespace
 
 std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
@@ -556,6 +710,10 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
     // The output starts as the input (what material -1 keeps).
     std::vector<float> out(g.irradiance);
     if (ext.x0 > ext.x1) return out;  // no medium pixel
+    if (p.rotate) {
+        rotated_pass(g, prep, rank, p, lp, px_per_mm_z, py_per_mm_z, out);
+        return out;
+    }
 
     // One 1D pass of term k at positions [begin, end) of a line of len texels, materials at
     // mat[pos * mstride]: calls store(pos, value) for the medium pixels whose kernel has term k,
