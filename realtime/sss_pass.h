@@ -56,7 +56,8 @@
 // thread count (with rotate: rows in parallel for both passes, the same). The pass keeps its
 // scratch images (16 bytes a pixel: a small process-wide pool, and per worker thread a row and
 // a block of rows) between calls, so that a frame's pass neither page-faults nor zero-fills
-// them; it touches only the medium's bounding box and the rows and columns its taps reach.
+// them; without rotate it touches only the medium's bounding box and the rows and columns its
+// taps reach.
 #pragma once
 
 #include "approx/convolve.h"
