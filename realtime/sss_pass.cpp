@@ -406,10 +406,12 @@ Extent scan_pixels(const SssGBuffer& g, const std::vector<SssMaterialKernel>& ma
             for (int y = r.begin(); y < r.end(); ++y) {
                 const size_t row = static_cast<size_t>(y) * w;
                 if (row >= acc.first_bad) break;
+                const int32_t* const mrow = g.material.data() + row;
+                const float* const zrow = g.view_z.data() + row;
                 for (int x = 0; x < w; ++x) {
-                    const int32_t m = g.material[row + x];
+                    const int32_t m = mrow[x];
                     if (m == -1) continue;
-                    const float z = g.view_z[row + x];
+                    const float z = zrow[x];
                     if (m < -1 || m >= static_cast<int32_t>(materials.size()) ||
                         !(z > 0 && std::isfinite(z))) {
                         acc.first_bad = std::min(acc.first_bad, row + x);
@@ -775,14 +777,19 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
                     const int y0 = ext.ry0 + b * kBlock, y1 = std::min(ext.ry1 + 1, y0 + kBlock);
                     for (int y = y0; y < y1; ++y) {
                         const size_t row = static_cast<size_t>(y) * w;
-                        for (int x = ext.cx0; x <= ext.cx1; ++x) {
-                            const float* e = &g.irradiance[3 * (row + x)];
-                            buf[x] = F4{e[0], e[1], e[2], g.view_z[row + x]};
-                        }
+                        // Local pointers: the byte stores below may alias anything, which
+                        // would reload the vectors' pointers every pixel and keep GCC from
+                        // vectorising.
+                        const float* const irr = g.irradiance.data() + 3 * row;
+                        const float* const vz = g.view_z.data() + row;
+                        const int32_t* const mrow = g.material.data() + row;
+                        for (int x = ext.cx0; x <= ext.cx1; ++x)
+                            buf[x] = F4{irr[3 * x], irr[3 * x + 1], irr[3 * x + 2], vz[x]};
                         if (k == 0) {
-                            uint8_t* bz = &busy[static_cast<size_t>(b) * bw];
+                            uint8_t* const bz = busy.data() + static_cast<size_t>(b) * bw;
+                            const int32_t* const mb = mrow + ext.x0;
                             for (int x = 0; x < bw; ++x)
-                                bz[x] |= static_cast<uint8_t>(g.material[row + ext.x0 + x] >= 0);
+                                bz[x] = static_cast<uint8_t>(bz[x] | (mb[x] >= 0 ? 1 : 0));
                         }
                         const ColumnLine line{buf};
                         run_line(line, column_fn, &g.material[row], 1, w, ext.x0, ext.x1 + 1, k, 0,
