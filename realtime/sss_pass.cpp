@@ -191,6 +191,92 @@ __attribute__((always_inline)) inline F4 fast_pixel_body(const F4* tc, int pos, 
     return out;
 }
 
+// Two pixels of a line with the same term at once (their taps interleaved): the same operations
+// per pixel as fast_pixel_body, so the same bits; about 1.8 x faster a tap than one pixel at a
+// time on this project's machine (measured: the chains of one pixel alone leave the core idle).
+template <bool Follow>
+__attribute__((always_inline)) inline void fast_pair_body(const F4* tca, int pa, double sa,
+                                                          const F4* tcb, int pb, double sb,
+                                                          const double* off, const F4* wt,
+                                                          size_t count, float follow, F4* out) {
+    const F4 ca = tca[0], cb = tcb[0];
+    const F8 za8 = F8{} + ca[3], zb8 = F8{} + cb[3], follow8 = F8{} + follow, one8 = F8{} + 1.0f;
+    F4 acc_a0{}, acc_a1{}, ex_a0{}, ex_a1{}, acc_b0{}, acc_b1{}, ex_b0{}, ex_b1{};
+    for (size_t begin = 0; begin < count; begin += kChunk) {
+        const size_t m = std::min(kChunk, count - begin);
+        int rel_a[kChunk], rel_b[kChunk];
+        float t_a[kChunk], t_b[kChunk];
+        for (size_t j = 0; j < m; ++j) {
+            const double spa = pa + off[begin + j] * sa;
+            const int ia = static_cast<int>(spa);
+            rel_a[j] = ia - pa;
+            t_a[j] = static_cast<float>(spa - ia);
+            const double spb = pb + off[begin + j] * sb;
+            const int ib = static_cast<int>(spb);
+            rel_b[j] = ib - pb;
+            t_b[j] = static_cast<float>(spb - ib);
+        }
+        auto tap = [&](const F4* tc, int rel, float a1, const F8& zc8, const F4& w, F4& ac, F4& ex)
+            __attribute__((always_inline)) {
+            F8 q;
+            std::memcpy(&q, tc + rel, sizeof q);  // (q0 | q1)
+            const float a0 = 1 - a1;
+            F8 a = {a0, a0, a0, a0, a1, a1, a1, a1};
+            if constexpr (Follow) {
+                const F8 z = __builtin_shufflevector(q, q, 3, 3, 3, 3, 7, 7, 7, 7);
+                F8 k = z - zc8;
+                I8 bits;
+                std::memcpy(&bits, &k, sizeof bits);
+                bits &= 0x7fffffff;
+                std::memcpy(&k, &bits, sizeof k);
+                k = follow8 * k;
+                const F8 t = k < one8 ? k : one8;  // NaN and inf: 1, as std::min(1, k)
+                const F8 bb = a * t;
+                a *= one8 - t;
+                const F4 b4 = __builtin_shufflevector(bb, bb, 0, 1, 2, 3) +
+                              __builtin_shufflevector(bb, bb, 4, 5, 6, 7);
+                ex += w * b4;
+            } else {
+                (void)zc8;
+                (void)ex;
+            }
+            const F8 pq = a * q;
+            ac += w * (__builtin_shufflevector(pq, pq, 0, 1, 2, 3) +
+                       __builtin_shufflevector(pq, pq, 4, 5, 6, 7));
+        };
+        size_t j = 0;
+        for (; j + 1 < m; j += 2) {
+            const F4 w0 = wt[begin + j], w1 = wt[begin + j + 1];
+            tap(tca, rel_a[j], t_a[j], za8, w0, acc_a0, ex_a0);
+            tap(tcb, rel_b[j], t_b[j], zb8, w0, acc_b0, ex_b0);
+            tap(tca, rel_a[j + 1], t_a[j + 1], za8, w1, acc_a1, ex_a1);
+            tap(tcb, rel_b[j + 1], t_b[j + 1], zb8, w1, acc_b1, ex_b1);
+        }
+        if (j < m) {
+            const F4 w0 = wt[begin + j];
+            tap(tca, rel_a[j], t_a[j], za8, w0, acc_a0, ex_a0);
+            tap(tcb, rel_b[j], t_b[j], zb8, w0, acc_b0, ex_b0);
+        }
+    }
+    out[0] = acc_a0 + acc_a1;
+    out[1] = acc_b0 + acc_b1;
+    if constexpr (Follow) {
+        out[0] += (ex_a0 + ex_a1) * ca;
+        out[1] += (ex_b0 + ex_b1) * cb;
+    }
+}
+
+__attribute__((target_clones("avx2", "default"))) void fast_pair_follow(
+    const F4* tca, int pa, double sa, const F4* tcb, int pb, double sb, const double* off,
+    const F4* wt, size_t count, float follow, F4* out) {
+    fast_pair_body<true>(tca, pa, sa, tcb, pb, sb, off, wt, count, follow, out);
+}
+__attribute__((target_clones("avx2", "default"))) void fast_pair_none(
+    const F4* tca, int pa, double sa, const F4* tcb, int pb, double sb, const double* off,
+    const F4* wt, size_t count, float follow, F4* out) {
+    fast_pair_body<false>(tca, pa, sa, tcb, pb, sb, off, wt, count, follow, out);
+}
+
 __attribute__((target_clones("avx2", "default"))) F4 fast_pixel_follow(const F4* tc, int pos,
                                                                        const double* off,
                                                                        const F4* wt, size_t count,
@@ -699,6 +785,12 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
     lp.seed = p.seed;
     const PixelFn<ColumnLine> column_fn[2] = {pick<ColumnLine>(p.mode, jitter, false),
                                               pick<ColumnLine>(p.mode, jitter, true)};
+    // The fast path's pairs (unclamped, unjittered, follow-surface or none).
+    using PairFn = void (*)(const F4*, int, double, const F4*, int, double, const double*,
+                            const F4*, size_t, float, F4*);
+    const PairFn pair_fn = jitter || p.mode == SssEdgeMode::kReject ? nullptr
+                           : p.mode == SssEdgeMode::kFollowSurface  ? fast_pair_follow
+                                                                    : fast_pair_none;
 
     // Kernel scale [Freude14 Eq. 4.11]: pixels per mm at view depth z, along y and along x.
     const double py_per_mm_z = h / (2.0 * p.tan_half * p.unit_mm);
@@ -742,6 +834,22 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
                 continue;
             }
             const bool inside = pos + pt.lo_mm * scale >= 0 && pos + pt.hi_mm * scale < len - 1;
+            if (pair_fn && inside && pos + 1 < end && mat[(pos + 1) * mstride] == m) {
+                // The next pixel on the fast path too: both at once.
+                const F4 c1 = line.texel(pos + 1);
+                const double scale1 = per_mm_z / c1[3];
+                if (!(pt.term->taps.support_mm * scale1 < 0.5) &&
+                    pos + 1 + pt.lo_mm * scale1 >= 0 && pos + 1 + pt.hi_mm * scale1 < len - 1) {
+                    F4 v2[2];
+                    pair_fn(line.at(pos), pos, scale, line.at(pos + 1), pos + 1, scale1,
+                            pt.term->taps.offset_mm.data(), pt.weight.data(),
+                            pt.term->taps.offset_mm.size(), lp.follow, v2);
+                    store(pos, &v2[0]);
+                    store(pos + 1, &v2[1]);
+                    ++pos;
+                    continue;
+                }
+            }
             const int x = dir == 0 ? pos : index, y = dir == 0 ? index : pos;
             const F4 v = fn[inside](line, mat, mstride, len, pos, pt, scale, lp, x, y,
                                     static_cast<int>(2 * k) + dir);
