@@ -33,12 +33,31 @@
 // the centre pixel's bin, the convention of approx/convolve.h (convolve_exact and
 // convolve_separable do the same), so a kernel narrower than a pixel is the identity.
 //
+// Rotation (SssParams::rotate) [JimenezSupp Figs. S.6, S.7]: the product of two 1D kernels is
+// a 2D kernel with a cross along the pass axes wherever the 1D profile is not a Gaussian; with
+// rotate on, each pixel runs its two passes along its own pair of perpendicular axes, at an
+// angle a in [0, pi) hashed from the pixel and the seed (deterministic), so that the cross
+// turns with the pixel and averages out into noise. The axes are (cos a, sin a) and
+// (-sin a, cos a) on the medium's plane in mm, so in pixels (cos a px, sin a py) and
+// (-sin a px, cos a py) per mm, px and py the horizontal and vertical scales above (the aspect
+// enters as without rotation). A tap's position along its axis is sampled bilinearly in 2D
+// (approx::tap_texels along x and along y: clamp-to-edge), and the edge rule above is applied
+// per texel to each of the four (weights (1 - t_x)(1 - t_y), t_x (1 - t_y), (1 - t_x) t_y,
+// t_x t_y). The second pass of a pixel reads the first pass's results of its neighbours, each
+// along that neighbour's own axis (as the shader does). The narrow-kernel rule above takes the
+// larger of the axis's two pixel components. With rotate off the pass is the x, y one above,
+// to the bit.
+//
 // Pixels with material -1 (no medium) pass their input through. Between the two passes of a term
 // they hold their input too, which is what kNone then bleeds into the medium.
 //
 // Threads: rows (horizontal pass) and columns (vertical pass) in parallel (oneTBB); each output
 // pixel is computed on its own from the previous pass, so results are bit-identical for any
-// thread count.
+// thread count (with rotate: rows in parallel for both passes, the same). The pass keeps its
+// scratch images (16 bytes a pixel: a small process-wide pool, and per worker thread a row and
+// a block of rows) between calls, so that a frame's pass neither page-faults nor zero-fills
+// them; without rotate it touches only the medium's bounding box and the rows and columns its
+// taps reach.
 #pragma once
 
 #include "approx/convolve.h"
@@ -101,7 +120,11 @@ struct SssParams {
     double follow_strength = 3.6;
     double reject_depth = 1;  ///< kReject: largest depth difference kept
     double jitter = 0;        ///< fraction of a tap's half cell it may move (0.33: "33 %")
-    uint32_t seed = 0;        ///< of the jitter hash (0: convolve_taps's)
+    uint32_t seed = 0;        ///< of the jitter and rotation hashes (0: convolve_taps's)
+    /// Per-pixel rotation of the pass axes against the cross pattern of separable kernels
+    /// [JimenezSupp Figs. S.6, S.7]: each pixel's two 1D passes run along its own pair of
+    /// perpendicular axes (see the file comment). false: the axes are x and y.
+    bool rotate = false;
 };
 
 /// The pass: output irradiance after subsurface scattering, RGB interleaved as the input.

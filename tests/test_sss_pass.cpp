@@ -2,7 +2,10 @@
 // Eqs. 4.11, 4.12; JimenezSupp §E, Figs. S.6, S.7]: constant irradiance through every kernel
 // model, agreement with approx::convolve_taps and approx::convolve_separable on a flat G-buffer,
 // follow-surface and rejection at a depth step and a material edge, kernels narrower than a pixel
-// and wider than the image, signed SVD terms, and bit-identical results for 1 and 2 threads.
+// and wider than the image, signed SVD terms, bit-identical results for 1 and 2 threads, and the
+// per-pixel rotation of the axes (SssParams::rotate): constants kept, a Gaussian's result
+// unchanged (square and non-square pixels), the cross of a non-Gaussian kernel turned into an
+// isotropic blur, determinism.
 #include "approx/convolve.h"
 #include "approx/image.h"
 #include "approx/models.h"
@@ -470,6 +473,266 @@ TEST(SssPass, BitIdenticalForOneAndTwoThreadsAndPassThrough) {
     bad.material[static_cast<size_t>(w) + 1] = 0;
     EXPECT_THROW(realtime::sss_pass(bad, mats, camera(w, h, SssEdgeMode::kNone)),
                  std::invalid_argument);
+}
+
+// ---- 7. Per-pixel rotation of the axes [JimenezSupp Figs. S.6, S.7] -------------------------
+
+TEST(SssPassRotate, ConstantIrradianceStaysConstant) {
+    const std::vector<Kernel2D> k = skin_kernels();
+    const int w = 40, h = 32;
+    const double c = 0.37, z = h;
+    for (const Model& m : all_models(k)) {
+        const SssMaterialKernel mk = realtime::make_material_kernel(m.ptr(), 17);
+        // c sum_k sign_k (sum of term k's weights)^2, summed here from the taps.
+        std::array<double, 3> sum{};
+        for (int ch = 0; ch < 3; ++ch)
+            for (const realtime::SssTerm& t : mk.terms) {
+                double ws = 0;
+                for (double v : t.taps.weight[ch]) ws += v;
+                sum[ch] += t.sign[ch] * ws * ws;
+            }
+        const ImageRGB e(w, h, 0.05, c);
+        for (SssEdgeMode mode : kModes)
+            for (double jitter : {0.0, 0.33}) {
+                SssParams p = camera(w, h, mode);
+                p.jitter = jitter;
+                p.rotate = true;
+                const std::vector<float> out = realtime::sss_pass(from_image(e, z), {mk}, p);
+                double worst = 0;
+                for (size_t i = 0; i < out.size(); ++i)
+                    worst = std::max(worst, std::fabs(out[i] / (c * sum[i % 3]) - 1));
+                EXPECT_LT(worst, 1e-6) << m.name << " " << mode_name(mode) << " " << jitter;
+            }
+    }
+}
+
+// A rank-1 term of 1D taps every `step_px` pixels (at pixel size pmm mm) over [-reach, reach]
+// pixels, the weights of f(d) (d in pixels) normalised to 1, the same in all channels.
+template <class F>
+SssMaterialKernel taps_from_profile(F&& f, double reach_px, double step_px, double pmm) {
+    realtime::SssTerm t;
+    const int n = static_cast<int>(std::lround(reach_px / step_px));
+    double total = 0;
+    for (int i = -n; i <= n; ++i) total += f(i * step_px);
+    for (int i = -n; i <= n; ++i) {
+        t.taps.offset_mm.push_back(i * step_px * pmm);
+        for (int ch = 0; ch < 3; ++ch) t.taps.weight[ch].push_back(f(i * step_px) / total);
+    }
+    t.taps.support_mm = n * step_px * pmm;
+    return SssMaterialKernel{{t}};
+}
+
+// The mean of the pass over seeds 0 .. n - 1 (rotation on): what a temporal filter sees.
+std::vector<float> mean_over_seeds(const SssGBuffer& g, const SssMaterialKernel& mk, SssParams p,
+                                   int n) {
+    std::vector<double> sum(g.irradiance.size(), 0.0);
+    for (int s = 0; s < n; ++s) {
+        p.seed = static_cast<uint32_t>(s);
+        const std::vector<float> o = realtime::sss_pass(g, {mk}, p);
+        for (size_t i = 0; i < o.size(); ++i) sum[i] += o[i];
+    }
+    std::vector<float> m(sum.size());
+    for (size_t i = 0; i < m.size(); ++i) m[i] = static_cast<float>(sum[i] / n);
+    return m;
+}
+
+// A Gaussian's product kernel is rotation-invariant, so on a Gaussian blob (a smooth irradiance)
+// rotation on and off both give the analytic convolution, a Gaussian of the summed variances,
+// to within the error of linear interpolation. With rotation a pixel's second pass reads its
+// neighbours' first passes, which ran along their own axes: one frame differs from the
+// analytic result to first order in sigma_k^2 (bounded below), the mean over seeds only to the
+// interpolation error and a fourth-order residue. Non-square pixels too, where the kernel is
+// 1 px wide along x and 2 px along y (the aspect must enter each rotated axis).
+TEST(SssPassRotate, GaussianKernelIsUnchangedByRotation) {
+    const int w = 64, h = 64;
+    const double z = h, sf = 7.0, cx = 31.5, cy = 30.25;  // blob sigma in px
+    for (double stretch : {1.0, 2.0}) {
+        SssParams p = camera(w, h, SssEdgeMode::kFollowSurface);
+        p.aspect *= stretch;                   // pixels `stretch` times as wide as high
+        const double pmm = pixel_mm(p, h, z);  // mm per pixel vertically
+        const double sk = 2.0;                 // kernel sigma in vertical pixels
+        const SssMaterialKernel mk = taps_from_profile(
+            [&](double d) { return std::exp(-d * d / (2 * sk * sk)); }, 5 * sk, 0.25, pmm);
+        const double skx = sk / stretch, sky = sk;
+        SssGBuffer g(w, h);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const size_t i = static_cast<size_t>(y) * w + x;
+                const double v =
+                    std::exp(-((x - cx) * (x - cx) + (y - cy) * (y - cy)) / (2 * sf * sf));
+                for (int ch = 0; ch < 3; ++ch) g.irradiance[3 * i + ch] = static_cast<float>(v);
+                g.view_z[i] = static_cast<float>(z);
+            }
+        const std::vector<float> off = realtime::sss_pass(g, {mk}, p);
+        p.rotate = true;
+        const std::vector<float> one = realtime::sss_pass(g, {mk}, p);
+        const std::vector<float> mean = mean_over_seeds(g, mk, p, 16);
+        // The analytic result: variances sf^2 + sk^2 along each axis.
+        const double vx = sf * sf + skx * skx, vy = sf * sf + sky * sky;
+        const double amp = std::sqrt(sf * sf / vx) * std::sqrt(sf * sf / vy);
+        double d_one = 0, d_mean = 0, d_off = 0, d_mean_off = 0;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const size_t i = static_cast<size_t>(y) * w + x;
+                const double ref = amp * std::exp(-(x - cx) * (x - cx) / (2 * vx) -
+                                                  (y - cy) * (y - cy) / (2 * vy));
+                for (int ch = 0; ch < 3; ++ch) {
+                    const size_t j = 3 * i + ch;
+                    d_one = std::max(d_one, std::fabs(one[j] - ref));
+                    d_mean = std::max(d_mean, std::fabs(mean[j] - ref));
+                    d_off = std::max(d_off, std::fabs(off[j] - ref));
+                    d_mean_off =
+                        std::max(d_mean_off, std::fabs(static_cast<double>(mean[j]) - off[j]));
+                }
+            }
+        // Linear interpolation at fraction t adds t (1 - t) / 2 f'' <= f'' / 8 per axis it
+        // interpolates along, max |f''| <= peak / sf^2 (the input, the sharper of the two
+        // passes' inputs; peak 1); two passes, each interpolating along up to two axes:
+        // 4 / 8 / sf^2. The taps (every quarter pixel over 5 sigma): under 1e-5.
+        const double interp = 0.5 / (sf * sf) + 1e-5;
+        // Rotation, one frame: a neighbour's first pass along u' instead of u changes the blur
+        // by sk^2 / 2 (d_u'^2 - d_u^2) f, at most sk^2 / 2 * 2 / (e sf^2) for a Gaussian f
+        // (max of r^2 exp(-r^2 / 2 sf^2) / sf^4).
+        const double mixing = sk * sk / (std::exp(1.0) * sf * sf);
+        // The mean over angles: the covariance sk^2 (u u^T + v v^T) of random u, v has the
+        // determinant of the exact one less sk^4 cos^2; the peak's excess, averaged, is
+        // sk^4 / (4 (sf^2 + sk^2)^2).
+        const double residue = std::pow(sk, 4) / (4 * std::pow(sf * sf + sk * sk, 2));
+        std::printf(
+            "  stretch %.1f: max |off - analytic| = %.2e (bound %.2e), |one seed - analytic| = "
+            "%.2e (bound %.2e), |mean of 16 seeds - analytic| = %.2e, |mean - off| = %.2e "
+            "(bound %.2e; a wrong aspect: %.2e)\n",
+            stretch, d_off, interp, d_one, interp + mixing, d_mean, d_mean_off, interp + residue,
+            amp * (1 - std::sqrt(vx / vy)));
+        EXPECT_LT(d_off, interp) << stretch;
+        EXPECT_LT(d_one, interp + mixing) << stretch;
+        EXPECT_LT(d_mean, interp + residue) << stretch;
+        EXPECT_LT(d_mean_off, interp + residue) << stretch;
+    }
+}
+
+// The ratio of the mean output on the axes to that on the diagonals, over an annulus around
+// (cx, cy): pixels within `half_deg` degrees of the directions 0, 90, 180, 270 degrees or of
+// 45, 135, 225, 315 degrees.
+double axis_to_diagonal(const std::vector<float>& out, int w, int h, double cx, double cy,
+                        double r0, double r1, double half_deg) {
+    double axis = 0, diag = 0;
+    int na = 0, nd = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const double dx = x - cx, dy = y - cy, r = std::hypot(dx, dy);
+            if (r < r0 || r > r1) continue;
+            const double deg = std::fmod(std::atan2(dy, dx) * 180 / std::acos(-1.0) + 360, 90);
+            const double v = out[3 * (static_cast<size_t>(y) * w + x)];
+            if (std::min(deg, 90 - deg) < half_deg) {
+                axis += v;
+                ++na;
+            } else if (std::fabs(deg - 45) < half_deg) {
+                diag += v;
+                ++nd;
+            }
+        }
+    EXPECT_GT(na, 20);
+    EXPECT_GT(nd, 20);
+    return (axis / na) / (diag / nd);
+}
+
+// The cross pattern [JimenezSupp Fig. S.6]: a 1D profile that is the sum of a narrow and a wide
+// Gaussian (one rank-1 term, as a 1-term fit of a two-lobed profile) makes the product kernel
+// k(x) k(y) a cross: on a circle of radius 10 px its value on an axis, k(10) k(0), is about 7
+// times that on a diagonal, k(7.1)^2. Rotating each pixel's axes spreads the cross over all
+// directions: the output on the circle is nearly isotropic. Energy is kept either way.
+TEST(SssPassRotate, RotationRemovesTheCrossPattern) {
+    const int w = 96, h = 96;
+    const double z = h, cx = 48, cy = 48;
+    const SssParams p0 = camera(w, h, SssEdgeMode::kNone);
+    const double pmm = pixel_mm(p0, h, z);
+    const double s1 = 1.0, s2 = 6.0;  // px
+    const SssMaterialKernel mk = taps_from_profile(
+        [&](double d) {
+            return 0.5 * std::exp(-d * d / (2 * s1 * s1)) / s1 +
+                   0.5 * std::exp(-d * d / (2 * s2 * s2)) / s2;
+        },
+        4 * s2, 0.5, pmm);
+    // A small bright disc (radius 1.5 px) at (cx, cy).
+    SssGBuffer g(w, h);
+    double in = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            if (std::hypot(x - cx, y - cy) <= 1.5) {
+                const size_t i = static_cast<size_t>(y) * w + x;
+                for (int ch = 0; ch < 3; ++ch) g.irradiance[3 * i + ch] = 1.0f;
+                in += 1;
+            }
+    for (auto& v : g.view_z) v = static_cast<float>(z);
+    double ratio[2] = {0, 0};
+    for (int rotate = 0; rotate < 2; ++rotate)
+        for (SssEdgeMode mode : {SssEdgeMode::kNone, SssEdgeMode::kFollowSurface}) {
+            SssParams p = camera(w, h, mode);
+            p.rotate = rotate != 0;
+            // With rotation, the mean over 16 seeds (one frame is noisy: see above).
+            const std::vector<float> out =
+                rotate ? mean_over_seeds(g, mk, p, 16) : realtime::sss_pass(g, {mk}, p);
+            const double a = axis_to_diagonal(out, w, h, cx, cy, 8.5, 11.5, 12);
+            double energy = 0;
+            for (size_t i = 0; i < g.pixels(); ++i) energy += out[3 * i];
+            std::printf(
+                "  rotate %d, %-6s: axis / diagonal on r = 8.5..11.5 px: %.3f, energy "
+                "out / in = %.6f\n",
+                rotate, mode_name(mode), a, energy / in);
+            // A gather whose kernel turns from pixel to pixel keeps energy on average only.
+            EXPECT_NEAR(energy / in, 1.0, rotate ? 1e-2 : 1e-5);
+            if (mode == SssEdgeMode::kNone) ratio[rotate] = a;
+        }
+    EXPECT_GT(ratio[0], 3.0);                                  // the cross
+    EXPECT_LT(std::fabs(ratio[1] - 1), 0.1 * (ratio[0] - 1));  // gone, to the noise
+}
+
+TEST(SssPassRotate, BitIdenticalForOneAndTwoThreads) {
+    const std::vector<Kernel2D> k = skin_kernels();
+    std::array<ModelResult, 3> pre, svd;
+    for (int c = 0; c < 3; ++c) {
+        pre[c] = approx::preintegration(k[c]);
+        svd[c] = approx::svd_rank_n(k[c], 2, false);
+    }
+    const std::vector<SssMaterialKernel> mats = {
+        realtime::make_material_kernel({&pre[0].kernel, &pre[1].kernel, &pre[2].kernel}, 17),
+        realtime::make_material_kernel({&svd[0].kernel, &svd[1].kernel, &svd[2].kernel}, 11)};
+    const int w = 53, h = 37;
+    SssGBuffer g = from_image(random_image(w, h, 1.0, 13), 1.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = static_cast<size_t>(y) * w + x;
+            g.view_z[i] = static_cast<float>(30 + 0.3 * x + (x > 30 ? 20 : 0));
+            g.material[i] =
+                (x - 26) * (x - 26) + (y - 18) * (y - 18) < 64 ? -1 : (y < h / 2 ? 0 : 1);
+        }
+    for (SssEdgeMode mode : kModes)
+        for (double jitter : {0.0, 0.33}) {
+            SssParams p = camera(w, h, mode);
+            p.jitter = jitter;
+            p.seed = 7;
+            p.rotate = true;
+            std::vector<float> one, two, unrotated, other_seed;
+            tbb::task_arena(1).execute([&] { one = realtime::sss_pass(g, mats, p); });
+            tbb::task_arena(2).execute([&] { two = realtime::sss_pass(g, mats, p); });
+            ASSERT_EQ(one.size(), two.size());
+            EXPECT_EQ(std::memcmp(one.data(), two.data(), one.size() * sizeof(float)), 0)
+                << mode_name(mode) << " " << jitter;
+            for (size_t i = 0; i < g.pixels(); ++i) {
+                if (g.material[i] >= 0) continue;
+                for (int ch = 0; ch < 3; ++ch) EXPECT_EQ(one[3 * i + ch], g.irradiance[3 * i + ch]);
+            }
+            SssParams q = p;
+            q.rotate = false;
+            unrotated = realtime::sss_pass(g, mats, q);
+            q = p;
+            q.seed = 8;
+            other_seed = realtime::sss_pass(g, mats, q);
+            // Rotation changes the result, and the angles follow the seed.
+            EXPECT_GT(rel_diff(one, unrotated), 1e-4) << mode_name(mode) << " " << jitter;
+            EXPECT_GT(rel_diff(one, other_seed), 1e-4) << mode_name(mode) << " " << jitter;
+        }
 }
 
 }  // namespace
