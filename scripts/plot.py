@@ -495,9 +495,9 @@ def error_vs_time_plot(root, p):
     """Per scene: the RGB RMS error of every frame against the screen-space reference (left) and
     the path tracer (right, +-1 SE bars) on a log axis, against the time of p["x"] (a column:
     sss_ms, the SSS pass, or frame_ms, the whole frame) on a log axis. A line per swept model
-    through its tap counts (solid: no jitter, dashed: jittered), the table's models of one
-    family (the part of the spec before ':') at the table's tap count joined by a dotted line,
-    the rest as single markers."""
+    through its tap counts (solid: no jitter, dashed: jittered, dash-dotted: rotated axes), the
+    table's models of one family (the part of the spec before ':') at the table's tap count
+    joined by a dotted line, the rest as single markers."""
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
     rows = [x for x in read_csv(os.path.join(root, p["csv"])) if x["scene"] == p["scene"]]
     xkey = p.get("x", "sss_ms")
@@ -513,8 +513,9 @@ def error_vs_time_plot(root, p):
             models.append(x["model"])
     swept = [m for m in models
              if len(set(int(x["taps"]) for x in rows if x["model"] == m)) > 1
-             or any(f(x, "jitter") > 0 for x in rows if x["model"] == m)]
-    table = [x for x in rows if int(x["taps"]) == taps and f(x, "jitter") == 0]
+             or any(f(x, "jitter") > 0 or f(x, "rotate") > 0 for x in rows if x["model"] == m)]
+    table = [x for x in rows
+             if int(x["taps"]) == taps and f(x, "jitter") == 0 and f(x, "rotate") == 0]
     families = []
     for x in table:
         fam = x["model"].split(":")[0]
@@ -524,13 +525,14 @@ def error_vs_time_plot(root, p):
     cmap = plt.get_cmap("tab10")
     series = []  # (label, rows, colour, line style, marker, annotation per row)
     for i, m in enumerate(swept):
-        jitters = sorted(set(f(x, "jitter") for x in rows if x["model"] == m))
-        for j in jitters:
-            pts = sorted([x for x in rows if x["model"] == m and f(x, "jitter") == j],
-                         key=lambda x: int(x["taps"]))
-            series.append(("%s%s" % (m, ", jitter %g" % j if j > 0 else ""), pts, cmap(i % 10),
-                           "--" if j > 0 else "-", "o", [x["taps"] for x in pts],
-                           (3, -9) if j > 0 else (3, 3)))
+        variants = sorted(set((f(x, "jitter"), f(x, "rotate")) for x in rows if x["model"] == m))
+        for j, rot in variants:
+            pts = sorted([x for x in rows if x["model"] == m and f(x, "jitter") == j
+                          and f(x, "rotate") == rot], key=lambda x: int(x["taps"]))
+            name = m + (", jitter %g" % j if j > 0 else "") + (", rotated" if rot > 0 else "")
+            style = "-." if rot > 0 else ("--" if j > 0 else "-")
+            series.append((name, pts, cmap(i % 10), style, "o", [x["taps"] for x in pts],
+                           (3, -9) if j > 0 else ((3, 9) if rot > 0 else (3, 3))))
     k = len(swept)
     for fam in families:
         g = groups[fam]

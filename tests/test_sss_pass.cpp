@@ -10,6 +10,7 @@
 #include "approx/image.h"
 #include "approx/models.h"
 #include "realtime/sss_pass.h"
+#include "testing.h"
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -34,35 +35,15 @@ using realtime::SssEdgeMode;
 using realtime::SssGBuffer;
 using realtime::SssMaterialKernel;
 using realtime::SssParams;
-
-// The analytic skin-like profile of test_image_space.cpp: exp(-r / l1) / r plus exp(-r / l2) / l2
-// per channel, lengths stretched by `scale`.
-RadialProfile analytic_profile(double dr_mm, int nr, double scale = 1.0) {
-    RadialProfile p;
-    p.name = "analytic";
-    p.dr_cm = dr_mm / 10.0;
-    p.nr = nr;
-    const double l1[3] = {0.15, 0.08, 0.05}, l2[3] = {0.8, 0.4, 0.25};  // mm
-    for (int c = 0; c < 3; ++c) {
-        p.rd_per_cm2[c].resize(static_cast<size_t>(nr));
-        p.se_per_cm2[c].assign(static_cast<size_t>(nr), 0.0);
-        for (int k = 0; k < nr; ++k) {
-            const double r = (k + 0.5) * dr_mm / scale;
-            p.rd_per_cm2[c][static_cast<size_t>(k)] =
-                100.0 * (0.05 * std::exp(-r / l1[c]) / r + 0.5 * std::exp(-r / l2[c]) / l2[c]);
-        }
-        p.rd_total[c] = 0.5;
-    }
-    return p;
-}
-
-// Kernels of extent 1.5 mm (0.01 mm cells, n = 150), the profile at half its length.
-std::vector<Kernel2D> skin_kernels() {
-    const RadialProfile p = analytic_profile(0.01, 150, 0.5);
-    std::vector<Kernel2D> k;
-    for (int c = 0; c < 3; ++c) k.emplace_back(p, c, KernelGrid::from_profile(p));
-    return k;
-}
+using testing::analytic_profile;
+using testing::edge_mode_name;
+using testing::flat_gbuffer;
+using testing::kSssEdgeModes;
+using testing::pixel_mm;
+using testing::random_image;
+using testing::rel_diff;
+using testing::skin_kernels;
+using testing::sss_camera;
 
 struct Model {
     std::string name;
@@ -89,65 +70,6 @@ std::vector<Model> all_models(const std::vector<Kernel2D>& k) {
     add("deon2", [&](int c) { return approx::sum_of_gaussians(k[c], 2); });
     add("ssss_skin", [&](int c) { return approx::ssss_skin_kernel(k[c], c); });
     return m;
-}
-
-// A camera with tan_half 0.5 and unit_mm 0.05: at view depth z = H a pixel is one world unit,
-// 0.05 mm, so the 1.5 mm kernels span 30 pixels.
-SssParams camera(int w, int h, SssEdgeMode mode) {
-    SssParams p;
-    p.tan_half = 0.5;
-    p.aspect = static_cast<double>(w) / h;
-    p.unit_mm = 0.05;
-    p.mode = mode;
-    return p;
-}
-double pixel_mm(const SssParams& p, int h, double z) {
-    return 2 * p.tan_half * z * p.unit_mm / h;
-}
-
-SssGBuffer from_image(const ImageRGB& e, double z) {
-    SssGBuffer g(e.width, e.height);
-    for (size_t i = 0; i < g.pixels(); ++i) {
-        for (int ch = 0; ch < 3; ++ch) g.irradiance[3 * i + ch] = static_cast<float>(e.c[ch][i]);
-        g.view_z[i] = static_cast<float>(z);
-    }
-    return g;
-}
-
-ImageRGB random_image(int w, int h, double pmm, unsigned seed) {
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    ImageRGB img(w, h, pmm);
-    for (auto& ch : img.c)
-        for (double& v : ch) v = static_cast<float>(u(rng));  // representable in the G-buffer
-    return img;
-}
-
-// max |out - ref| over max |ref|, ref an image.
-double rel_diff(const std::vector<float>& out, const ImageRGB& ref) {
-    double m = 0, r = 0;
-    const size_t n = ref.c[0].size();
-    for (size_t i = 0; i < n; ++i)
-        for (int ch = 0; ch < 3; ++ch) {
-            m = std::max(m, std::fabs(out[3 * i + ch] - ref.c[ch][i]));
-            r = std::max(r, std::fabs(ref.c[ch][i]));
-        }
-    return m / r;
-}
-
-double rel_diff(const std::vector<float>& a, const std::vector<float>& b) {
-    double m = 0, r = 0;
-    for (size_t i = 0; i < a.size(); ++i) {
-        m = std::max(m, std::fabs(static_cast<double>(a[i]) - b[i]));
-        r = std::max(r, std::fabs(static_cast<double>(b[i])));
-    }
-    return m / r;
-}
-
-const SssEdgeMode kModes[3] = {SssEdgeMode::kNone, SssEdgeMode::kFollowSurface,
-                               SssEdgeMode::kReject};
-const char* mode_name(SssEdgeMode m) {
-    return m == SssEdgeMode::kNone ? "none" : m == SssEdgeMode::kReject ? "reject" : "follow";
 }
 
 // ---- 1. Constant irradiance on a flat, camera-facing medium ---------------------------------
@@ -178,15 +100,15 @@ TEST(SssPass, ConstantIrradianceThroughEveryModel) {
             for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(sum[ch], 1.0, 1e-9) << m.name;
         }
         const ImageRGB e(w, h, 0.05, c);
-        for (SssEdgeMode mode : kModes)
+        for (SssEdgeMode mode : kSssEdgeModes)
             for (double jitter : {0.0, 0.33}) {
-                SssParams p = camera(w, h, mode);
+                SssParams p = sss_camera(w, h, mode);
                 p.jitter = jitter;
-                const std::vector<float> out = realtime::sss_pass(from_image(e, z), {mk}, p);
+                const std::vector<float> out = realtime::sss_pass(flat_gbuffer(e, z), {mk}, p);
                 double worst = 0;
                 for (size_t i = 0; i < out.size(); ++i)
                     worst = std::max(worst, std::fabs(out[i] / (c * sum[i % 3]) - 1));
-                EXPECT_LT(worst, 1e-6) << m.name << " " << mode_name(mode) << " " << jitter;
+                EXPECT_LT(worst, 1e-6) << m.name << " " << edge_mode_name(mode) << " " << jitter;
             }
     }
 }
@@ -201,21 +123,21 @@ TEST(SssPass, FlatEqualsConvolveTaps) {
                                                      &pre[2].kernel};
     const int w = 40, h = 32;  // not square: the aspect enters the horizontal scale
     for (double z : {32.0, 20.0}) {
-        const SssParams p0 = camera(w, h, SssEdgeMode::kNone);
+        const SssParams p0 = sss_camera(w, h, SssEdgeMode::kNone);
         const ImageRGB e = random_image(w, h, pixel_mm(p0, h, z), 3);
         for (int count : {9, 17})
             for (double jitter : {0.0, 0.33}) {
                 const approx::TapKernel taps = approx::make_taps(a, count);
                 const ImageRGB ref = approx::convolve_taps(e, taps, jitter);
                 const SssMaterialKernel mk = realtime::make_material_kernel(a, count);
-                for (SssEdgeMode mode : kModes) {
-                    SssParams p = camera(w, h, mode);
+                for (SssEdgeMode mode : kSssEdgeModes) {
+                    SssParams p = sss_camera(w, h, mode);
                     p.jitter = jitter;
-                    const double d = rel_diff(realtime::sss_pass(from_image(e, z), {mk}, p), ref);
+                    const double d = rel_diff(realtime::sss_pass(flat_gbuffer(e, z), {mk}, p), ref);
                     std::printf(
                         "  z %g, %d taps, jitter %.2f, %-6s: max |pass - taps| / max = "
                         "%.3g\n",
-                        z, count, jitter, mode_name(mode), d);
+                        z, count, jitter, edge_mode_name(mode), d);
                     EXPECT_LT(d, 1e-6);
                 }
             }
@@ -229,7 +151,7 @@ TEST(SssPass, FullResolutionTapsEqualConvolveSeparable) {
     std::array<ModelResult, 3> svd;
     for (int c = 0; c < 3; ++c) svd[c] = approx::svd_rank_n(k[c], 2, false);
     const int w = 24, h = 24;  // square: the same fold along both axes
-    const SssParams p = camera(w, h, SssEdgeMode::kNone);
+    const SssParams p = sss_camera(w, h, SssEdgeMode::kNone);
     const double z = 24, pmm = pixel_mm(p, h, z);
     const ImageRGB e = random_image(w, h, pmm, 5);
     SssMaterialKernel mk;
@@ -250,7 +172,7 @@ TEST(SssPass, FullResolutionTapsEqualConvolveSeparable) {
     }
     const ImageRGB ref =
         approx::convolve_separable(e, {&svd[0].kernel, &svd[1].kernel, &svd[2].kernel});
-    const double d = rel_diff(realtime::sss_pass(from_image(e, z), {mk}, p), ref);
+    const double d = rel_diff(realtime::sss_pass(flat_gbuffer(e, z), {mk}, p), ref);
     std::printf("  max |pass - convolve_separable| / max = %.3g (signs %g %g %g)\n", d,
                 mk.terms[1].sign[0], mk.terms[1].sign[1], mk.terms[1].sign[2]);
     EXPECT_LT(d, 1e-6);
@@ -288,15 +210,15 @@ TEST(SssPass, FollowSurfaceAndRejectStopBleedingAcrossADepthStep) {
     const double lit = 3.0 * (w / 2) * h;
     std::array<double, 3> bleed{};
     for (int m = 0; m < 3; ++m) {
-        SssParams p = camera(w, h, kModes[m]);
+        SssParams p = sss_camera(w, h, kSssEdgeModes[m]);
         p.jitter = 0.33;
         p.reject_depth = 1.0;  // 0.05 mm
         bleed[m] = right_half_energy(realtime::sss_pass(g, {mk}, p), w, h) / lit;
         std::printf("  %-6s: fraction of the lit half's energy across the step = %.3g\n",
-                    mode_name(kModes[m]), bleed[m]);
+                    edge_mode_name(kSssEdgeModes[m]), bleed[m]);
         // With rejection the kept weights are renormalised: a constant stays constant on both
         // sides of the step.
-        if (kModes[m] == SssEdgeMode::kReject) {
+        if (kSssEdgeModes[m] == SssEdgeMode::kReject) {
             const std::vector<float> o = realtime::sss_pass(ones, {mk}, p);
             for (float v : o) EXPECT_NEAR(v, 1.0, 1e-6);
         }
@@ -313,10 +235,10 @@ TEST(SssPass, FollowSurfaceAndRejectStopBleedingAcrossADepthStep) {
             me.view_z[i] = static_cast<float>(z);
             me.material[i] = x < w / 2 ? 0 : 1;
         }
-    const double none =
-        right_half_energy(realtime::sss_pass(me, {mk, mk}, camera(w, h, SssEdgeMode::kNone)), w, h);
+    const double none = right_half_energy(
+        realtime::sss_pass(me, {mk, mk}, sss_camera(w, h, SssEdgeMode::kNone)), w, h);
     const double rej = right_half_energy(
-        realtime::sss_pass(me, {mk, mk}, camera(w, h, SssEdgeMode::kReject)), w, h);
+        realtime::sss_pass(me, {mk, mk}, sss_camera(w, h, SssEdgeMode::kReject)), w, h);
     std::printf("  material edge: none %.3g, reject %.3g\n", none / lit, rej / lit);
     EXPECT_GT(none / lit, 1e-3);
     EXPECT_EQ(rej, 0.0);
@@ -333,13 +255,13 @@ TEST(SssPass, KernelNarrowerThanAPixelIsTheIdentity) {
     const int w = 32, h = 24;
     // At depth 100 h a pixel is 5 mm: the kernel's support is under 0.3 px.
     const double z = 100.0 * h;
-    const SssGBuffer g = from_image(random_image(w, h, 1.0, 9), z);
-    for (SssEdgeMode mode : kModes) {
-        SssParams p = camera(w, h, mode);
+    const SssGBuffer g = flat_gbuffer(random_image(w, h, 1.0, 9), z);
+    for (SssEdgeMode mode : kSssEdgeModes) {
+        SssParams p = sss_camera(w, h, mode);
         p.jitter = 0.33;
         const std::vector<float> out = realtime::sss_pass(g, {mk}, p);
         const double d = rel_diff(out, g.irradiance);
-        std::printf("  %-6s: max |out - in| / max = %.3g\n", mode_name(mode), d);
+        std::printf("  %-6s: max |out - in| / max = %.3g\n", edge_mode_name(mode), d);
         EXPECT_LT(d, 1e-6);
     }
 }
@@ -353,24 +275,24 @@ TEST(SssPass, KernelWiderThanTheImage) {
     const int w = 24, h = 20;
     // At depth h / 50 a pixel is 0.001 mm: the kernel spans 1500 px on a 24 px image.
     const double z = h / 50.0;
-    for (SssEdgeMode mode : kModes) {
-        SssParams p = camera(w, h, mode);
+    for (SssEdgeMode mode : kSssEdgeModes) {
+        SssParams p = sss_camera(w, h, mode);
         p.jitter = 0.33;
         const std::vector<float> c =
-            realtime::sss_pass(from_image(ImageRGB(w, h, 1.0, 0.6), z), {mk}, p);
-        for (float v : c) EXPECT_NEAR(v, 0.6, 1e-6) << mode_name(mode);
+            realtime::sss_pass(flat_gbuffer(ImageRGB(w, h, 1.0, 0.6), z), {mk}, p);
+        for (float v : c) EXPECT_NEAR(v, 0.6, 1e-6) << edge_mode_name(mode);
         ImageRGB dot(w, h, 1.0, 0.0);
         for (int ch = 0; ch < 3; ++ch) dot.at(ch, 11, 9) = 1.0;
-        const std::vector<float> o = realtime::sss_pass(from_image(dot, z), {mk}, p);
+        const std::vector<float> o = realtime::sss_pass(flat_gbuffer(dot, z), {mk}, p);
         double energy = 0;
         bool finite = true;
         for (float v : o) {
             finite = finite && std::isfinite(v) && v >= -1e-7f;
             energy += v;
         }
-        std::printf("  %-6s: impulse energy out / in = %.3g\n", mode_name(mode), energy / 3);
-        EXPECT_TRUE(finite) << mode_name(mode);
-        EXPECT_LE(energy, 3.0 * (1 + 1e-6)) << mode_name(mode);
+        std::printf("  %-6s: impulse energy out / in = %.3g\n", edge_mode_name(mode), energy / 3);
+        EXPECT_TRUE(finite) << edge_mode_name(mode);
+        EXPECT_LE(energy, 3.0 * (1 + 1e-6)) << edge_mode_name(mode);
     }
 }
 
@@ -386,11 +308,11 @@ TEST(SssPass, Rank2IsTheSumOfItsTerms) {
     std::printf("  term 2 signs: %g %g %g\n", both.terms[1].sign[0], both.terms[1].sign[1],
                 both.terms[1].sign[2]);
     const int w = 40, h = 32;
-    SssGBuffer g = from_image(random_image(w, h, 1.0, 11), h);
+    SssGBuffer g = flat_gbuffer(random_image(w, h, 1.0, 11), h);
     for (int x = w / 2; x < w; ++x)
         for (int y = 0; y < h; ++y) g.view_z[static_cast<size_t>(y) * w + x] = 1.5f * h;
-    for (SssEdgeMode mode : kModes) {
-        SssParams p = camera(w, h, mode);
+    for (SssEdgeMode mode : kSssEdgeModes) {
+        SssParams p = sss_camera(w, h, mode);
         p.jitter = 0.33;
         p.reject_depth = 1.0;
         const std::vector<float> all = realtime::sss_pass(g, {both}, p);
@@ -413,9 +335,10 @@ TEST(SssPass, Rank2IsTheSumOfItsTerms) {
         const std::vector<float> diff = realtime::sss_pass(g, {neg}, p0);
         for (size_t i = 0; i < sum.size(); ++i) sum[i] = a0[i] - a1[i];
         d = std::max(d, rel_diff(diff, sum));
-        std::printf("  %-6s: max |both - (term 1 +- term 2)| / max = %.3g\n", mode_name(mode), d);
-        EXPECT_LT(d, 1e-6) << mode_name(mode);
-        EXPECT_GT(rel_diff(all, t0), 1e-4) << mode_name(mode);  // term 2 matters
+        std::printf("  %-6s: max |both - (term 1 +- term 2)| / max = %.3g\n", edge_mode_name(mode),
+                    d);
+        EXPECT_LT(d, 1e-6) << edge_mode_name(mode);
+        EXPECT_GT(rel_diff(all, t0), 1e-4) << edge_mode_name(mode);  // term 2 matters
     }
 }
 
@@ -432,7 +355,7 @@ TEST(SssPass, BitIdenticalForOneAndTwoThreadsAndPassThrough) {
         realtime::make_material_kernel({&pre[0].kernel, &pre[1].kernel, &pre[2].kernel}, 17),
         realtime::make_material_kernel({&svd[0].kernel, &svd[1].kernel, &svd[2].kernel}, 11)};
     const int w = 53, h = 37;
-    SssGBuffer g = from_image(random_image(w, h, 1.0, 13), 1.0);
+    SssGBuffer g = flat_gbuffer(random_image(w, h, 1.0, 13), 1.0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const size_t i = static_cast<size_t>(y) * w + x;
@@ -440,8 +363,8 @@ TEST(SssPass, BitIdenticalForOneAndTwoThreadsAndPassThrough) {
             g.material[i] =
                 (x - 26) * (x - 26) + (y - 18) * (y - 18) < 64 ? -1 : (y < h / 2 ? 0 : 1);
         }
-    for (SssEdgeMode mode : kModes) {
-        SssParams p = camera(w, h, mode);
+    for (SssEdgeMode mode : kSssEdgeModes) {
+        SssParams p = sss_camera(w, h, mode);
         p.jitter = 0.33;
         p.seed = 7;
         std::vector<float> one, two;
@@ -449,7 +372,7 @@ TEST(SssPass, BitIdenticalForOneAndTwoThreadsAndPassThrough) {
         tbb::task_arena(2).execute([&] { two = realtime::sss_pass(g, mats, p); });
         ASSERT_EQ(one.size(), two.size());
         EXPECT_EQ(std::memcmp(one.data(), two.data(), one.size() * sizeof(float)), 0)
-            << mode_name(mode);
+            << edge_mode_name(mode);
         size_t through = 0, changed = 0;
         for (size_t i = 0; i < g.pixels(); ++i)
             for (int ch = 0; ch < 3; ++ch) {
@@ -466,12 +389,12 @@ TEST(SssPass, BitIdenticalForOneAndTwoThreadsAndPassThrough) {
     // Bad input is refused.
     SssGBuffer bad = g;
     bad.material[0] = 2;
-    EXPECT_THROW(realtime::sss_pass(bad, mats, camera(w, h, SssEdgeMode::kNone)),
+    EXPECT_THROW(realtime::sss_pass(bad, mats, sss_camera(w, h, SssEdgeMode::kNone)),
                  std::invalid_argument);
     bad = g;
     bad.view_z[static_cast<size_t>(w) + 1] = 0;
     bad.material[static_cast<size_t>(w) + 1] = 0;
-    EXPECT_THROW(realtime::sss_pass(bad, mats, camera(w, h, SssEdgeMode::kNone)),
+    EXPECT_THROW(realtime::sss_pass(bad, mats, sss_camera(w, h, SssEdgeMode::kNone)),
                  std::invalid_argument);
 }
 
@@ -492,16 +415,16 @@ TEST(SssPassRotate, ConstantIrradianceStaysConstant) {
                 sum[ch] += t.sign[ch] * ws * ws;
             }
         const ImageRGB e(w, h, 0.05, c);
-        for (SssEdgeMode mode : kModes)
+        for (SssEdgeMode mode : kSssEdgeModes)
             for (double jitter : {0.0, 0.33}) {
-                SssParams p = camera(w, h, mode);
+                SssParams p = sss_camera(w, h, mode);
                 p.jitter = jitter;
                 p.rotate = true;
-                const std::vector<float> out = realtime::sss_pass(from_image(e, z), {mk}, p);
+                const std::vector<float> out = realtime::sss_pass(flat_gbuffer(e, z), {mk}, p);
                 double worst = 0;
                 for (size_t i = 0; i < out.size(); ++i)
                     worst = std::max(worst, std::fabs(out[i] / (c * sum[i % 3]) - 1));
-                EXPECT_LT(worst, 1e-6) << m.name << " " << mode_name(mode) << " " << jitter;
+                EXPECT_LT(worst, 1e-6) << m.name << " " << edge_mode_name(mode) << " " << jitter;
             }
     }
 }
@@ -547,7 +470,7 @@ TEST(SssPassRotate, GaussianKernelIsUnchangedByRotation) {
     const int w = 64, h = 64;
     const double z = h, sf = 7.0, cx = 31.5, cy = 30.25;  // blob sigma in px
     for (double stretch : {1.0, 2.0}) {
-        SssParams p = camera(w, h, SssEdgeMode::kFollowSurface);
+        SssParams p = sss_camera(w, h, SssEdgeMode::kFollowSurface);
         p.aspect *= stretch;                   // pixels `stretch` times as wide as high
         const double pmm = pixel_mm(p, h, z);  // mm per pixel vertically
         const double sk = 2.0;                 // kernel sigma in vertical pixels
@@ -645,7 +568,7 @@ double axis_to_diagonal(const std::vector<float>& out, int w, int h, double cx, 
 TEST(SssPassRotate, RotationRemovesTheCrossPattern) {
     const int w = 96, h = 96;
     const double z = h, cx = 48, cy = 48;
-    const SssParams p0 = camera(w, h, SssEdgeMode::kNone);
+    const SssParams p0 = sss_camera(w, h, SssEdgeMode::kNone);
     const double pmm = pixel_mm(p0, h, z);
     const double s1 = 1.0, s2 = 6.0;  // px
     const SssMaterialKernel mk = taps_from_profile(
@@ -668,7 +591,7 @@ TEST(SssPassRotate, RotationRemovesTheCrossPattern) {
     double ratio[2] = {0, 0};
     for (int rotate = 0; rotate < 2; ++rotate)
         for (SssEdgeMode mode : {SssEdgeMode::kNone, SssEdgeMode::kFollowSurface}) {
-            SssParams p = camera(w, h, mode);
+            SssParams p = sss_camera(w, h, mode);
             p.rotate = rotate != 0;
             // With rotation, the mean over 16 seeds (one frame is noisy: see above).
             const std::vector<float> out =
@@ -679,7 +602,7 @@ TEST(SssPassRotate, RotationRemovesTheCrossPattern) {
             std::printf(
                 "  rotate %d, %-6s: axis / diagonal on r = 8.5..11.5 px: %.3f, energy "
                 "out / in = %.6f\n",
-                rotate, mode_name(mode), a, energy / in);
+                rotate, edge_mode_name(mode), a, energy / in);
             // A gather whose kernel turns from pixel to pixel keeps energy on average only.
             EXPECT_NEAR(energy / in, 1.0, rotate ? 1e-2 : 1e-5);
             if (mode == SssEdgeMode::kNone) ratio[rotate] = a;
@@ -699,7 +622,7 @@ TEST(SssPassRotate, BitIdenticalForOneAndTwoThreads) {
         realtime::make_material_kernel({&pre[0].kernel, &pre[1].kernel, &pre[2].kernel}, 17),
         realtime::make_material_kernel({&svd[0].kernel, &svd[1].kernel, &svd[2].kernel}, 11)};
     const int w = 53, h = 37;
-    SssGBuffer g = from_image(random_image(w, h, 1.0, 13), 1.0);
+    SssGBuffer g = flat_gbuffer(random_image(w, h, 1.0, 13), 1.0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const size_t i = static_cast<size_t>(y) * w + x;
@@ -707,9 +630,9 @@ TEST(SssPassRotate, BitIdenticalForOneAndTwoThreads) {
             g.material[i] =
                 (x - 26) * (x - 26) + (y - 18) * (y - 18) < 64 ? -1 : (y < h / 2 ? 0 : 1);
         }
-    for (SssEdgeMode mode : kModes)
+    for (SssEdgeMode mode : kSssEdgeModes)
         for (double jitter : {0.0, 0.33}) {
-            SssParams p = camera(w, h, mode);
+            SssParams p = sss_camera(w, h, mode);
             p.jitter = jitter;
             p.seed = 7;
             p.rotate = true;
@@ -718,7 +641,7 @@ TEST(SssPassRotate, BitIdenticalForOneAndTwoThreads) {
             tbb::task_arena(2).execute([&] { two = realtime::sss_pass(g, mats, p); });
             ASSERT_EQ(one.size(), two.size());
             EXPECT_EQ(std::memcmp(one.data(), two.data(), one.size() * sizeof(float)), 0)
-                << mode_name(mode) << " " << jitter;
+                << edge_mode_name(mode) << " " << jitter;
             for (size_t i = 0; i < g.pixels(); ++i) {
                 if (g.material[i] >= 0) continue;
                 for (int ch = 0; ch < 3; ++ch) EXPECT_EQ(one[3 * i + ch], g.irradiance[3 * i + ch]);
@@ -730,8 +653,8 @@ TEST(SssPassRotate, BitIdenticalForOneAndTwoThreads) {
             q.seed = 8;
             other_seed = realtime::sss_pass(g, mats, q);
             // Rotation changes the result, and the angles follow the seed.
-            EXPECT_GT(rel_diff(one, unrotated), 1e-4) << mode_name(mode) << " " << jitter;
-            EXPECT_GT(rel_diff(one, other_seed), 1e-4) << mode_name(mode) << " " << jitter;
+            EXPECT_GT(rel_diff(one, unrotated), 1e-4) << edge_mode_name(mode) << " " << jitter;
+            EXPECT_GT(rel_diff(one, other_seed), 1e-4) << edge_mode_name(mode) << " " << jitter;
         }
 }
 

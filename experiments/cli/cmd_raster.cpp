@@ -41,7 +41,7 @@ struct RasterArgs {
     int light_samples = 16, environment_samples = 64, shadow_map = 2048, environment_map = 512;
     double jitter = 0, follow_strength = -1, reject_depth = -1;
     int reference_samples = 256;
-    bool no_translucency = false;
+    bool no_translucency = false, rotate = false;
     double exposure = 0;
     std::string cache = "results";
     CommonOptions common;
@@ -77,6 +77,7 @@ std::string raster_toml(const RasterArgs& a, const Scene& scene, const realtime:
     st.record("follow_strength", o.sss.follow_strength);
     st.record("reject_depth", o.sss.reject_depth);
     st.record("jitter", o.sss.jitter);
+    st.record("rotate", std::string(o.sss.rotate ? "true" : "false"));
     st.record("width", static_cast<std::int64_t>(r.image.width()));
     st.record("height", static_cast<std::int64_t>(r.image.height()));
     st.record("supersample", static_cast<std::int64_t>(o.raster.supersample));
@@ -136,6 +137,7 @@ int run_raster(const RasterArgs& a) {
     o.sss.reject_depth =
         a.reject_depth >= 0 ? a.reject_depth : realtime::default_reject_depth(scene);
     o.sss.jitter = a.jitter;
+    o.sss.rotate = a.rotate;
     o.reference.samples = a.reference_samples;
     o.reference.seed = a.common.seed.value_or(1);
 
@@ -249,6 +251,9 @@ void register_raster(CLI::App& app, std::function<int()>& action) {
                     "Per-pixel jitter of the taps within their cells, as a fraction (0.33: "
                     "JimenezSupp Fig. S.6; default 0)")
         ->check(number_in(0, 1, false));
+    sub->add_flag("--rotate", a->rotate,
+                  "Rotate the SSS pass axes per pixel against the cross pattern of separable "
+                  "kernels (JimenezSupp Fig. S.7)");
     sub->add_option("--width", a->width, "Override the camera's width")
         ->check(integer_in(1, 16384));
     sub->add_option("--height", a->height, "Override the camera's height")

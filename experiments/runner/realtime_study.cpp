@@ -96,6 +96,7 @@ struct Score {
     std::string model, label;
     int taps = 0;
     double jitter = 0;
+    bool rotate = false;
     std::array<NoiseCorrectedRms, 3> vs_reference{}, vs_volpath{};
     double sss_ms = 0, frame_ms = 0, build_s = 0;
 };
@@ -213,6 +214,7 @@ RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_
             s.taps_sweep.push_back(static_cast<int>(x));
         }
     s.jitter = t.number("jitter", 0.33, Range::closed(0, 1));
+    s.rotate = t.boolean("rotate", false);
     s.width = static_cast<int>(t.integer("width", 512, Range::closed(0, 16384)));
     s.height = static_cast<int>(t.integer("height", 512, Range::closed(0, 16384)));
     if ((s.width == 0) != (s.height == 0))
@@ -246,7 +248,7 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
     table << "scene,model,label,taps,channel,pixels,rms_vs_reference,rms_vs_reference_se,"
              "norm_table,norm_scene,rel_rms_vs_reference,rms_vs_volpath,rms_vs_volpath_se,"
              "raw_rms_vs_volpath,volpath_noise_rms,sss_ms,frame_ms,kernel_build_s\n";
-    sweep << "scene,model,label,taps,jitter,rms_vs_reference_rgb,rms_vs_reference_rgb_se,"
+    sweep << "scene,model,label,taps,jitter,rotate,rms_vs_reference_rgb,rms_vs_reference_rgb_se,"
              "rms_vs_volpath_rgb,rms_vs_volpath_rgb_se,sss_ms,frame_ms\n";
     decomposition << "scene,channel,pixels,reference_signal_rms,separability_model,separability,"
                      "screen_space,screen_space_se,specular,specular_se,surfaces,surfaces_se,total,"
@@ -346,10 +348,11 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         realtime::LitFrame lit;
         arena.execute([&] { lit = realtime::light_frame(scene, frame, fo, slabs); });
         auto run = [&](const std::map<int, realtime::FrameMaterial>& k, realtime::SssMethod m,
-                       double jitter) {
+                       double jitter, bool rotate = false) {
             realtime::FrameOptions o = fo;
             o.method = m;
             o.sss.jitter = jitter;
+            o.sss.rotate = rotate;
             o.sss.seed = static_cast<std::uint32_t>(ctx.seed);
             realtime::FrameResult r;
             arena.execute([&] { r = realtime::render_frame(scene, frame, lit, k, o); });
@@ -432,17 +435,19 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         auto sweep_row = [&](const Score& sc) {
             const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
             sweep << scene.name << "," << csv_field(sc.model) << "," << sc.label << "," << sc.taps
-                  << "," << fmt(sc.jitter) << "," << fmt(ref_rgb.rms) << "," << fmt(ref_rgb.rms_se)
-                  << "," << fmt(vp_rgb.rms) << "," << fmt(vp_rgb.rms_se) << "," << fmt(sc.sss_ms)
-                  << "," << fmt(sc.frame_ms) << "\n";
+                  << "," << fmt(sc.jitter) << "," << (sc.rotate ? 1 : 0) << "," << fmt(ref_rgb.rms)
+                  << "," << fmt(ref_rgb.rms_se) << "," << fmt(vp_rgb.rms) << ","
+                  << fmt(vp_rgb.rms_se) << "," << fmt(sc.sss_ms) << "," << fmt(sc.frame_ms) << "\n";
         };
         for (const Score& sc : ss.scores) sweep_row(sc);
-        std::vector<double> jitters = {0.0};
-        if (spec.jitter > 0) jitters.push_back(spec.jitter);
+        // Variants of the sweep: (jitter, rotate).
+        std::vector<std::pair<double, bool>> variants = {{0.0, false}};
+        if (spec.jitter > 0) variants.push_back({spec.jitter, false});
+        if (spec.rotate) variants.push_back({0.0, true});
         for (const std::string& model : spec.sweep_models)
             for (int taps : spec.taps_sweep)
-                for (double jit : jitters) {
-                    if (taps == spec.taps && jit == 0.0 &&
+                for (const auto& [jit, rot] : variants) {
+                    if (taps == spec.taps && jit == 0.0 && !rot &&
                         std::find(spec.models.begin(), spec.models.end(), model) !=
                             spec.models.end())
                         continue;  // already a table row
@@ -451,9 +456,10 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                     sc.label = approx::parse_model(model).label();
                     sc.taps = taps;
                     sc.jitter = jit;
-                    score_frame(
-                        run(kernels_of(model, taps, false), realtime::SssMethod::kSeparable, jit),
-                        sc);
+                    sc.rotate = rot;
+                    score_frame(run(kernels_of(model, taps, false), realtime::SssMethod::kSeparable,
+                                    jit, rot),
+                                sc);
                     sweep_row(sc);
                 }
 
@@ -653,7 +659,9 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                    "separability error), right against the path tracer (noise-corrected, error "
                    "bars +-1 standard error). A line per swept model through its tap counts "
                    "(points labelled by taps), solid without jitter, dashed with jitter "
-                << fmt(spec.jitter, 3) << "; the table's models of one family at " << spec.taps
+                << fmt(spec.jitter, 3)
+                << (spec.rotate ? ", dash-dotted with the pass axes rotated per pixel" : "")
+                << "; the table's models of one family at " << spec.taps
                 << " taps (SVD ranks, d'Eon's numbers of Gaussians) joined by a dotted line, "
                    "points labelled by that parameter; other models as single markers.";
         plot_requests.push_back(
@@ -709,8 +717,9 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
               "screen-space assumption, lighting, total");
     html << "<h3 id=\"realtime-time\">Error against time</h3>\n<p>Every model of the "
             "table at "
-         << spec.taps
-         << " taps, and the swept models over their tap counts with and without jitter: the "
+         << spec.taps << " taps, and the swept models over their tap counts with and without jitter"
+         << (spec.rotate ? " and with rotated pass axes" : "")
+         << ": the "
             "error against the time the SSS pass took, per scene (the frame times are in the "
             "table). Table: <a "
             "href=\"realtime/error_vs_time.csv\">realtime/error_vs_time.csv</a>.</p>\n";

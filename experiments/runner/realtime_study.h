@@ -59,6 +59,9 @@ struct RealtimeStudySpec {
     std::vector<std::string> sweep_models;
     std::vector<int> taps_sweep;
     double jitter = 0.33;
+    /// The sweep also runs every tap count with the pass axes rotated per pixel
+    /// (SssParams::rotate, JimenezSupp Fig. S.7), without jitter.
+    bool rotate = false;
     int width = 512, height = 512;
     std::string edge = "follow";
     std::int64_t spp = 252;
