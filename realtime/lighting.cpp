@@ -272,19 +272,9 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     // raster frame (a few dozen flops against ~100 bytes a sample of memory traffic), and only
     // its kind is kept.
     std::vector<Kind> kind(N, Kind::kNone);
-    // The camera rays of RasterCamera::ray_direction, its ndc coordinates computed once per
-    // column and row (the same expressions: the same directions to the bit).
-    std::vector<double> ndc_x(static_cast<std::size_t>(W)), ndc_y(static_cast<std::size_t>(H));
-    for (int sx = 0; sx < W; ++sx)
-        ndc_x[static_cast<std::size_t>(sx)] =
-            (2 * ((sx + 0.5) / ss) / camera.width - 1) * camera.tan_half * camera.aspect;
-    for (int sy = 0; sy < H; ++sy)
-        ndc_y[static_cast<std::size_t>(sy)] =
-            (1 - 2 * ((sy + 0.5) / ss) / camera.height) * camera.tan_half;
-    auto ray = [&](int sx, int sy) {
-        return normalize(camera.forward + camera.right * ndc_x[static_cast<std::size_t>(sx)] +
-                         camera.up * ndc_y[static_cast<std::size_t>(sy)]);
-    };
+    // The camera rays of RasterCamera::ray_direction, to the bit.
+    const RasterCamera::SampleRays rays = camera.sample_rays(ss);
+    auto ray = [&](int sx, int sy) { return rays.direction(sx, sy); };
     // Facet normals as volpath/embree_scene.cpp computes them (double precision), once per
     // triangle rather than once per sample and light.
     std::vector<std::vector<Vec3>> facet(scene.shapes.size());
@@ -318,6 +308,32 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         r.ns = r.kind == Kind::kDiffuse && dot(r.n, r.wo) < 0 ? -r.n : r.n;
         return r;
     };
+    // The nearest sphere light along from + t d (t in tl; nullptr and inf if none), and what a ray
+    // that meets no geometry sees: the environment and the suns' discs.
+    auto nearest_sphere = [&](const Vec3& from, const Vec3& d, double& tl) {
+        const SceneLight* hit = nullptr;
+        tl = kInf;
+        for (const SceneLight& l : scene.lights)
+            if (l.type == LightType::kSphere) {
+                const double t = hit_sphere(from, d, l.position, l.radius);
+                if (t < tl) tl = t, hit = &l;
+            }
+        return hit;
+    };
+    auto sky = [&](const Vec3& d) {
+        RGB L{};
+        for (const SceneLight& l : scene.lights) {
+            if (l.type == LightType::kEnvironment)
+                for (std::size_t c = 0; c < 3; ++c) L[c] += l.color[c];
+            if (l.type == LightType::kDirectional && l.angular_radius_deg > 0) {
+                const double a = l.angular_radius_deg * kPi / 180;
+                if (dot(d, l.direction) >= std::cos(a))
+                    for (std::size_t c = 0; c < 3; ++c)
+                        L[c] += l.color[c] / (kPi * std::sin(a) * std::sin(a));
+            }
+        }
+        return L;
+    };
     const Box receivers = tbb::parallel_reduce(
         tbb::blocked_range<int>(0, H), Box{},
         [&](const tbb::blocked_range<int>& rows, Box box) {
@@ -330,27 +346,12 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                     // Sphere lights are not rasterized (nor in volpath's BVH): the nearest in
                     // front.
                     double tl = kInf;
-                    const SceneLight* hit_light = nullptr;
-                    for (const SceneLight& l : scene.lights)
-                        if (l.type == LightType::kSphere) {
-                            const double t = hit_sphere(camera.position, d, l.position, l.radius);
-                            if (t < tl) tl = t, hit_light = &l;
-                        }
+                    const SceneLight* hit_light = nearest_sphere(camera.position, d, tl);
                     RGB surf{};
-                    if (hit_light && tl < t_geo) {
+                    if (hit_light && tl < t_geo)
                         surf = hit_light->color;
-                    } else if (s < 0) {
-                        for (const SceneLight& l : scene.lights) {
-                            if (l.type == LightType::kEnvironment)
-                                for (std::size_t c = 0; c < 3; ++c) surf[c] += l.color[c];
-                            if (l.type == LightType::kDirectional && l.angular_radius_deg > 0) {
-                                const double a = l.angular_radius_deg * kPi / 180;
-                                if (dot(d, l.direction) >= std::cos(a))
-                                    for (std::size_t c = 0; c < 3; ++c)
-                                        surf[c] += l.color[c] / (kPi * std::sin(a) * std::sin(a));
-                            }
-                        }
-                    }
+                    else if (s < 0)
+                        surf = sky(d);
                     for (std::size_t c = 0; c < 3; ++c) {
                         g.surface[3 * i + c] = static_cast<float>(surf[c]);
                         g.normal[3 * i + c] = 0.f;
@@ -397,27 +398,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                         const Vec3 rd = r.n * (2 * dot(r.n, r.wo)) - r.wo;
                         const double F = dielectric::fresnel_dielectric(dot(r.n, r.wo), T.eta());
                         double tb = kInf;
-                        const SceneLight* sl = nullptr;
-                        for (const SceneLight& l : scene.lights)
-                            if (l.type == LightType::kSphere) {
-                                const double t = hit_sphere(r.p, rd, l.position, l.radius);
-                                if (t < tb) tb = t, sl = &l;
-                            }
-                        RGB Lr{};
-                        if (sl) {
-                            Lr = sl->color;
-                        } else {
-                            for (const SceneLight& l : scene.lights) {
-                                if (l.type == LightType::kEnvironment)
-                                    for (std::size_t c = 0; c < 3; ++c) Lr[c] += l.color[c];
-                                if (l.type == LightType::kDirectional && l.angular_radius_deg > 0) {
-                                    const double a = l.angular_radius_deg * kPi / 180;
-                                    if (dot(rd, l.direction) >= std::cos(a))
-                                        for (std::size_t c = 0; c < 3; ++c)
-                                            Lr[c] += l.color[c] / (kPi * std::sin(a) * std::sin(a));
-                                }
-                            }
-                        }
+                        const SceneLight* sl = nearest_sphere(r.p, rd, tb);
+                        const RGB Lr = sl ? sl->color : sky(rd);
                         for (std::size_t c = 0; c < 3; ++c)
                             g.specular[3 * i + c] = static_cast<float>(F * Lr[c]);
                     }

@@ -282,6 +282,17 @@ Vec3 RasterCamera::ray_direction(double px, double py) const {
     return normalize(forward + right * ndc_x + up * ndc_y);
 }
 
+RasterCamera::SampleRays RasterCamera::sample_rays(int ss) const {
+    SampleRays r{forward, right, up, std::vector<double>(static_cast<std::size_t>(width) * ss),
+                 std::vector<double>(static_cast<std::size_t>(height) * ss)};
+    // The expressions of ray_direction with px = (sx + 1/2) / s, py = (sy + 1/2) / s.
+    for (std::size_t sx = 0; sx < r.ndc_x.size(); ++sx)
+        r.ndc_x[sx] = (2 * ((static_cast<double>(sx) + 0.5) / ss) / width - 1) * tan_half * aspect;
+    for (std::size_t sy = 0; sy < r.ndc_y.size(); ++sy)
+        r.ndc_y[sy] = (1 - 2 * ((static_cast<double>(sy) + 0.5) / ss) / height) * tan_half;
+    return r;
+}
+
 double RasterCamera::ray_length_per_depth(double px, double py) const {
     const double ndc_x = (2 * px / width - 1) * tan_half * aspect;
     const double ndc_y = (1 - 2 * py / height) * tan_half;
@@ -387,15 +398,7 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
 
     // Ray distances per sample, box-filtered pixels.
     const int ss = o.supersample;
-    // RasterCamera::ray_length_per_depth's ndc coordinates, once per column and row (the same
-    // expressions: the same lengths to the bit).
-    std::vector<double> ndc_x(static_cast<std::size_t>(ws)), ndc_y(static_cast<std::size_t>(hs));
-    for (int sx = 0; sx < ws; ++sx)
-        ndc_x[static_cast<std::size_t>(sx)] =
-            (2 * ((sx + 0.5) / ss) / camera.width - 1) * camera.tan_half * camera.aspect;
-    for (int sy = 0; sy < hs; ++sy)
-        ndc_y[static_cast<std::size_t>(sy)] =
-            (1 - 2 * ((sy + 0.5) / ss) / camera.height) * camera.tan_half;
+    const RasterCamera::SampleRays rays = camera.sample_rays(ss);
     // Every entry is written below.
     f.coverage.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
     f.depth.resize(f.coverage.size());
@@ -412,12 +415,7 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
                         continue;
                     }
                     f.ray_t[k] =
-                        o.orthographic
-                            ? f.view_z[k]
-                            : f.view_z[k] *
-                                  length(camera.forward +
-                                         camera.right * ndc_x[static_cast<std::size_t>(sx)] +
-                                         camera.up * ndc_y[static_cast<std::size_t>(sy)]);
+                        o.orthographic ? f.view_z[k] : f.view_z[k] * rays.length_per_depth(sx, sy);
                     ++covered;
                     sum_t += f.ray_t[k];
                 }

@@ -52,6 +52,21 @@ struct RasterCamera {
     Vec3 ray_direction(double px, double py) const;
     /// Ray distance over view depth at raster point (px, py): |forward + right nx + up ny|.
     double ray_length_per_depth(double px, double py) const;
+
+    /// The rays through the samples of an s x s supersampled frame of this camera, their ndc
+    /// coordinates computed once per column and row: direction(sx, sy) is
+    /// ray_direction((sx + 1/2) / s, (sy + 1/2) / s) and length_per_depth likewise, to the bit.
+    struct SampleRays {
+        Vec3 forward, right, up;
+        std::vector<double> ndc_x, ndc_y;  ///< per sample column, per sample row
+        Vec3 direction(int sx, int sy) const { return normalize(unnormalized(sx, sy)); }
+        double length_per_depth(int sx, int sy) const { return length(unnormalized(sx, sy)); }
+        Vec3 unnormalized(int sx, int sy) const {
+            return forward + right * ndc_x[static_cast<std::size_t>(sx)] +
+                   up * ndc_y[static_cast<std::size_t>(sy)];
+        }
+    };
+    SampleRays sample_rays(int supersample) const;
 };
 
 /// One mesh to draw: clip-space vertices and triangles (counter-clockwise seen from the front).

@@ -131,6 +131,40 @@ constexpr size_t kChunk = 32;
 typedef float F8 __attribute__((vector_size(32)));
 typedef int32_t I8 __attribute__((vector_size(32)));
 
+// One tap of the fast loops: both texels (q0 | q1) at tc + rel with weights (1 - a1, a1), the
+// follow-surface share to the centre in `ex` [Freude14 Eq. 4.12: s = min(1, follow |z - z_c|)
+// per texel], the weighted texels in `ac`.
+template <bool Follow>
+__attribute__((always_inline)) inline void fast_tap(const F4* tc, int rel, float a1, const F8& zc8,
+                                                    const F8& follow8, const F8& one8, const F4& w,
+                                                    F4& ac, F4& ex) {
+    F8 q;
+    std::memcpy(&q, tc + rel, sizeof q);  // (q0 | q1)
+    const float a0 = 1 - a1;
+    F8 a = {a0, a0, a0, a0, a1, a1, a1, a1};
+    if constexpr (Follow) {
+        const F8 z = __builtin_shufflevector(q, q, 3, 3, 3, 3, 7, 7, 7, 7);
+        F8 k = z - zc8;
+        I8 bits;
+        std::memcpy(&bits, &k, sizeof bits);
+        bits &= 0x7fffffff;
+        std::memcpy(&k, &bits, sizeof k);
+        k = follow8 * k;
+        const F8 t = k < one8 ? k : one8;  // NaN and inf: 1, as std::min(1, k)
+        const F8 bb = a * t;
+        a *= one8 - t;
+        const F4 b4 = __builtin_shufflevector(bb, bb, 0, 1, 2, 3) +
+                      __builtin_shufflevector(bb, bb, 4, 5, 6, 7);
+        ex += w * b4;
+    } else {
+        (void)zc8;
+        (void)ex;
+    }
+    const F8 pq = a * q;
+    ac += w * (__builtin_shufflevector(pq, pq, 0, 1, 2, 3) +
+               __builtin_shufflevector(pq, pq, 4, 5, 6, 7));
+}
+
 template <bool Follow>
 __attribute__((always_inline)) inline F4 fast_pixel_body(const F4* tc, int pos, const double* off,
                                                          const F4* wt, size_t count, double scale,
@@ -151,33 +185,7 @@ __attribute__((always_inline)) inline F4 fast_pixel_body(const F4* tc, int pos, 
             a1s[j] = static_cast<float>(sp - i0);
         }
         auto tap = [&](size_t j, F4 & ac, F4 & ex) __attribute__((always_inline)) {
-            F8 q;
-            std::memcpy(&q, tc + rel[j], sizeof q);  // (q0 | q1)
-            const float a1 = a1s[j], a0 = 1 - a1;
-            F8 a = {a0, a0, a0, a0, a1, a1, a1, a1};
-            const F4 w = wt[begin + j];
-            if constexpr (Follow) {
-                // [Freude14 Eq. 4.12]: s = min(1, follow |z - z_c|) per texel, its share to
-                // the centre.
-                const F8 z = __builtin_shufflevector(q, q, 3, 3, 3, 3, 7, 7, 7, 7);
-                F8 k = z - zc8;
-                I8 bits;
-                std::memcpy(&bits, &k, sizeof bits);
-                bits &= 0x7fffffff;
-                std::memcpy(&k, &bits, sizeof k);
-                k = follow8 * k;
-                const F8 t = k < one8 ? k : one8;  // NaN and inf: 1, as std::min(1, k)
-                const F8 bb = a * t;
-                a *= one8 - t;
-                const F4 b4 = __builtin_shufflevector(bb, bb, 0, 1, 2, 3) +
-                              __builtin_shufflevector(bb, bb, 4, 5, 6, 7);
-                ex += w * b4;
-            } else {
-                (void)ex;
-            }
-            const F8 pq = a * q;
-            ac += w * (__builtin_shufflevector(pq, pq, 0, 1, 2, 3) +
-                       __builtin_shufflevector(pq, pq, 4, 5, 6, 7));
+            fast_tap<Follow>(tc, rel[j], a1s[j], zc8, follow8, one8, wt[begin + j], ac, ex);
         };
         size_t j = 0;
         for (; j + 1 < m; j += 2) {
@@ -218,31 +226,7 @@ __attribute__((always_inline)) inline void fast_pair_body(const F4* tca, int pa,
         }
         auto tap = [&](const F4* tc, int rel, float a1, const F8& zc8, const F4& w, F4& ac, F4& ex)
             __attribute__((always_inline)) {
-            F8 q;
-            std::memcpy(&q, tc + rel, sizeof q);  // (q0 | q1)
-            const float a0 = 1 - a1;
-            F8 a = {a0, a0, a0, a0, a1, a1, a1, a1};
-            if constexpr (Follow) {
-                const F8 z = __builtin_shufflevector(q, q, 3, 3, 3, 3, 7, 7, 7, 7);
-                F8 k = z - zc8;
-                I8 bits;
-                std::memcpy(&bits, &k, sizeof bits);
-                bits &= 0x7fffffff;
-                std::memcpy(&k, &bits, sizeof k);
-                k = follow8 * k;
-                const F8 t = k < one8 ? k : one8;  // NaN and inf: 1, as std::min(1, k)
-                const F8 bb = a * t;
-                a *= one8 - t;
-                const F4 b4 = __builtin_shufflevector(bb, bb, 0, 1, 2, 3) +
-                              __builtin_shufflevector(bb, bb, 4, 5, 6, 7);
-                ex += w * b4;
-            } else {
-                (void)zc8;
-                (void)ex;
-            }
-            const F8 pq = a * q;
-            ac += w * (__builtin_shufflevector(pq, pq, 0, 1, 2, 3) +
-                       __builtin_shufflevector(pq, pq, 4, 5, 6, 7));
+            fast_tap<Follow>(tc, rel, a1, zc8, follow8, one8, w, ac, ex);
         };
         size_t j = 0;
         for (; j + 1 < m; j += 2) {
