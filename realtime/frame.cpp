@@ -221,11 +221,17 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const
         used.push_back(&it->second);
     }
     const size_t n = g.samples();
-    SssGBuffer sg;
+    // The pass's inputs and output: scratch of the calling thread, kept between frames (fresh
+    // 1080p arrays would fault in 64 MB of pages a frame). The result does not depend on it.
+    // (References: the composite's worker threads must see this thread's arrays, not theirs.)
+    static thread_local SssGBuffer scratch_g;
+    static thread_local std::vector<float> scratch_out;
+    SssGBuffer& sg = scratch_g;
+    std::vector<float>& scattered = scratch_out;
     sg.width = g.width;
     sg.height = g.height;
-    sg.irradiance = g.irradiance;
-    sg.view_z = g.view_z;
+    sg.irradiance.assign(g.irradiance.begin(), g.irradiance.end());
+    sg.view_z.assign(g.view_z.begin(), g.view_z.end());
     sg.material.assign(n, -1);
     bool any_medium = false;
     for (size_t i = 0; i < n; ++i) {
@@ -238,7 +244,7 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const
     p.tan_half = frame.camera.tan_half;
     p.aspect = frame.camera.aspect;
     p.unit_mm = scene.unit_mm;
-    std::vector<float> scattered, scattered_se;
+    std::vector<float> scattered_se;
     const bool run = any_medium && o.method != SssMethod::kNone;
     std::vector<SssMaterialKernel> taps;
     std::vector<SssExactKernel> exact;
@@ -255,9 +261,9 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const
     }
     auto t0 = Clock::now();  // the pass alone: its inputs are ready, as on a GPU
     if (!run) {
-        scattered = sg.irradiance;  // nothing to scatter: the pass is not run
+        scattered.assign(sg.irradiance.begin(), sg.irradiance.end());  // no pass to run
     } else if (o.method == SssMethod::kSeparable) {
-        scattered = sss_pass(sg, taps, p);
+        sss_pass(sg, taps, p, scattered);
     } else {
         SssReferenceResult r = sss_reference(sg, exact, p, o.reference);
         scattered = std::move(r.irradiance);

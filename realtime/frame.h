@@ -24,6 +24,10 @@
 // the samples' facet normals) -- plus irradiance (RGB, before the SSS pass), surface (RGB),
 // translucency (RGB exitance), material (Y: the scene material index of most of the pixel's
 // samples, -1 for none) and, for the reference's sampled pixels, subsurface.stderr (RGB).
+//
+// Scratch: the SSS pass's inputs and output, the shadow maps and their band frames are kept per
+// calling thread between frames (no result depends on them). Frames are therefore rendered one
+// at a time per thread: never start a frame from inside another frame's parallel work.
 #pragma once
 
 #include "approx/model_spec.h"

@@ -85,7 +85,7 @@ enum class Kind : std::uint8_t { kNone, kDiffuse, kMedium };
 struct Receiver {
     Vec3 p, n;  // position, outward facet normal
     Vec3 ns;    // shading normal: diffuse towards the camera, medium the outward one
-    Vec3 wo;    // towards the camera
+    Vec3 wo;    // towards the camera: unit for media; diffuse receivers use only its side
     Kind kind = Kind::kNone;
     int shape = -1, material = -1;
 };
@@ -291,7 +291,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                               }
                           });
     }
-    auto receiver_at = [&](std::size_t i, const Vec3& d) {
+    auto receiver_at = [&](std::size_t i, const Vec3& d /* unit for a medium */) {
         Receiver r;
         const int s = frame.shape[i];
         const SceneShape& sh = scene.shapes[static_cast<std::size_t>(s)];
@@ -307,6 +307,12 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         r.kind = kind[i];
         r.ns = r.kind == Kind::kDiffuse && dot(r.n, r.wo) < 0 ? -r.n : r.n;
         return r;
+    };
+    // The receiver of sample (sx, sy) of a light pass: the camera ray normalized only where
+    // its length matters (a medium's boundary terms).
+    auto receiver_at_sample = [&](std::size_t i, int sx, int sy) {
+        return receiver_at(
+            i, kind[i] == Kind::kMedium ? rays.direction(sx, sy) : rays.unnormalized(sx, sy));
     };
     // The nearest sphere light along from + t d (t in tl; nullptr and inf if none), and what a ray
     // that meets no geometry sees: the environment and the suns' discs.
@@ -334,14 +340,25 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         }
         return L;
     };
+    const bool any_sphere =
+        std::any_of(scene.lights.begin(), scene.lights.end(),
+                    [](const SceneLight& l) { return l.type == LightType::kSphere; });
     const Box receivers = tbb::parallel_reduce(
         tbb::blocked_range<int>(0, H), Box{},
         [&](const tbb::blocked_range<int>& rows, Box box) {
             for (int sy = rows.begin(); sy != rows.end(); ++sy)
                 for (int sx = 0; sx < W; ++sx) {
                     const std::size_t i = frame.sample_index(sx, sy);
-                    const Vec3 d = ray(sx, sy);
                     const int s = frame.shape[i];
+                    const bool medium =
+                        s >= 0 &&
+                        scene.materials[static_cast<std::size_t>(
+                                            scene.shapes[static_cast<std::size_t>(s)].material)]
+                                .kind == SceneMaterial::Kind::kMedium;
+                    // The unit ray where its length matters (sphere lights, what the sky shows,
+                    // a medium's boundary); a diffuse receiver uses only its side.
+                    const Vec3 d =
+                        any_sphere || s < 0 || medium ? ray(sx, sy) : rays.unnormalized(sx, sy);
                     const double t_geo = s >= 0 ? frame.ray_t[i] : kInf;
                     // Sphere lights are not rasterized (nor in volpath's BVH): the nearest in
                     // front.
@@ -575,7 +592,11 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     };
 
     const double near = 1e-6 * scene_size;
-    ShadowMap sm;  // one map at a time, its storage reused from map to map
+    // One map at a time, its storage reused from map to map and from frame to frame (scratch
+    // of the calling thread; the result does not depend on it).
+    // (A reference: the light passes' worker threads must see this thread's map, not theirs.)
+    static thread_local ShadowMap scratch_map;
+    ShadowMap& sm = scratch_map;
     double shadow_ms = 0;
     int maps = 0;
     for (const LightSample& s : samples) {
@@ -584,8 +605,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
             [&](const tbb::blocked_range<std::size_t>& br, bool acc) {
                 for (std::size_t i = br.begin(); i != br.end() && !acc; ++i)
                     if (kind[i] != Kind::kNone)
-                        acc = reaches(s, receiver_at(i, ray(static_cast<int>(i % W),
-                                                            static_cast<int>(i / W))));
+                        acc = reaches(s, receiver_at_sample(i, static_cast<int>(i % W),
+                                                            static_cast<int>(i / W)));
                 return acc;
             },
             [](bool a, bool b) { return a || b; });
@@ -609,90 +630,96 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                 ++maps;
             }
             tbb::parallel_for(
-                tbb::blocked_range<std::size_t>(0, N, 1024),
-                [&](const tbb::blocked_range<std::size_t>& br) {
-                    for (std::size_t i = br.begin(); i != br.end(); ++i) {
-                        if (kind[i] == Kind::kNone) continue;
-                        const Receiver r =
-                            receiver_at(i, ray(static_cast<int>(i % W), static_cast<int>(i / W)));
-                        // Cube faces: a receiver belongs to the first face it projects into.
-                        auto in_view = [&](const ShadowView& v) {
-                            const ClipVertex c = v.to_clip(r.p);
-                            if (v.orthographic) return true;
-                            return c.w > 0 && std::abs(c.x) <= c.w && std::abs(c.y) <= c.w;
-                        };
-                        if (views.size() > 1) {
-                            if (!in_view(views[vi])) continue;
-                            bool earlier = false;
-                            for (std::size_t k = 0; k < vi && !earlier; ++k)
-                                earlier = in_view(views[k]);
-                            if (earlier) continue;
-                        }
-                        Vec3 wi;
-                        RGB E;
-                        if (!incident(s, r.p, wi, E)) continue;
-                        const double cs = dot(r.ns, wi);
-                        // Thickness along the light's ray from the map's first hit, if that is the
-                        // receiver's own shape [Jimenez10].
-                        double d_thick = -1;
-                        if (r.kind == Kind::kMedium && need_map &&
-                            (s.thickness_view || (cs < 0 && slab_of(r.material)))) {
-                            const ShadowMap::Lookup lk = sm.lookup(r.p);
-                            if (lk.inside && lk.shape == r.shape && std::isfinite(lk.map_depth))
-                                d_thick = std::max(0.0, lk.point_depth - lk.map_depth_smooth) *
-                                          lk.distance_per_depth;
-                        }
-                        if (s.thickness_view)
-                            g.thickness[i] = static_cast<float>(std::max(0.0, d_thick));
-                        if (!s.lights) continue;
-                        if (cs > 0) {
-                            bool lit = true;
-                            if (o.shadows) {
-                                const ShadowView& v = views[vi];
-                                // texel_size at the point's depth (to_clip(p).w).
-                                const double texel = v.texel_size(
-                                    v.orthographic ? 0.0 : dot(r.p - v.origin, v.forward));
-                                const Vec3 nl = dot(r.n, wi) >= 0 ? r.n : -r.n;
-                                const ShadowMap::Lookup lk =
-                                    sm.lookup(r.p + nl * (o.normal_offset_texels * texel), false);
-                                lit = !lk.inside ||
-                                      lk.point_depth <= lk.map_depth + o.depth_bias_texels * texel;
+                tbb::blocked_range<int>(0, H, std::max(1, 1024 / W)),
+                [&](const tbb::blocked_range<int>& rows) {
+                    for (int sy = rows.begin(); sy != rows.end(); ++sy)
+                        for (int sx = 0; sx < W; ++sx) {
+                            const std::size_t i = frame.sample_index(sx, sy);
+                            if (kind[i] == Kind::kNone) continue;
+                            const Receiver r = receiver_at_sample(i, sx, sy);
+                            // Cube faces: a receiver belongs to the first face it projects into.
+                            auto in_view = [&](const ShadowView& v) {
+                                const ClipVertex c = v.to_clip(r.p);
+                                if (v.orthographic) return true;
+                                return c.w > 0 && std::abs(c.x) <= c.w && std::abs(c.y) <= c.w;
+                            };
+                            if (views.size() > 1) {
+                                if (!in_view(views[vi])) continue;
+                                bool earlier = false;
+                                for (std::size_t k = 0; k < vi && !earlier; ++k)
+                                    earlier = in_view(views[k]);
+                                if (earlier) continue;
                             }
-                            if (!lit || (!spheres.empty() && behind_sphere(s, r.p, wi))) continue;
-                            if (r.kind == Kind::kDiffuse) {
-                                const auto& alb =
-                                    scene.materials[static_cast<std::size_t>(r.material)].albedo;
-                                for (std::size_t c = 0; c < 3; ++c)
-                                    g.surface[3 * i + c] +=
-                                        static_cast<float>(alb[c] / kPi * E[c] * cs);
-                            } else {
-                                const BoundaryTransmittance& T =
-                                    *mat_T[static_cast<std::size_t>(r.material)];
-                                const double t = T(cs);
-                                for (std::size_t c = 0; c < 3; ++c)
-                                    g.irradiance[3 * i + c] += static_cast<float>(t * E[c] * cs);
-                                if (T.alpha() > 0) {
-                                    Vec3 bs, bt;
-                                    basis(r.n, bs, bt);
-                                    auto local = [&](const Vec3& v) {
-                                        return Vec3{dot(v, bs), dot(v, bt), dot(v, r.n)};
-                                    };
-                                    const double f = dielectric::rough_dielectric_f(
-                                        local(r.wo), local(wi), T.eta(), T.alpha(),
-                                        dielectric::TransportMode::kRadiance);
+                            Vec3 wi;
+                            RGB E;
+                            if (!incident(s, r.p, wi, E)) continue;
+                            const double cs = dot(r.ns, wi);
+                            // Thickness along the light's ray from the map's first hit, if that is
+                            // the receiver's own shape [Jimenez10].
+                            double d_thick = -1;
+                            if (r.kind == Kind::kMedium && need_map &&
+                                (s.thickness_view || (cs < 0 && slab_of(r.material)))) {
+                                const ShadowMap::Lookup lk = sm.lookup(r.p);
+                                if (lk.inside && lk.shape == r.shape && std::isfinite(lk.map_depth))
+                                    d_thick = std::max(0.0, lk.point_depth - lk.map_depth_smooth) *
+                                              lk.distance_per_depth;
+                            }
+                            if (s.thickness_view)
+                                g.thickness[i] = static_cast<float>(std::max(0.0, d_thick));
+                            if (!s.lights) continue;
+                            if (cs > 0) {
+                                bool lit = true;
+                                if (o.shadows) {
+                                    const ShadowView& v = views[vi];
+                                    // texel_size at the point's depth (to_clip(p).w).
+                                    const double texel = v.texel_size(
+                                        v.orthographic ? 0.0 : dot(r.p - v.origin, v.forward));
+                                    const Vec3 nl = dot(r.n, wi) >= 0 ? r.n : -r.n;
+                                    const ShadowMap::Lookup lk = sm.lookup(
+                                        r.p + nl * (o.normal_offset_texels * texel), false);
+                                    lit = !lk.inside ||
+                                          lk.point_depth <=
+                                              lk.map_depth + o.depth_bias_texels * texel;
+                                }
+                                if (!lit || (!spheres.empty() && behind_sphere(s, r.p, wi)))
+                                    continue;
+                                if (r.kind == Kind::kDiffuse) {
+                                    const auto& alb =
+                                        scene.materials[static_cast<std::size_t>(r.material)]
+                                            .albedo;
                                     for (std::size_t c = 0; c < 3; ++c)
-                                        g.specular[3 * i + c] += static_cast<float>(f * cs * E[c]);
+                                        g.surface[3 * i + c] +=
+                                            static_cast<float>(alb[c] / kPi * E[c] * cs);
+                                } else {
+                                    const BoundaryTransmittance& T =
+                                        *mat_T[static_cast<std::size_t>(r.material)];
+                                    const double t = T(cs);
+                                    for (std::size_t c = 0; c < 3; ++c)
+                                        g.irradiance[3 * i + c] +=
+                                            static_cast<float>(t * E[c] * cs);
+                                    if (T.alpha() > 0) {
+                                        Vec3 bs, bt;
+                                        basis(r.n, bs, bt);
+                                        auto local = [&](const Vec3& v) {
+                                            return Vec3{dot(v, bs), dot(v, bt), dot(v, r.n)};
+                                        };
+                                        const double f = dielectric::rough_dielectric_f(
+                                            local(r.wo), local(wi), T.eta(), T.alpha(),
+                                            dielectric::TransportMode::kRadiance);
+                                        for (std::size_t c = 0; c < 3; ++c)
+                                            g.specular[3 * i + c] +=
+                                                static_cast<float>(f * cs * E[c]);
+                                    }
+                                }
+                            } else if (r.kind == Kind::kMedium && d_thick >= 0) {
+                                if (const SlabTransmittance* st = slab_of(r.material)) {
+                                    const auto Ts = st->at(d_thick * scene.unit_mm);
+                                    for (std::size_t c = 0; c < 3; ++c)
+                                        g.translucency[3 * i + c] +=
+                                            static_cast<float>(E[c] * (-cs) * Ts[c]);
                                 }
                             }
-                        } else if (r.kind == Kind::kMedium && d_thick >= 0) {
-                            if (const SlabTransmittance* st = slab_of(r.material)) {
-                                const auto Ts = st->at(d_thick * scene.unit_mm);
-                                for (std::size_t c = 0; c < 3; ++c)
-                                    g.translucency[3 * i + c] +=
-                                        static_cast<float>(E[c] * (-cs) * Ts[c]);
-                            }
                         }
-                    }
                 });
         }
     }

@@ -728,6 +728,13 @@ void rotated_pass(const SssGBuffer& g, const std::vector<std::vector<PreparedTer
 
 std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
                             const SssParams& p) {
+    std::vector<float> out;
+    sss_pass(g, materials, p, out);
+    return out;
+}
+
+void sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
+              const SssParams& p, std::vector<float>& out) {
     check_arrays(g, materials, p);
     const int w = g.width, h = g.height;
     const bool jitter = p.jitter > 0;
@@ -786,11 +793,11 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
     const Extent ext = scan_pixels(g, materials, reach_mm, px_per_mm_z, py_per_mm_z);
 
     // The output starts as the input (what material -1 keeps).
-    std::vector<float> out(g.irradiance);
-    if (ext.x0 > ext.x1) return out;  // no medium pixel
+    out.assign(g.irradiance.begin(), g.irradiance.end());
+    if (ext.x0 > ext.x1) return;  // no medium pixel
     if (p.rotate) {
         rotated_pass(g, prep, rank, p, lp, px_per_mm_z, py_per_mm_z, out);
-        return out;
+        return;
     }
 
     // One 1D pass of term k at positions [begin, end) of a line of len texels, materials at
@@ -937,7 +944,6 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
                 }
             });
     }
-    return out;
 }
 
 }  // namespace ssslab::realtime

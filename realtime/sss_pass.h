@@ -132,5 +132,8 @@ struct SssParams {
 /// medium pixel of non-positive or non-finite depth, or bad parameters.
 std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
                             const SssParams& p);
+/// The same into `out`, whose storage is reused when the size is unchanged.
+void sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
+              const SssParams& p, std::vector<float>& out);
 
 }  // namespace ssslab::realtime
