@@ -274,7 +274,6 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     std::vector<Kind> kind(N, Kind::kNone);
     // The camera rays of RasterCamera::ray_direction, to the bit.
     const RasterCamera::SampleRays rays = camera.sample_rays(ss);
-    auto ray = [&](int sx, int sy) { return rays.direction(sx, sy); };
     // Facet normals as volpath/embree_scene.cpp computes them (double precision), once per
     // triangle rather than once per sample and light.
     std::vector<std::vector<Vec3>> facet(scene.shapes.size());
@@ -350,53 +349,49 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                 for (int sx = 0; sx < W; ++sx) {
                     const std::size_t i = frame.sample_index(sx, sy);
                     const int s = frame.shape[i];
+                    const SceneShape* sh =
+                        s >= 0 ? &scene.shapes[static_cast<std::size_t>(s)] : nullptr;
                     const bool medium =
-                        s >= 0 &&
-                        scene.materials[static_cast<std::size_t>(
-                                            scene.shapes[static_cast<std::size_t>(s)].material)]
-                                .kind == SceneMaterial::Kind::kMedium;
+                        sh && scene.materials[static_cast<std::size_t>(sh->material)].kind ==
+                                  SceneMaterial::Kind::kMedium;
                     // The unit ray where its length matters (sphere lights, what the sky shows,
                     // a medium's boundary); a diffuse receiver uses only its side.
-                    const Vec3 d =
-                        any_sphere || s < 0 || medium ? ray(sx, sy) : rays.unnormalized(sx, sy);
-                    const double t_geo = s >= 0 ? frame.ray_t[i] : kInf;
+                    const Vec3 d = any_sphere || !sh || medium ? rays.direction(sx, sy)
+                                                               : rays.unnormalized(sx, sy);
+                    const double t_geo = sh ? frame.ray_t[i] : kInf;
                     // Sphere lights are not rasterized (nor in volpath's BVH): the nearest in
                     // front.
                     double tl = kInf;
                     const SceneLight* hit_light = nearest_sphere(camera.position, d, tl);
+                    const bool light_in_front = hit_light && tl < t_geo;
                     RGB surf{};
-                    if (hit_light && tl < t_geo)
+                    if (light_in_front)
                         surf = hit_light->color;
-                    else if (s < 0)
+                    else if (!sh)
                         surf = sky(d);
+                    // Every entry of the sample is written here (the G-buffer is only sized).
                     for (std::size_t c = 0; c < 3; ++c) {
                         g.surface[3 * i + c] = static_cast<float>(surf[c]);
-                        g.normal[3 * i + c] = 0.f;
                         g.irradiance[3 * i + c] = 0.f;
                         g.specular[3 * i + c] = 0.f;
                         g.translucency[3 * i + c] = 0.f;
                     }
-                    g.view_z[i] = std::numeric_limits<float>::infinity();
-                    g.ray_t[i] = 0.f;
-                    g.shape[i] = -1;
-                    g.material[i] = -1;
                     g.exit_weight[i] = 0.f;
                     g.thickness[i] = 0.f;
-                    if (s < 0) continue;
+                    if (!sh) {
+                        g.view_z[i] = std::numeric_limits<float>::infinity();
+                        g.ray_t[i] = 0.f;
+                        g.shape[i] = -1;
+                        g.material[i] = -1;
+                        for (std::size_t c = 0; c < 3; ++c) g.normal[3 * i + c] = 0.f;
+                        continue;
+                    }
                     g.view_z[i] = static_cast<float>(frame.view_z[i]);
                     g.ray_t[i] = static_cast<float>(frame.ray_t[i]);
-                    const SceneShape& sh = scene.shapes[static_cast<std::size_t>(s)];
                     g.shape[i] = s;
-                    g.material[i] = sh.material;
-                    const SceneMaterial& m = scene.materials[static_cast<std::size_t>(sh.material)];
-                    const bool light_in_front = hit_light && tl < t_geo;
-                    if (!light_in_front) {
-                        if (m.kind == SceneMaterial::Kind::kDiffuse) {
-                            kind[i] = Kind::kDiffuse;
-                        } else {
-                            kind[i] = Kind::kMedium;  // provisional: seen from outside below
-                        }
-                    }
+                    g.material[i] = sh->material;
+                    // A medium is provisional until it is seen from outside (below).
+                    if (!light_in_front) kind[i] = medium ? Kind::kMedium : Kind::kDiffuse;
                     const Receiver r = receiver_at(i, d);
                     for (int c = 0; c < 3; ++c)
                         g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(r.n[c]);
@@ -407,7 +402,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                     }
                     box.add(r.p);
                     if (r.kind != Kind::kMedium) continue;
-                    const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(sh.material)];
+                    const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(sh->material)];
                     g.exit_weight[i] = static_cast<float>(T.exit_weight(dot(r.n, r.wo)));
                     if (T.alpha() == 0) {
                         // Mirror: F times what the reflected ray sees of the sphere lights, the
