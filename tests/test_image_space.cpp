@@ -4,6 +4,8 @@
 #include "approx/image.h"
 #include "approx/models.h"
 
+#include "testing.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -28,27 +30,9 @@ using approx::SeparableKernel;
 using approx::Signal;
 using approx::SignalParams;
 
-// A skin-like radial profile, analytic: a near term exp(-r / l1) / r and a broader
-// exp(-r / l2) / l2 per channel, annulus values at the bin centres, in 1/cm^2. `scale` stretches
-// the lengths.
-RadialProfile analytic_profile(double dr_mm, int nr, double scale = 1.0) {
-    RadialProfile p;
-    p.name = "analytic";
-    p.dr_cm = dr_mm / 10.0;
-    p.nr = nr;
-    const double l1[3] = {0.15, 0.08, 0.05}, l2[3] = {0.8, 0.4, 0.25};  // mm
-    for (int c = 0; c < 3; ++c) {
-        p.rd_per_cm2[c].resize(static_cast<size_t>(nr));
-        p.se_per_cm2[c].assign(static_cast<size_t>(nr), 0.0);
-        for (int k = 0; k < nr; ++k) {
-            const double r = (k + 0.5) * dr_mm / scale;  // mm, unscaled
-            p.rd_per_cm2[c][static_cast<size_t>(k)] =
-                100.0 * (0.05 * std::exp(-r / l1[c]) / r + 0.5 * std::exp(-r / l2[c]) / l2[c]);
-        }
-        p.rd_total[c] = 0.5;
-    }
-    return p;
-}
+// The skin-like analytic profile (testing.h): exp(-r / l1) / r plus exp(-r / l2) / l2 per
+// channel, lengths stretched by `scale`.
+using testing::analytic_profile;
 
 struct Kernels {
     std::vector<Kernel2D> k;  // one per channel

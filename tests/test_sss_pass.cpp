@@ -344,25 +344,39 @@ TEST(SssPass, Rank2IsTheSumOfItsTerms) {
 
 // ---- 6. Determinism and pass-through ---------------------------------------------------------
 
-TEST(SssPass, BitIdenticalForOneAndTwoThreadsAndPassThrough) {
+// The determinism tests' case: two materials (pre-integration with 17 taps, SVD rank 2 with 11),
+// a random 53 x 37 irradiance over a depth ramp with a step, and a disc of no medium.
+struct DeterminismCase {
+    std::vector<SssMaterialKernel> mats;
+    SssGBuffer g;
+};
+DeterminismCase determinism_case() {
     const std::vector<Kernel2D> k = skin_kernels();
     std::array<ModelResult, 3> pre, svd;
     for (int c = 0; c < 3; ++c) {
         pre[c] = approx::preintegration(k[c]);
         svd[c] = approx::svd_rank_n(k[c], 2, false);
     }
-    const std::vector<SssMaterialKernel> mats = {
-        realtime::make_material_kernel({&pre[0].kernel, &pre[1].kernel, &pre[2].kernel}, 17),
-        realtime::make_material_kernel({&svd[0].kernel, &svd[1].kernel, &svd[2].kernel}, 11)};
+    DeterminismCase d;
+    d.mats = {realtime::make_material_kernel({&pre[0].kernel, &pre[1].kernel, &pre[2].kernel}, 17),
+              realtime::make_material_kernel({&svd[0].kernel, &svd[1].kernel, &svd[2].kernel}, 11)};
     const int w = 53, h = 37;
-    SssGBuffer g = flat_gbuffer(random_image(w, h, 1.0, 13), 1.0);
+    d.g = flat_gbuffer(random_image(w, h, 1.0, 13), 1.0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const size_t i = static_cast<size_t>(y) * w + x;
-            g.view_z[i] = static_cast<float>(30 + 0.3 * x + (x > 30 ? 20 : 0));
-            g.material[i] =
+            d.g.view_z[i] = static_cast<float>(30 + 0.3 * x + (x > 30 ? 20 : 0));
+            d.g.material[i] =
                 (x - 26) * (x - 26) + (y - 18) * (y - 18) < 64 ? -1 : (y < h / 2 ? 0 : 1);
         }
+    return d;
+}
+
+TEST(SssPass, BitIdenticalForOneAndTwoThreadsAndPassThrough) {
+    const DeterminismCase dc = determinism_case();
+    const std::vector<SssMaterialKernel>& mats = dc.mats;
+    const SssGBuffer& g = dc.g;
+    const int w = dc.g.width, h = dc.g.height;
     for (SssEdgeMode mode : kSssEdgeModes) {
         SssParams p = sss_camera(w, h, mode);
         p.jitter = 0.33;
@@ -612,24 +626,10 @@ TEST(SssPassRotate, RotationRemovesTheCrossPattern) {
 }
 
 TEST(SssPassRotate, BitIdenticalForOneAndTwoThreads) {
-    const std::vector<Kernel2D> k = skin_kernels();
-    std::array<ModelResult, 3> pre, svd;
-    for (int c = 0; c < 3; ++c) {
-        pre[c] = approx::preintegration(k[c]);
-        svd[c] = approx::svd_rank_n(k[c], 2, false);
-    }
-    const std::vector<SssMaterialKernel> mats = {
-        realtime::make_material_kernel({&pre[0].kernel, &pre[1].kernel, &pre[2].kernel}, 17),
-        realtime::make_material_kernel({&svd[0].kernel, &svd[1].kernel, &svd[2].kernel}, 11)};
-    const int w = 53, h = 37;
-    SssGBuffer g = flat_gbuffer(random_image(w, h, 1.0, 13), 1.0);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            const size_t i = static_cast<size_t>(y) * w + x;
-            g.view_z[i] = static_cast<float>(30 + 0.3 * x + (x > 30 ? 20 : 0));
-            g.material[i] =
-                (x - 26) * (x - 26) + (y - 18) * (y - 18) < 64 ? -1 : (y < h / 2 ? 0 : 1);
-        }
+    const DeterminismCase dc = determinism_case();
+    const std::vector<SssMaterialKernel>& mats = dc.mats;
+    const SssGBuffer& g = dc.g;
+    const int w = dc.g.width, h = dc.g.height;
     for (SssEdgeMode mode : kSssEdgeModes)
         for (double jitter : {0.0, 0.33}) {
             SssParams p = sss_camera(w, h, mode);
