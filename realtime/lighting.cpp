@@ -269,14 +269,19 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
 
     // Receivers and what the camera sees directly. A receiver (position, normals, direction
     // to the camera) is not stored: each pass over the light samples recomputes it from the
-    // raster frame (a few dozen flops against ~100 bytes a sample of memory traffic), and only
-    // its kind is kept.
-    std::vector<Kind> kind(N, Kind::kNone);
+    // G-buffer (a few flops against ~100 bytes a sample of memory traffic), and only its kind
+    // is kept. Scratch of the calling thread, kept between frames (a reference: the passes'
+    // worker threads must see this thread's).
+    static thread_local std::vector<Kind> kind_scratch;
+    std::vector<Kind>& kind = kind_scratch;
+    kind.assign(N, Kind::kNone);
     // The camera rays of RasterCamera::ray_direction, to the bit.
     const RasterCamera::SampleRays rays = camera.sample_rays(ss);
     // Facet normals as volpath/embree_scene.cpp computes them (double precision), once per
     // triangle rather than once per sample and light.
-    std::vector<std::vector<Vec3>> facet(scene.shapes.size());
+    static thread_local std::vector<std::vector<Vec3>> facet_scratch;
+    std::vector<std::vector<Vec3>>& facet = facet_scratch;
+    facet.resize(scene.shapes.size());
     for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
         const TriangleMesh& m = scene.shapes[k].mesh;
         facet[k].resize(m.triangles.size());
@@ -290,28 +295,22 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                               }
                           });
     }
-    auto receiver_at = [&](std::size_t i, const Vec3& d /* unit for a medium */) {
+    // The receiver of sample (sx, sy), i its index, from the G-buffer as the first pass below
+    // wrote it: the point at the sample's view depth on its camera ray (the rasterizer's depth
+    // is that of the ray-plane intersection, to rounding), the facet normal as the G-buffer
+    // holds it (float), and the camera ray normalized only where its length matters (a
+    // medium's boundary terms). Every pass sees the same receiver.
+    auto receiver_at = [&](std::size_t i, int sx, int sy) {
         Receiver r;
-        const int s = frame.shape[i];
-        const SceneShape& sh = scene.shapes[static_cast<std::size_t>(s)];
-        const auto& tri = sh.mesh.triangles[frame.triangle[i]];
-        const Vec3 &v0 = sh.mesh.positions[tri[0]], &v1 = sh.mesh.positions[tri[1]],
-                   &v2 = sh.mesh.positions[tri[2]];
-        r.n = facet[static_cast<std::size_t>(s)][frame.triangle[i]];
-        const auto [b1, b2] = frame.barycentric[i];
-        r.p = v0 * (1 - b1 - b2) + v1 * b1 + v2 * b2;
-        r.wo = -d;
-        r.shape = s;
-        r.material = sh.material;
+        const Vec3 du = rays.unnormalized(sx, sy);
+        r.p = camera.position + du * frame.view_z[i];
+        r.n = {g.normal[3 * i], g.normal[3 * i + 1], g.normal[3 * i + 2]};
         r.kind = kind[i];
+        r.wo = r.kind == Kind::kMedium ? -normalize(du) : -du;
+        r.shape = g.shape[i];
+        r.material = g.material[i];
         r.ns = r.kind == Kind::kDiffuse && dot(r.n, r.wo) < 0 ? -r.n : r.n;
         return r;
-    };
-    // The receiver of sample (sx, sy) of a light pass: the camera ray normalized only where
-    // its length matters (a medium's boundary terms).
-    auto receiver_at_sample = [&](std::size_t i, int sx, int sy) {
-        return receiver_at(
-            i, kind[i] == Kind::kMedium ? rays.direction(sx, sy) : rays.unnormalized(sx, sy));
     };
     // The nearest sphere light along from + t d (t in tl; nullptr and inf if none), and what a ray
     // that meets no geometry sees: the environment and the suns' discs.
@@ -390,12 +389,13 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                     g.ray_t[i] = static_cast<float>(frame.ray_t[i]);
                     g.shape[i] = s;
                     g.material[i] = sh->material;
-                    // A medium is provisional until it is seen from outside (below).
-                    if (!light_in_front) kind[i] = medium ? Kind::kMedium : Kind::kDiffuse;
-                    const Receiver r = receiver_at(i, d);
+                    const Vec3& fn = facet[static_cast<std::size_t>(s)][frame.triangle[i]];
                     for (int c = 0; c < 3; ++c)
-                        g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(r.n[c]);
+                        g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(fn[c]);
                     if (light_in_front) continue;  // a sphere light in front: nothing to light
+                    // A medium is provisional until it is seen from outside (below).
+                    kind[i] = medium ? Kind::kMedium : Kind::kDiffuse;
+                    const Receiver r = receiver_at(i, sx, sy);
                     if (r.kind == Kind::kMedium && !(dot(r.n, r.wo) > 0)) {
                         kind[i] = Kind::kNone;  // a medium seen from inside: not lit here
                         continue;
@@ -600,8 +600,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
             [&](const tbb::blocked_range<std::size_t>& br, bool acc) {
                 for (std::size_t i = br.begin(); i != br.end() && !acc; ++i)
                     if (kind[i] != Kind::kNone)
-                        acc = reaches(s, receiver_at_sample(i, static_cast<int>(i % W),
-                                                            static_cast<int>(i / W)));
+                        acc = reaches(
+                            s, receiver_at(i, static_cast<int>(i % W), static_cast<int>(i / W)));
                 return acc;
             },
             [](bool a, bool b) { return a || b; });
@@ -624,6 +624,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                 shadow_ms += std::chrono::duration<double, std::milli>(clock::now() - t0).count();
                 ++maps;
             }
+            const ShadowView::Projection proj = views[vi].projection();
             tbb::parallel_for(
                 tbb::blocked_range<int>(0, H, std::max(1, 1024 / W)),
                 [&](const tbb::blocked_range<int>& rows) {
@@ -631,7 +632,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                         for (int sx = 0; sx < W; ++sx) {
                             const std::size_t i = frame.sample_index(sx, sy);
                             if (kind[i] == Kind::kNone) continue;
-                            const Receiver r = receiver_at_sample(i, sx, sy);
+                            const Receiver r = receiver_at(i, sx, sy);
                             // Cube faces: a receiver belongs to the first face it projects into.
                             auto in_view = [&](const ShadowView& v) {
                                 const ClipVertex c = v.to_clip(r.p);
@@ -649,12 +650,14 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                             RGB E;
                             if (!incident(s, r.p, wi, E)) continue;
                             const double cs = dot(r.ns, wi);
+                            // The point's map coordinates, once for both lookups below.
+                            const ClipVertex pc = need_map ? proj.at(r.p) : ClipVertex{};
                             // Thickness along the light's ray from the map's first hit, if that is
                             // the receiver's own shape [Jimenez10].
                             double d_thick = -1;
                             if (r.kind == Kind::kMedium && need_map &&
                                 (s.thickness_view || (cs < 0 && slab_of(r.material)))) {
-                                const ShadowMap::Lookup lk = sm.lookup(r.p);
+                                const ShadowMap::Lookup lk = sm.lookup(pc, r.p, true);
                                 if (lk.inside && lk.shape == r.shape && std::isfinite(lk.map_depth))
                                     d_thick = std::max(0.0, lk.point_depth - lk.map_depth_smooth) *
                                               lk.distance_per_depth;
@@ -667,11 +670,14 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                                 if (o.shadows) {
                                     const ShadowView& v = views[vi];
                                     // texel_size at the point's depth (to_clip(p).w).
-                                    const double texel = v.texel_size(
-                                        v.orthographic ? 0.0 : dot(r.p - v.origin, v.forward));
+                                    const double texel = v.texel_size(v.orthographic ? 0.0 : pc.w);
                                     const Vec3 nl = dot(r.n, wi) >= 0 ? r.n : -r.n;
-                                    const ShadowMap::Lookup lk = sm.lookup(
-                                        r.p + nl * (o.normal_offset_texels * texel), false);
+                                    // The normal-offset point p + nl * offset, by linearity.
+                                    const double off = o.normal_offset_texels * texel;
+                                    const ClipVertex dn = proj.along(nl);
+                                    const ClipVertex qc{pc.x + dn.x * off, pc.y + dn.y * off,
+                                                        pc.w + dn.w * off};
+                                    const ShadowMap::Lookup lk = sm.lookup(qc, r.p, false);
                                     lit = !lk.inside ||
                                           lk.point_depth <=
                                               lk.map_depth + o.depth_bias_texels * texel;

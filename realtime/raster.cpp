@@ -76,17 +76,6 @@ std::int64_t floor_div(std::int64_t a, std::int64_t b) {
     return (a % b != 0 && ((a < 0) != (b < 0))) ? q - 1 : q;
 }
 
-// v resized to n entries, all `value`, filled in parallel (a 1080p frame clears ~90 MB).
-template <class T>
-void fill(std::vector<T>& v, std::size_t n, const T& value) {
-    v.resize(n);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, std::size_t{1} << 16),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                          std::fill(v.begin() + static_cast<std::ptrdiff_t>(r.begin()),
-                                    v.begin() + static_cast<std::ptrdiff_t>(r.end()), value);
-                      });
-}
-
 struct Viewport {
     int ws, hs;    // sample grid
     double guard;  // |x / w|, |y / w| <= guard keeps snapped coordinates in range
@@ -332,13 +321,14 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
     f.supersample = o.supersample;
     const int ws = f.sample_width(), hs = f.sample_height();
     const std::size_t samples = static_cast<std::size_t>(ws) * static_cast<std::size_t>(hs);
-    fill(f.view_z, samples, std::numeric_limits<double>::infinity());
-    fill(f.shape, samples, std::int32_t{-1});
+    // Sized only: each tile clears its own samples before it draws them (in cache, once).
+    f.view_z.resize(samples);
+    f.shape.resize(samples);
     if (!o.depth_only) {
-        f.ray_t.resize(samples);  // written for every sample below
-        fill(f.triangle, samples, std::numeric_limits<std::uint32_t>::max());
-        fill(f.barycentric, samples, std::array<double, 2>{0.0, 0.0});
-        fill(f.fragments, samples, 0u);
+        f.ray_t.resize(samples);
+        f.triangle.resize(samples);
+        f.barycentric.resize(samples);
+        f.fragments.resize(samples);
     } else {
         f.ray_t.clear();
         f.triangle.clear();
@@ -353,16 +343,25 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
     struct Block {
         std::size_t mesh, begin, end;
     };
+    // The set-up triangles and the tiles' bins: scratch of the calling thread, kept between
+    // calls with their capacity (a frame of 100k triangles sets up ~17 MB, which fresh vectors
+    // fault in and grow by copying every call). The result does not depend on it. (References:
+    // the worker threads below must see this thread's.)
+    static thread_local std::vector<std::vector<SetupTriangle>> setup_scratch;
+    static thread_local std::vector<std::vector<const SetupTriangle*>> bins_scratch;
+    std::vector<std::vector<SetupTriangle>>& setup = setup_scratch;
+    std::vector<std::vector<const SetupTriangle*>>& bins = bins_scratch;
     std::vector<Block> blocks;
     constexpr std::size_t kBlock = 1024;
     for (std::size_t mi = 0; mi < meshes.size(); ++mi)
         for (std::size_t b = 0; b < meshes[mi].triangles.size(); b += kBlock)
             blocks.push_back({mi, b, std::min(b + kBlock, meshes[mi].triangles.size())});
-    std::vector<std::vector<SetupTriangle>> setup(blocks.size());
+    if (setup.size() < blocks.size()) setup.resize(blocks.size());
     tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t bi) {
         const Block& b = blocks[bi];
         const RasterMesh& m = meshes[b.mesh];
         const Viewport vp{ws, hs, guard, m.cull_back_faces, o.orthographic};
+        setup[bi].clear();
         for (std::size_t t = b.begin; t < b.end; ++t)
             setup_triangle(m, static_cast<std::uint32_t>(t), static_cast<std::int32_t>(b.mesh),
                            o.near, vp, setup[bi]);
@@ -371,37 +370,67 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
     // Binning, in submission order.
     const int ts = o.tile_size;
     const int ntx = (ws + ts - 1) / ts, nty = (hs + ts - 1) / ts;
-    std::vector<std::vector<const SetupTriangle*>> bins(static_cast<std::size_t>(ntx) *
-                                                        static_cast<std::size_t>(nty));
-    for (const auto& blk : setup)
-        for (const SetupTriangle& s : blk)
+    bins.resize(static_cast<std::size_t>(ntx) * static_cast<std::size_t>(nty));
+    for (auto& b : bins) b.clear();
+    for (std::size_t bi = 0; bi < blocks.size(); ++bi)
+        for (const SetupTriangle& s : setup[bi])
             for (int ty = s.y0 / ts; ty <= s.y1 / ts; ++ty)
                 for (int tx = s.x0 / ts; tx <= s.x1 / ts; ++tx)
                     bins[static_cast<std::size_t>(ty) * static_cast<std::size_t>(ntx) +
                          static_cast<std::size_t>(tx)]
                         .push_back(&s);
 
-    // Tiles in parallel: each owns its samples and draws its triangles in order.
+    // Tiles in parallel: each owns its samples, clears them, draws its triangles in order and,
+    // at one sample a pixel, finishes its pixels (ray distance, coverage, depth) while they are
+    // in cache.
+    const int ss = o.supersample;
+    const RasterCamera::SampleRays rays =
+        o.depth_only ? RasterCamera::SampleRays{} : camera.sample_rays(ss);
+    if (!o.depth_only) {
+        // Every entry is written below.
+        f.coverage.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
+        f.depth.resize(f.coverage.size());
+    }
+    // The ray distance of a covered sample.
+    auto ray_t = [&](int sx, int sy, std::size_t k) {
+        return o.orthographic ? f.view_z[k] : f.view_z[k] * rays.length_per_depth(sx, sy);
+    };
+    const auto sw = static_cast<std::size_t>(ws);
     tbb::parallel_for(std::size_t{0}, bins.size(), [&](std::size_t bi) {
         const int tx = static_cast<int>(bi % static_cast<std::size_t>(ntx));
         const int ty = static_cast<int>(bi / static_cast<std::size_t>(ntx));
         const int x0 = tx * ts, y0 = ty * ts;
         const int x1 = std::min(x0 + ts, ws) - 1, y1 = std::min(y0 + ts, hs) - 1;
+        const auto n = static_cast<std::ptrdiff_t>(x1 - x0 + 1);
+        for (int y = y0; y <= y1; ++y) {
+            const auto k = static_cast<std::ptrdiff_t>(static_cast<std::size_t>(y) * sw +
+                                                       static_cast<std::size_t>(x0));
+            std::fill_n(f.view_z.begin() + k, n, std::numeric_limits<double>::infinity());
+            std::fill_n(f.shape.begin() + k, n, std::int32_t{-1});
+            if (o.depth_only) continue;
+            std::fill_n(f.triangle.begin() + k, n, std::numeric_limits<std::uint32_t>::max());
+            std::fill_n(f.barycentric.begin() + k, n, std::array<double, 2>{0.0, 0.0});
+            std::fill_n(f.fragments.begin() + k, n, 0u);
+        }
         for (const SetupTriangle* s : bins[bi]) {
             if (o.depth_only)
                 draw<true>(*s, x0, y0, x1, y1, o.depth_test, o.orthographic, f);
             else
                 draw<false>(*s, x0, y0, x1, y1, o.depth_test, o.orthographic, f);
         }
+        if (o.depth_only || ss != 1) return;
+        for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x) {
+                const std::size_t k = f.sample_index(x, y);
+                const bool covered = f.shape[k] >= 0;
+                f.ray_t[k] = covered ? ray_t(x, y, k) : 0.0;
+                f.coverage[k] = covered ? 1.0 : 0.0;
+                f.depth[k] = f.ray_t[k];
+            }
     });
-    if (o.depth_only) return;
+    if (o.depth_only || ss == 1) return;
 
-    // Ray distances per sample, box-filtered pixels.
-    const int ss = o.supersample;
-    const RasterCamera::SampleRays rays = camera.sample_rays(ss);
-    // Every entry is written below.
-    f.coverage.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
-    f.depth.resize(f.coverage.size());
+    // Supersampled: ray distances per sample, box-filtered pixels.
     tbb::parallel_for(0, f.height, [&](int y) {
         for (int x = 0; x < f.width; ++x) {
             int covered = 0;
@@ -414,8 +443,7 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
                         f.ray_t[k] = 0;
                         continue;
                     }
-                    f.ray_t[k] =
-                        o.orthographic ? f.view_z[k] : f.view_z[k] * rays.length_per_depth(sx, sy);
+                    f.ray_t[k] = ray_t(sx, sy, k);
                     ++covered;
                     sum_t += f.ray_t[k];
                 }

@@ -1,6 +1,9 @@
 // Shadow maps (see shadow_map.h).
 #include "realtime/shadow_map.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -132,8 +135,11 @@ std::vector<ShadowView> fit_point(const Vec3& position, const Box& receivers, do
 }
 
 ShadowMap::Lookup ShadowMap::lookup(const Vec3& p, bool smooth) const {
+    return lookup(view.to_clip(p), p, smooth);
+}
+
+ShadowMap::Lookup ShadowMap::lookup(const ClipVertex& c, const Vec3& p, bool smooth) const {
     Lookup r;
-    const ClipVertex c = view.to_clip(p);
     double u = c.x, w = c.y;
     if (!view.orthographic) {
         if (!(c.w > view.near)) return r;
@@ -181,10 +187,21 @@ ShadowMap render_shadow_map(const Scene& scene, const ShadowView& view, std::siz
 
 void render_shadow_map(const Scene& scene, const ShadowView& view, ShadowMap& sm,
                        std::size_t band_texels) {
-    std::vector<std::vector<ClipVertex>> clip(scene.shapes.size());
+    // The meshes in the view's clip space (and per band below): scratch of the calling thread,
+    // kept between calls, like the band's frame (references: the worker threads must see this
+    // thread's).
+    static thread_local std::vector<std::vector<ClipVertex>> clip_scratch;
+    static thread_local std::vector<RasterMesh> meshes_scratch;
+    std::vector<std::vector<ClipVertex>>& clip = clip_scratch;
+    clip.resize(scene.shapes.size());
     for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
-        clip[k].reserve(scene.shapes[k].mesh.positions.size());
-        for (const Vec3& p : scene.shapes[k].mesh.positions) clip[k].push_back(view.to_clip(p));
+        const std::vector<Vec3>& pos = scene.shapes[k].mesh.positions;
+        clip[k].resize(pos.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pos.size(), 4096),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t v = r.begin(); v != r.end(); ++v)
+                                  clip[k][v] = view.to_clip(pos[v]);
+                          });
     }
     sm.view = view;
     const std::size_t S = static_cast<std::size_t>(view.size);
@@ -202,8 +219,10 @@ void render_shadow_map(const Scene& scene, const ShadowView& view, ShadowMap& sm
     o.near = view.near;
     // The band's frame: scratch of the calling thread, kept between calls (maps of one size
     // then reuse its storage instead of faulting in up to 50 MB of fresh pages per map).
-    static thread_local RasterFrame f;
-    std::vector<RasterMesh> meshes(scene.shapes.size());
+    static thread_local RasterFrame band_scratch;
+    RasterFrame& f = band_scratch;
+    std::vector<RasterMesh>& meshes = meshes_scratch;
+    meshes.resize(scene.shapes.size());
     for (int r0 = 0; r0 < view.size; r0 += rows) {
         const int r1 = std::min(view.size, r0 + rows);
         const double top = 1 - 2.0 * r0 / view.size, bottom = 1 - 2.0 * r1 / view.size;
@@ -214,15 +233,20 @@ void render_shadow_map(const Scene& scene, const ShadowView& view, ShadowMap& sm
         for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
             RasterMesh& m = meshes[k];
             m.vertices.resize(clip[k].size());
-            for (std::size_t v = 0; v < clip[k].size(); ++v) {
-                const ClipVertex& c = clip[k][v];
-                m.vertices[v] = {c.x, (c.y - yc * (view.orthographic ? 1.0 : c.w)) / hh, c.w};
-            }
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, clip[k].size(), 4096),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  for (std::size_t v = r.begin(); v != r.end(); ++v) {
+                                      const ClipVertex& c = clip[k][v];
+                                      m.vertices[v] = {
+                                          c.x, (c.y - yc * (view.orthographic ? 1.0 : c.w)) / hh,
+                                          c.w};
+                                  }
+                              });
             m.triangles = scene.shapes[k].mesh.triangles;
             m.cull_back_faces = false;
         }
         rasterize(cam, meshes, o, f);
-        for (int y = 0; y < r1 - r0; ++y)
+        tbb::parallel_for(0, r1 - r0, [&](int y) {
             for (int x = 0; x < view.size; ++x) {
                 const std::size_t i = f.sample_index(x, y);
                 const std::size_t j =
@@ -230,6 +254,7 @@ void render_shadow_map(const Scene& scene, const ShadowView& view, ShadowMap& sm
                 sm.depth[j] = static_cast<float>(f.view_z[i]);
                 sm.shape[j] = f.shape[i];
             }
+        });
     }
 }
 

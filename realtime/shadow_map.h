@@ -47,6 +47,22 @@ struct ShadowView {
     ClipVertex to_clip(const Vec3& p) const;
     /// World size of a texel (the larger side) at depth w.
     double texel_size(double w) const;
+
+    /// to_clip's x, y and w (before any perspective divide) for many points of one view: the
+    /// axes divided by the half extents once, so a point costs three dot products, and linear
+    /// in the offset from the origin, so that a point and a neighbour p + v share one
+    /// projection (`at(p) + along(v)`). Equal to to_clip to rounding.
+    struct Projection {
+        Vec3 origin, x, y, w;
+        ClipVertex at(const Vec3& p) const {
+            const Vec3 d = p - origin;
+            return {dot(d, x), dot(d, y), dot(d, w)};
+        }
+        ClipVertex along(const Vec3& v) const { return {dot(v, x), dot(v, y), dot(v, w)}; }
+    };
+    Projection projection() const {
+        return {origin, right * (1 / half_x), up * (1 / half_y), forward};
+    }
 };
 
 /// An orthographic view along -to_light (a unit vector towards the light) covering the box
@@ -84,6 +100,9 @@ struct ShadowMap {
     /// `smooth` false: a shadow test's lookup (inside, point_depth, map_depth, shape only;
     /// map_depth_smooth = map_depth and distance_per_depth = 1 are not computed).
     Lookup lookup(const Vec3& p, bool smooth = true) const;
+    /// The same from p's map coordinates c (view.to_clip(p), or view.projection().at(p)),
+    /// computed once by a caller that looks up several points of one projection.
+    Lookup lookup(const ClipVertex& c, const Vec3& p, bool smooth) const;
 };
 
 /// The scene's shapes rasterized into the view (both sides of every triangle), band by band.
