@@ -442,7 +442,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     bool thickness_taken = false;
     for (const SceneLight& l : scene.lights) {
         const std::size_t first_sample = samples.size();
-        const bool first = !thickness_taken && l.type != LightType::kEnvironment;
+        const bool first =
+            o.thickness_layer && !thickness_taken && l.type != LightType::kEnvironment;
         thickness_taken = thickness_taken || first;
         switch (l.type) {
             case LightType::kDirectional: {

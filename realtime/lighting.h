@@ -42,6 +42,11 @@ struct LightingOptions {
     /// more than everything else in a frame).
     int environment_map_size = 512;
     bool shadows = true;
+    /// Fill GBuffer::thickness, the first light's thickness view: a diagnostic layer that no
+    /// later pass reads (translucency looks the thickness up per light sample itself), so off
+    /// by default; on, it costs a filtered map lookup per medium sample and, for a sun's disc
+    /// or a sphere light, a map of its own from the light's centre.
+    bool thickness_layer = false;
     /// Shadow tests look the receiver up at p + n * normal_offset_texels * texel (n the facet
     /// normal on the light's side, texel the map's texel size at p) [Holbert 2011, "Saying
     /// goodbye to shadow acne"], and call it lit when its depth is at most the map's plus
@@ -82,7 +87,8 @@ struct GBuffer {
     /// 3: radiance of diffuse (Lambert) surfaces from direct light, plus emitters and the
     /// environment seen directly (what volpath's radiance holds there at max_depth = 1).
     std::vector<float> surface;
-    /// 1: for medium samples, the medium thickness the first light's rays cross before
+    /// 1 (LightingOptions::thickness_layer; 0 without): for medium samples, the medium
+    /// thickness the first light's rays cross before
     /// reaching this point: distance from its shadow map's first hit, when that is the same
     /// shape, to the point [world units]; 0 where none. The first light is the first one of the
     /// scene that is not the environment; sphere lights and suns are taken from their centre.

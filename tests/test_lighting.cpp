@@ -622,6 +622,7 @@ material = "m"
         const Scene s = parse_scene(text, "slab.toml", ".");
         LightingOptions o;
         o.shadow_map_size = 256;
+        o.thickness_layer = true;
         const Rendered r = render_rt(s, 16, 16, 1, o, {table});
         const double d = 0.5 / std::cos(th);
         const auto Ts = table.at(d);
@@ -641,6 +642,14 @@ material = "m"
             tilt, worst_t, worst_tr);
         EXPECT_LT(worst_t, 1e-5);
         EXPECT_LT(worst_tr, 1e-5);
+        // Without the thickness layer (the default) translucency is the same bits (it looks
+        // the thickness up itself) and the layer holds 0.
+        o.thickness_layer = false;
+        const Rendered off = render_rt(s, 16, 16, 1, o, {table});
+        EXPECT_EQ(off.g.translucency, r.g.translucency);
+        EXPECT_EQ(off.g.irradiance, r.g.irradiance);
+        EXPECT_TRUE(std::all_of(off.g.thickness.begin(), off.g.thickness.end(),
+                                [](float t) { return t == 0.f; }));
     }
     // The table: log-linear between entries, clamped outside.
     EXPECT_NEAR(table.at(0.2)[0], std::sqrt(0.8 * 0.5), 1e-12);
@@ -676,6 +685,7 @@ TEST(Lighting, BitIdenticalForOneAndTwoThreads) {
     o.light_samples = 4;
     o.environment_samples = 8;
     o.shadow_map_size = 128;
+    o.thickness_layer = true;
     GBuffer g[2];
     for (int t = 0; t < 2; ++t) {
         tbb::task_arena arena(t + 1);
