@@ -261,6 +261,10 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         mat_T[m] =
             &tabulated_boundary(eta, alpha, o.transmittance_cosines, o.transmittance_quadrature);
     }
+    // Lambert's albedo / pi per diffuse material.
+    std::vector<RGB> albedo_pi(scene.materials.size());
+    for (std::size_t m = 0; m < scene.materials.size(); ++m)
+        for (std::size_t c = 0; c < 3; ++c) albedo_pi[m][c] = scene.materials[m].albedo[c] / kPi;
     auto slab_of = [&](int m) -> const SlabTransmittance* {
         if (m < 0 || static_cast<std::size_t>(m) >= slabs.size()) return nullptr;
         const SlabTransmittance& s = slabs[static_cast<std::size_t>(m)];
@@ -274,7 +278,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     // worker threads must see this thread's).
     static thread_local std::vector<Kind> kind_scratch;
     std::vector<Kind>& kind = kind_scratch;
-    kind.assign(N, Kind::kNone);
+    kind.resize(N);  // written for every sample by the first pass below
     // The camera rays of RasterCamera::ray_direction, to the bit.
     const RasterCamera::SampleRays rays = camera.sample_rays(ss);
     // Facet normals as volpath/embree_scene.cpp computes them (double precision), once per
@@ -341,43 +345,51 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     const bool any_sphere =
         std::any_of(scene.lights.begin(), scene.lights.end(),
                     [](const SceneLight& l) { return l.type == LightType::kSphere; });
+    // Per shape: its material and whether that is a medium.
+    std::vector<int> shape_material(scene.shapes.size());
+    std::vector<char> shape_medium(scene.shapes.size());
+    for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
+        shape_material[k] = scene.shapes[k].material;
+        shape_medium[k] = scene.materials[static_cast<std::size_t>(shape_material[k])].kind ==
+                          SceneMaterial::Kind::kMedium;
+    }
     const Box receivers = tbb::parallel_reduce(
         tbb::blocked_range<int>(0, H), Box{},
         [&](const tbb::blocked_range<int>& rows, Box box) {
-            for (int sy = rows.begin(); sy != rows.end(); ++sy)
+            // The box's corners as plain numbers (Box::add per sample is a call).
+            double lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
+            for (int sy = rows.begin(); sy != rows.end(); ++sy) {
+                // Every entry of the row is written here (the G-buffer is only sized): the
+                // lighting layers start at 0, the rest per sample below.
+                const std::size_t row = frame.sample_index(0, sy);
+                const auto w = static_cast<std::size_t>(W);
+                std::fill_n(g.irradiance.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w,
+                            0.f);
+                std::fill_n(g.specular.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w, 0.f);
+                std::fill_n(g.translucency.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w,
+                            0.f);
+                std::fill_n(g.surface.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w, 0.f);
+                std::fill_n(g.exit_weight.begin() + static_cast<std::ptrdiff_t>(row), w, 0.f);
+                std::fill_n(g.thickness.begin() + static_cast<std::ptrdiff_t>(row), w, 0.f);
                 for (int sx = 0; sx < W; ++sx) {
-                    const std::size_t i = frame.sample_index(sx, sy);
+                    const std::size_t i = row + static_cast<std::size_t>(sx);
                     const int s = frame.shape[i];
-                    const SceneShape* sh =
-                        s >= 0 ? &scene.shapes[static_cast<std::size_t>(s)] : nullptr;
-                    const bool medium =
-                        sh && scene.materials[static_cast<std::size_t>(sh->material)].kind ==
-                                  SceneMaterial::Kind::kMedium;
-                    // The unit ray where its length matters (sphere lights, what the sky shows,
-                    // a medium's boundary); a diffuse receiver uses only its side.
-                    const Vec3 d = any_sphere || !sh || medium ? rays.direction(sx, sy)
-                                                               : rays.unnormalized(sx, sy);
-                    const double t_geo = sh ? frame.ray_t[i] : kInf;
+                    kind[i] = Kind::kNone;
                     // Sphere lights are not rasterized (nor in volpath's BVH): the nearest in
-                    // front.
-                    double tl = kInf;
-                    const SceneLight* hit_light = nearest_sphere(camera.position, d, tl);
-                    const bool light_in_front = hit_light && tl < t_geo;
-                    RGB surf{};
-                    if (light_in_front)
-                        surf = hit_light->color;
-                    else if (!sh)
-                        surf = sky(d);
-                    // Every entry of the sample is written here (the G-buffer is only sized).
-                    for (std::size_t c = 0; c < 3; ++c) {
-                        g.surface[3 * i + c] = static_cast<float>(surf[c]);
-                        g.irradiance[3 * i + c] = 0.f;
-                        g.specular[3 * i + c] = 0.f;
-                        g.translucency[3 * i + c] = 0.f;
+                    // front of the geometry is what the sample shows.
+                    const SceneLight* light_in_front = nullptr;
+                    if (any_sphere || s < 0) {
+                        const Vec3 d = rays.direction(sx, sy);
+                        double tl = kInf;
+                        const SceneLight* hit = nearest_sphere(camera.position, d, tl);
+                        if (hit && (s < 0 || tl < frame.ray_t[i])) light_in_front = hit;
+                        if (s < 0) {
+                            const RGB surf = hit ? hit->color : sky(d);
+                            for (std::size_t c = 0; c < 3; ++c)
+                                g.surface[3 * i + c] = static_cast<float>(surf[c]);
+                        }
                     }
-                    g.exit_weight[i] = 0.f;
-                    g.thickness[i] = 0.f;
-                    if (!sh) {
+                    if (s < 0) {
                         g.view_z[i] = std::numeric_limits<float>::infinity();
                         g.ray_t[i] = 0.f;
                         g.shape[i] = -1;
@@ -385,24 +397,34 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                         for (std::size_t c = 0; c < 3; ++c) g.normal[3 * i + c] = 0.f;
                         continue;
                     }
+                    const auto su = static_cast<std::size_t>(s);
+                    const int mat = shape_material[su];
+                    const bool medium = shape_medium[su] != 0;
                     g.view_z[i] = static_cast<float>(frame.view_z[i]);
                     g.ray_t[i] = static_cast<float>(frame.ray_t[i]);
                     g.shape[i] = s;
-                    g.material[i] = sh->material;
-                    const Vec3& fn = facet[static_cast<std::size_t>(s)][frame.triangle[i]];
+                    g.material[i] = mat;
+                    const Vec3& fn = facet[su][frame.triangle[i]];
                     for (int c = 0; c < 3; ++c)
                         g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(fn[c]);
-                    if (light_in_front) continue;  // a sphere light in front: nothing to light
+                    if (light_in_front) {  // a sphere light in front: nothing to light
+                        for (std::size_t c = 0; c < 3; ++c)
+                            g.surface[3 * i + c] = static_cast<float>(light_in_front->color[c]);
+                        continue;
+                    }
                     // A medium is provisional until it is seen from outside (below).
                     kind[i] = medium ? Kind::kMedium : Kind::kDiffuse;
                     const Receiver r = receiver_at(i, sx, sy);
-                    if (r.kind == Kind::kMedium && !(dot(r.n, r.wo) > 0)) {
+                    if (medium && !(dot(r.n, r.wo) > 0)) {
                         kind[i] = Kind::kNone;  // a medium seen from inside: not lit here
                         continue;
                     }
-                    box.add(r.p);
-                    if (r.kind != Kind::kMedium) continue;
-                    const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(sh->material)];
+                    for (int c = 0; c < 3; ++c) {
+                        lo[c] = std::min(lo[c], r.p[c]);
+                        hi[c] = std::max(hi[c], r.p[c]);
+                    }
+                    if (!medium) continue;
+                    const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(mat)];
                     g.exit_weight[i] = static_cast<float>(T.exit_weight(dot(r.n, r.wo)));
                     if (T.alpha() == 0) {
                         // Mirror: F times what the reflected ray sees of the sphere lights, the
@@ -416,6 +438,9 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                             g.specular[3 * i + c] = static_cast<float>(F * Lr[c]);
                     }
                 }
+            }
+            box.lo = {lo[0], lo[1], lo[2]};
+            box.hi = {hi[0], hi[1], hi[2]};
             return box;
         },
         [](Box a, const Box& b) {
@@ -626,6 +651,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                 ++maps;
             }
             const ShadowView::Projection proj = views[vi].projection();
+            const bool ortho = views[vi].orthographic;
+            const double texel0 = views[vi].texel_size(1.0);  // at depth 1 when perspective
             tbb::parallel_for(
                 tbb::blocked_range<int>(0, H, std::max(1, 1024 / W)),
                 [&](const tbb::blocked_range<int>& rows) {
@@ -669,29 +696,28 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                             if (cs > 0) {
                                 bool lit = true;
                                 if (o.shadows) {
-                                    const ShadowView& v = views[vi];
-                                    // texel_size at the point's depth (to_clip(p).w).
-                                    const double texel = v.texel_size(v.orthographic ? 0.0 : pc.w);
+                                    // ShadowView::texel_size at the point's depth (pc.w).
+                                    const double texel =
+                                        ortho ? texel0 : texel0 * std::max(pc.w, 0.0);
                                     const Vec3 nl = dot(r.n, wi) >= 0 ? r.n : -r.n;
-                                    // The normal-offset point p + nl * offset, by linearity.
+                                    // The normal-offset point p + nl * offset, by linearity; lit
+                                    // where it lies outside the map or within the bias of the
+                                    // texel's first surface.
                                     const double off = o.normal_offset_texels * texel;
                                     const ClipVertex dn = proj.along(nl);
                                     const ClipVertex qc{pc.x + dn.x * off, pc.y + dn.y * off,
                                                         pc.w + dn.w * off};
-                                    const ShadowMap::Lookup lk = sm.lookup(qc, r.p, false);
-                                    lit = !lk.inside ||
-                                          lk.point_depth <=
-                                              lk.map_depth + o.depth_bias_texels * texel;
+                                    std::size_t ti = 0;
+                                    lit = !sm.texel_of(qc, ti) ||
+                                          qc.w <= sm.depth[ti] + o.depth_bias_texels * texel;
                                 }
                                 if (!lit || (!spheres.empty() && behind_sphere(s, r.p, wi)))
                                     continue;
                                 if (r.kind == Kind::kDiffuse) {
-                                    const auto& alb =
-                                        scene.materials[static_cast<std::size_t>(r.material)]
-                                            .albedo;
+                                    const RGB& a = albedo_pi[static_cast<std::size_t>(r.material)];
                                     for (std::size_t c = 0; c < 3; ++c)
                                         g.surface[3 * i + c] +=
-                                            static_cast<float>(alb[c] / kPi * E[c] * cs);
+                                            static_cast<float>(a[c] * E[c] * cs);
                                 } else {
                                     const BoundaryTransmittance& T =
                                         *mat_T[static_cast<std::size_t>(r.material)];

@@ -140,17 +140,9 @@ ShadowMap::Lookup ShadowMap::lookup(const Vec3& p, bool smooth) const {
 
 ShadowMap::Lookup ShadowMap::lookup(const ClipVertex& c, const Vec3& p, bool smooth) const {
     Lookup r;
-    double u = c.x, w = c.y;
-    if (!view.orthographic) {
-        if (!(c.w > view.near)) return r;
-        u /= c.w;
-        w /= c.w;
-    }
-    const double fx = (u + 1) * 0.5 * view.size, fy = (1 - w) * 0.5 * view.size;
-    if (!(fx >= 0 && fy >= 0 && fx < view.size && fy < view.size)) return r;
-    const std::size_t i =
-        static_cast<std::size_t>(static_cast<int>(fy)) * static_cast<std::size_t>(view.size) +
-        static_cast<std::size_t>(static_cast<int>(fx));
+    double fx = 0, fy = 0;
+    if (!texel_coords(c, fx, fy)) return r;
+    const std::size_t i = texel_index(fx, fy);
     r.inside = true;
     r.point_depth = c.w;
     r.map_depth = depth[i];

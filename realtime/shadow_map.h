@@ -103,6 +103,33 @@ struct ShadowMap {
     /// The same from p's map coordinates c (view.to_clip(p), or view.projection().at(p)),
     /// computed once by a caller that looks up several points of one projection.
     Lookup lookup(const ClipVertex& c, const Vec3& p, bool smooth) const;
+    /// Map coordinates c in texels (fx right, fy down, both in [0, size) on the map), false
+    /// where c has none: behind a perspective map's near plane, or outside the map.
+    bool texel_coords(const ClipVertex& c, double& fx, double& fy) const {
+        double u = c.x, w = c.y;
+        if (!view.orthographic) {
+            if (!(c.w > view.near)) return false;
+            u /= c.w;
+            w /= c.w;
+        }
+        fx = (u + 1) * 0.5 * view.size;
+        fy = (1 - w) * 0.5 * view.size;
+        return fx >= 0 && fy >= 0 && fx < view.size && fy < view.size;
+    }
+    /// The nearest texel of map coordinates c (an index into depth and shape), false where
+    /// none. What lookup does first; inline, for the lighting pass's shadow test per sample.
+    bool texel_of(const ClipVertex& c, std::size_t& index) const {
+        double fx = 0, fy = 0;
+        if (!texel_coords(c, fx, fy)) return false;
+        index = texel_index(fx, fy);
+        return true;
+    }
+    /// The texel containing texel coordinates (fx, fy) on the map.
+    std::size_t texel_index(double fx, double fy) const {
+        return static_cast<std::size_t>(static_cast<int>(fy)) *
+                   static_cast<std::size_t>(view.size) +
+               static_cast<std::size_t>(static_cast<int>(fx));
+    }
 };
 
 /// The scene's shapes rasterized into the view (both sides of every triangle), band by band.
