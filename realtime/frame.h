@@ -74,7 +74,9 @@ const char* to_string(SssMethod m);
 
 struct FrameOptions {
     int width = 0, height = 0;  ///< 0: the scene camera's size
-    RasterOptions raster;       ///< supersample, tiles, near plane, culling
+    /// Supersample, tiles, near plane, culling. Pass 1 reads depth, shape and triangle only,
+    /// so a frame's raster fills no barycentrics and counts no fragments.
+    RasterOptions raster = {.barycentrics = false, .count_fragments = false};
     LightingOptions lighting;
     SssMethod method = SssMethod::kSeparable;
     /// Edge mode, follow-surface strength, rejection depth, jitter, seed; tan_half, aspect and

@@ -227,7 +227,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     const std::size_t N = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
     if (camera.width != frame.width || camera.height != frame.height || ss < 1 ||
         frame.view_z.size() != N || frame.shape.size() != N || frame.triangle.size() != N ||
-        frame.barycentric.size() != N || frame.ray_t.size() != N)
+        frame.ray_t.size() != N)
         throw std::invalid_argument("lighting: the frame does not match the camera");
     if (o.light_samples < 1 || o.environment_samples < 1 || o.shadow_map_size < 1 ||
         o.shadow_map_size > 16384 || o.environment_map_size < 1 || o.environment_map_size > 16384 ||

@@ -195,8 +195,10 @@ void setup_triangle(const RasterMesh& m, std::uint32_t t, std::int32_t shape, do
 
 // Draw one setup triangle into the part of a tile [tx0, tx1] x [ty0, ty1] it overlaps.
 template <bool kDepthOnly>
-void draw(const SetupTriangle& s, int tx0, int ty0, int tx1, int ty1, bool depth_test, bool ortho,
+void draw(const SetupTriangle& s, int tx0, int ty0, int tx1, int ty1, const RasterOptions& o,
           RasterFrame& f) {
+    const bool depth_test = o.depth_test, ortho = o.orthographic;
+    const bool bary = o.barycentrics, frags = o.count_fragments;
     const int x0 = std::max(s.x0, tx0), x1 = std::min(s.x1, tx1);
     const int y0 = std::max(s.y0, ty0), y1 = std::min(s.y1, ty1);
     if (x0 > x1 || y0 > y1) return;
@@ -221,7 +223,8 @@ void draw(const SetupTriangle& s, int tx0, int ty0, int tx1, int ty1, bool depth
             if ((e[0] | e[1] | e[2]) >= 0) {
                 const std::size_t i =
                     static_cast<std::size_t>(y) * sw + static_cast<std::size_t>(x);
-                if constexpr (!kDepthOnly) ++f.fragments[i];
+                if constexpr (!kDepthOnly)
+                    if (frags) ++f.fragments[i];
                 const double ex = (x + 0.5) - s.ox, ey = py - s.oy;
                 const double q = s.a[0] + s.ddx[0] * ex + s.ddy[0] * ey;
                 const double z = ortho ? q : 1.0 / q;
@@ -229,10 +232,12 @@ void draw(const SetupTriangle& s, int tx0, int ty0, int tx1, int ty1, bool depth
                     f.view_z[i] = z;
                     f.shape[i] = s.shape;
                     if constexpr (!kDepthOnly) {
-                        const double m = ortho ? 1.0 : z;
                         f.triangle[i] = s.triangle;
-                        f.barycentric[i] = {(s.a[1] + s.ddx[1] * ex + s.ddy[1] * ey) * m,
-                                            (s.a[2] + s.ddx[2] * ex + s.ddy[2] * ey) * m};
+                        if (bary) {
+                            const double m = ortho ? 1.0 : z;
+                            f.barycentric[i] = {(s.a[1] + s.ddx[1] * ex + s.ddy[1] * ey) * m,
+                                                (s.a[2] + s.ddx[2] * ex + s.ddy[2] * ey) * m};
+                        }
                     }
                 }
             }
@@ -327,8 +332,14 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
     if (!o.depth_only) {
         f.ray_t.resize(samples);
         f.triangle.resize(samples);
-        f.barycentric.resize(samples);
-        f.fragments.resize(samples);
+        if (o.barycentrics)
+            f.barycentric.resize(samples);
+        else
+            f.barycentric.clear();
+        if (o.count_fragments)
+            f.fragments.resize(samples);
+        else
+            f.fragments.clear();
     } else {
         f.ray_t.clear();
         f.triangle.clear();
@@ -409,14 +420,15 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
             std::fill_n(f.shape.begin() + k, n, std::int32_t{-1});
             if (o.depth_only) continue;
             std::fill_n(f.triangle.begin() + k, n, std::numeric_limits<std::uint32_t>::max());
-            std::fill_n(f.barycentric.begin() + k, n, std::array<double, 2>{0.0, 0.0});
-            std::fill_n(f.fragments.begin() + k, n, 0u);
+            if (o.barycentrics)
+                std::fill_n(f.barycentric.begin() + k, n, std::array<double, 2>{0.0, 0.0});
+            if (o.count_fragments) std::fill_n(f.fragments.begin() + k, n, 0u);
         }
         for (const SetupTriangle* s : bins[bi]) {
             if (o.depth_only)
-                draw<true>(*s, x0, y0, x1, y1, o.depth_test, o.orthographic, f);
+                draw<true>(*s, x0, y0, x1, y1, o, f);
             else
-                draw<false>(*s, x0, y0, x1, y1, o.depth_test, o.orthographic, f);
+                draw<false>(*s, x0, y0, x1, y1, o, f);
         }
         if (o.depth_only || ss != 1) return;
         for (int y = y0; y <= y1; ++y)

@@ -91,6 +91,11 @@ struct RasterOptions {
     /// Fill view_z and shape only (shadow maps): ray_t, triangle, barycentric, fragments,
     /// coverage and depth are left empty, 12 bytes a sample instead of 44.
     bool depth_only = false;
+    /// Fill `barycentric` (16 bytes a sample); off, it is left empty. Attributes interpolated
+    /// over the triangle need it; the lighting pass does not (realtime/frame.h turns it off).
+    bool barycentrics = true;
+    /// Fill `fragments` (the watertightness tests' count); off, it is left empty.
+    bool count_fragments = true;
     /// An orthographic projection (the shadow maps of directional lights): vertices' x and y
     /// are [-1, 1] across the image already (not divided by w) and w is the depth along the
     /// view axis; depth and barycentrics interpolate linearly, ray_t = view_z. The near plane
@@ -110,10 +115,12 @@ struct RasterFrame {
     std::vector<std::int32_t> shape;      ///< mesh index (-1: nothing)
     std::vector<std::uint32_t> triangle;  ///< triangle index in its mesh (UINT32_MAX: nothing)
     /// Perspective-correct barycentrics (b1, b2) of the triangle's vertices 1 and 2 (vertex 0
-    /// has 1 - b1 - b2): world position, normals, uv follow by interpolation.
+    /// has 1 - b1 - b2): world position, normals, uv follow by interpolation
+    /// (RasterOptions::barycentrics; empty without).
     std::vector<std::array<double, 2>> barycentric;
     /// Triangles that covered the sample, depth test or not (back faces culled are not counted):
-    /// overdraw, and the watertightness tests' coverage count.
+    /// overdraw, and the watertightness tests' coverage count (RasterOptions::count_fragments;
+    /// empty without).
     std::vector<std::uint32_t> fragments;
 
     // Per pixel (box filter over its samples, as volpath's pixels are box filtered).
