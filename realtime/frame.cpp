@@ -5,6 +5,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <chrono>
@@ -161,9 +162,23 @@ void rasterize_frame(const Scene& scene, const FrameOptions& o, RasterizedFrame&
     rasterize(scene, o.raster, w, h, f.raster);
     f.ms = ms_since(t0);
     f.camera = RasterCamera::from_scene(scene.camera, w, h);
+    // The shapes seen (in parallel blocks), then their materials.
+    const std::vector<char> shapes_seen = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, f.raster.shape.size(), 65536),
+        std::vector<char>(scene.shapes.size(), 0),
+        [&](const tbb::blocked_range<size_t>& r, std::vector<char> seen) {
+            for (size_t i = r.begin(); i != r.end(); ++i)
+                if (const std::int32_t s = f.raster.shape[i]; s >= 0)
+                    seen[static_cast<size_t>(s)] = 1;
+            return seen;
+        },
+        [](std::vector<char> a, const std::vector<char>& b) {
+            for (size_t k = 0; k < a.size(); ++k) a[k] = static_cast<char>(a[k] | b[k]);
+            return a;
+        });
     std::vector<char> seen(scene.materials.size(), 0);
-    for (const std::int32_t s : f.raster.shape)
-        if (s >= 0) seen[static_cast<size_t>(scene.shapes[static_cast<size_t>(s)].material)] = 1;
+    for (size_t k = 0; k < shapes_seen.size(); ++k)
+        if (shapes_seen[k]) seen[static_cast<size_t>(scene.shapes[k].material)] = 1;
     for (size_t m = 0; m < seen.size(); ++m) {
         if (!seen[m]) continue;
         f.lit_in_view.push_back(static_cast<int>(m));
@@ -230,16 +245,28 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const
     std::vector<float>& scattered = scratch_out;
     sg.width = g.width;
     sg.height = g.height;
-    sg.irradiance.assign(g.irradiance.begin(), g.irradiance.end());
-    sg.view_z.assign(g.view_z.begin(), g.view_z.end());
-    sg.material.assign(n, -1);
-    bool any_medium = false;
-    for (size_t i = 0; i < n; ++i) {
-        const std::int32_t m = g.material[i];
-        if (m < 0) continue;
-        sg.material[i] = dense[static_cast<size_t>(m)];
-        any_medium = any_medium || sg.material[i] >= 0;
-    }
+    sg.irradiance.resize(3 * n);  // every entry is written below
+    sg.view_z.resize(n);
+    sg.material.resize(n);
+    // Copied in parallel blocks: the G-buffer's irradiance and view z, and the dense kernel
+    // index of each sample's material (-1: no medium).
+    const bool any_medium = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 16384), false,
+        [&](const tbb::blocked_range<size_t>& r, bool any) {
+            std::copy(g.irradiance.begin() + static_cast<std::ptrdiff_t>(3 * r.begin()),
+                      g.irradiance.begin() + static_cast<std::ptrdiff_t>(3 * r.end()),
+                      sg.irradiance.begin() + static_cast<std::ptrdiff_t>(3 * r.begin()));
+            std::copy(g.view_z.begin() + static_cast<std::ptrdiff_t>(r.begin()),
+                      g.view_z.begin() + static_cast<std::ptrdiff_t>(r.end()),
+                      sg.view_z.begin() + static_cast<std::ptrdiff_t>(r.begin()));
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                const std::int32_t m = g.material[i];
+                sg.material[i] = m < 0 ? -1 : dense[static_cast<size_t>(m)];
+                any = any || sg.material[i] >= 0;
+            }
+            return any;
+        },
+        [](bool a, bool b) { return a || b; });
     SssParams p = o.sss;
     p.tan_half = frame.camera.tan_half;
     p.aspect = frame.camera.aspect;
