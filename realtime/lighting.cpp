@@ -353,47 +353,92 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         shape_medium[k] = scene.materials[static_cast<std::size_t>(shape_material[k])].kind ==
                           SceneMaterial::Kind::kMedium;
     }
-    // The facet normal of a covered sample as the G-buffer holds it (float).
-    auto facet_at = [&](std::size_t i) {
-        const Vec3& f = facet[static_cast<std::size_t>(frame.shape[i])][frame.triangle[i]];
-        return Vec3{static_cast<float>(f.x), static_cast<float>(f.y), static_cast<float>(f.z)};
-    };
-    // The first sphere light in front of the geometry along the camera ray of sample i (unit
-    // direction d), which the sample then shows (nullptr: none). Sphere lights are not
-    // rasterized (nor in volpath's BVH).
-    auto light_in_front = [&](std::size_t i, const Vec3& d) -> const SceneLight* {
-        double tl = kInf;
-        const SceneLight* hit = nearest_sphere(camera.position, d, tl);
-        return hit && (frame.shape[i] < 0 || tl < frame.ray_t[i]) ? hit : nullptr;
-    };
-
-    // The receivers: each sample's kind, and their bounding box, which the shadow maps are
-    // fitted to (a pass that reads the raster frame only, so that the first light's map can be
-    // drawn before the G-buffer pass, which then lights its samples as it writes them).
     const Box receivers = tbb::parallel_reduce(
         tbb::blocked_range<int>(0, H), Box{},
         [&](const tbb::blocked_range<int>& rows, Box box) {
             // The box's corners as plain numbers (Box::add per sample is a call).
             double lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
-            for (int sy = rows.begin(); sy != rows.end(); ++sy)
+            for (int sy = rows.begin(); sy != rows.end(); ++sy) {
+                // Every entry of the row is written here (the G-buffer is only sized): the
+                // lighting layers start at 0, the rest per sample below.
+                const std::size_t row = frame.sample_index(0, sy);
+                const auto w = static_cast<std::size_t>(W);
+                std::fill_n(g.irradiance.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w,
+                            0.f);
+                std::fill_n(g.specular.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w, 0.f);
+                std::fill_n(g.translucency.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w,
+                            0.f);
+                std::fill_n(g.surface.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w, 0.f);
+                std::fill_n(g.exit_weight.begin() + static_cast<std::ptrdiff_t>(row), w, 0.f);
+                std::fill_n(g.thickness.begin() + static_cast<std::ptrdiff_t>(row), w, 0.f);
                 for (int sx = 0; sx < W; ++sx) {
-                    const std::size_t i = frame.sample_index(sx, sy);
+                    const std::size_t i = row + static_cast<std::size_t>(sx);
                     const int s = frame.shape[i];
                     kind[i] = Kind::kNone;
-                    if (s < 0) continue;
-                    if (any_sphere && light_in_front(i, rays.direction(sx, sy))) continue;
-                    const bool medium = shape_medium[static_cast<std::size_t>(s)] != 0;
-                    // receiver_at's point and direction to the camera.
-                    const Vec3 du = rays.unnormalized(sx, sy);
-                    // A medium seen from inside is not lit here.
-                    if (medium && !(dot(facet_at(i), -normalize(du)) > 0)) continue;
+                    // Sphere lights are not rasterized (nor in volpath's BVH): the nearest in
+                    // front of the geometry is what the sample shows.
+                    const SceneLight* light_in_front = nullptr;
+                    if (any_sphere || s < 0) {
+                        const Vec3 d = rays.direction(sx, sy);
+                        double tl = kInf;
+                        const SceneLight* hit = nearest_sphere(camera.position, d, tl);
+                        if (hit && (s < 0 || tl < frame.ray_t[i])) light_in_front = hit;
+                        if (s < 0) {
+                            const RGB surf = hit ? hit->color : sky(d);
+                            for (std::size_t c = 0; c < 3; ++c)
+                                g.surface[3 * i + c] = static_cast<float>(surf[c]);
+                        }
+                    }
+                    if (s < 0) {
+                        g.view_z[i] = std::numeric_limits<float>::infinity();
+                        g.ray_t[i] = 0.f;
+                        g.shape[i] = -1;
+                        g.material[i] = -1;
+                        for (std::size_t c = 0; c < 3; ++c) g.normal[3 * i + c] = 0.f;
+                        continue;
+                    }
+                    const auto su = static_cast<std::size_t>(s);
+                    const int mat = shape_material[su];
+                    const bool medium = shape_medium[su] != 0;
+                    g.view_z[i] = static_cast<float>(frame.view_z[i]);
+                    g.ray_t[i] = static_cast<float>(frame.ray_t[i]);
+                    g.shape[i] = s;
+                    g.material[i] = mat;
+                    const Vec3& fn = facet[su][frame.triangle[i]];
+                    for (int c = 0; c < 3; ++c)
+                        g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(fn[c]);
+                    if (light_in_front) {  // a sphere light in front: nothing to light
+                        for (std::size_t c = 0; c < 3; ++c)
+                            g.surface[3 * i + c] = static_cast<float>(light_in_front->color[c]);
+                        continue;
+                    }
+                    // A medium is provisional until it is seen from outside (below).
                     kind[i] = medium ? Kind::kMedium : Kind::kDiffuse;
-                    const Vec3 p = camera.position + du * frame.view_z[i];
+                    const Receiver r = receiver_at(i, sx, sy);
+                    if (medium && !(dot(r.n, r.wo) > 0)) {
+                        kind[i] = Kind::kNone;  // a medium seen from inside: not lit here
+                        continue;
+                    }
                     for (int c = 0; c < 3; ++c) {
-                        lo[c] = std::min(lo[c], p[c]);
-                        hi[c] = std::max(hi[c], p[c]);
+                        lo[c] = std::min(lo[c], r.p[c]);
+                        hi[c] = std::max(hi[c], r.p[c]);
+                    }
+                    if (!medium) continue;
+                    const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(mat)];
+                    g.exit_weight[i] = static_cast<float>(T.exit_weight(dot(r.n, r.wo)));
+                    if (T.alpha() == 0) {
+                        // Mirror: F times what the reflected ray sees of the sphere lights, the
+                        // environment and the suns (unoccluded).
+                        const Vec3 rd = r.n * (2 * dot(r.n, r.wo)) - r.wo;
+                        const double F = dielectric::fresnel_dielectric(dot(r.n, r.wo), T.eta());
+                        double tb = kInf;
+                        const SceneLight* sl = nearest_sphere(r.p, rd, tb);
+                        const RGB Lr = sl ? sl->color : sky(rd);
+                        for (std::size_t c = 0; c < 3; ++c)
+                            g.specular[3 * i + c] = static_cast<float>(F * Lr[c]);
                     }
                 }
+            }
             box.lo = {lo[0], lo[1], lo[2]};
             box.hi = {hi[0], hi[1], hi[2]};
             return box;
@@ -575,217 +620,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     ShadowMap& sm = scratch_map;
     double shadow_ms = 0;
     int maps = 0;
-    const bool any_slab = std::any_of(slabs.begin(), slabs.end(), [](const SlabTransmittance& t) {
-        return !t.thickness_mm.empty();
-    });
-
-    // A light sample's views (one map, or cube faces) and the one whose map is drawn.
-    struct LightView {
-        const LightSample* s = nullptr;
-        std::vector<ShadowView> views;
-        std::size_t vi = 0;
-        ShadowView::Projection proj{};
-        bool ortho = true;
-        double texel0 = 0;  // ShadowView::texel_size at depth 1 when perspective
-        bool need_map = false;
-    };
-    auto views_of = [&](const LightSample& s) {
-        LightView lv;
-        lv.s = &s;
-        if (s.directional)
-            lv.views.push_back(
-                fit_directional(s.w, receivers, casters,
-                                s.environment ? o.environment_map_size : o.shadow_map_size));
-        else
-            lv.views = fit_point(s.pos, receivers, near, o.shadow_map_size);
-        lv.need_map = o.shadows || s.thickness_view || any_slab;
-        return lv;
-    };
-    // Draws view vi's map (where one is needed) and makes it the current view.
-    auto draw_view = [&](LightView& lv, std::size_t vi) {
-        lv.vi = vi;
-        const ShadowView& v = lv.views[vi];
-        if (lv.need_map) {
-            const auto t0 = clock::now();
-            render_shadow_map(scene, v, sm);
-            shadow_ms += std::chrono::duration<double, std::milli>(clock::now() - t0).count();
-            ++maps;
-        }
-        lv.proj = v.projection();
-        lv.ortho = v.orthographic;
-        lv.texel0 = v.texel_size(1.0);
-    };
-
-    // What light sample lv.s gives receiver sample i through the current view's map, added to
-    // its G-buffer entries.
-    auto light_sample_at = [&](const LightView& lv, std::size_t i, int sx, int sy) {
-        const LightSample& s = *lv.s;
-        const std::vector<ShadowView>& views = lv.views;
-        const std::size_t vi = lv.vi;
-        const Receiver r = receiver_at(i, sx, sy);
-        // Cube faces: a receiver belongs to the first face it projects into.
-        auto in_view = [&](const ShadowView& v) {
-            const ClipVertex c = v.to_clip(r.p);
-            if (v.orthographic) return true;
-            return c.w > 0 && std::abs(c.x) <= c.w && std::abs(c.y) <= c.w;
-        };
-        if (views.size() > 1) {
-            if (!in_view(views[vi])) return;
-            for (std::size_t k = 0; k < vi; ++k)
-                if (in_view(views[k])) return;
-        }
-        Vec3 wi;
-        RGB E;
-        if (!incident(s, r.p, wi, E)) return;
-        const double cs = dot(r.ns, wi);
-        // The point's map coordinates, once for both lookups below.
-        const ClipVertex pc = lv.need_map ? lv.proj.at(r.p) : ClipVertex{};
-        // Thickness along the light's ray from the map's first hit, if that is the receiver's
-        // own shape [Jimenez10].
-        double d_thick = -1;
-        if (r.kind == Kind::kMedium && lv.need_map &&
-            (s.thickness_view || (cs < 0 && slab_of(r.material)))) {
-            const ShadowMap::Lookup lk = sm.lookup(pc, r.p, true);
-            if (lk.inside && lk.shape == r.shape && std::isfinite(lk.map_depth))
-                d_thick =
-                    std::max(0.0, lk.point_depth - lk.map_depth_smooth) * lk.distance_per_depth;
-        }
-        if (s.thickness_view) g.thickness[i] = static_cast<float>(std::max(0.0, d_thick));
-        if (!s.lights) return;
-        if (cs > 0) {
-            bool lit = true;
-            if (o.shadows) {
-                // ShadowView::texel_size at the point's depth (pc.w).
-                const double texel = lv.ortho ? lv.texel0 : lv.texel0 * std::max(pc.w, 0.0);
-                const Vec3 nl = dot(r.n, wi) >= 0 ? r.n : -r.n;
-                // The normal-offset point p + nl * offset, by linearity; lit where it lies
-                // outside the map or within the bias of the texel's first surface.
-                const double off = o.normal_offset_texels * texel;
-                const ClipVertex dn = lv.proj.along(nl);
-                const ClipVertex qc{pc.x + dn.x * off, pc.y + dn.y * off, pc.w + dn.w * off};
-                std::size_t ti = 0;
-                lit = !sm.texel_of(qc, ti) || qc.w <= sm.depth[ti] + o.depth_bias_texels * texel;
-            }
-            if (!lit || (!spheres.empty() && behind_sphere(s, r.p, wi))) return;
-            if (r.kind == Kind::kDiffuse) {
-                const RGB& a = albedo_pi[static_cast<std::size_t>(r.material)];
-                for (std::size_t c = 0; c < 3; ++c)
-                    g.surface[3 * i + c] += static_cast<float>(a[c] * E[c] * cs);
-            } else {
-                const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(r.material)];
-                const double t = T(cs);
-                for (std::size_t c = 0; c < 3; ++c)
-                    g.irradiance[3 * i + c] += static_cast<float>(t * E[c] * cs);
-                if (T.alpha() > 0) {
-                    Vec3 bs, bt;
-                    basis(r.n, bs, bt);
-                    auto local = [&](const Vec3& v) {
-                        return Vec3{dot(v, bs), dot(v, bt), dot(v, r.n)};
-                    };
-                    const double f =
-                        dielectric::rough_dielectric_f(local(r.wo), local(wi), T.eta(), T.alpha(),
-                                                       dielectric::TransportMode::kRadiance);
-                    for (std::size_t c = 0; c < 3; ++c)
-                        g.specular[3 * i + c] += static_cast<float>(f * cs * E[c]);
-                }
-            }
-        } else if (r.kind == Kind::kMedium && d_thick >= 0) {
-            if (const SlabTransmittance* st = slab_of(r.material)) {
-                const auto Ts = st->at(d_thick * scene.unit_mm);
-                for (std::size_t c = 0; c < 3; ++c)
-                    g.translucency[3 * i + c] += static_cast<float>(E[c] * (-cs) * Ts[c]);
-            }
-        }
-    };
-
-    // The first light sample is lit in the G-buffer pass itself when it has one view: its map
-    // is drawn first, and each sample is lit as it is written (the G-buffer is then read once
-    // less; the sums are the same, as every layer starts at 0 or at what the pass writes
-    // before the light). Its map is drawn even if it should light nothing (the pass would then
-    // add nothing, as the separate pass would have skipped it).
-    LightView first;
-    bool fused = false;
-    if (!samples.empty()) {
-        first = views_of(samples[0]);
-        fused = first.views.size() == 1;
-        if (fused) draw_view(first, 0);
-    }
-
-    // The G-buffer pass: what the camera sees directly, every entry written here (the G-buffer
-    // is only sized), the first light sample added where fused.
-    tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
-        for (int sy = rows.begin(); sy != rows.end(); ++sy) {
-            // The lighting layers start at 0, the rest per sample below.
-            const std::size_t row = frame.sample_index(0, sy);
-            const auto w = static_cast<std::size_t>(W);
-            auto zero = [](std::vector<float>& v, std::size_t from, std::size_t n) {
-                std::fill_n(v.begin() + static_cast<std::ptrdiff_t>(from), n, 0.f);
-            };
-            zero(g.irradiance, 3 * row, 3 * w);
-            zero(g.specular, 3 * row, 3 * w);
-            zero(g.translucency, 3 * row, 3 * w);
-            zero(g.surface, 3 * row, 3 * w);
-            zero(g.exit_weight, row, w);
-            zero(g.thickness, row, w);
-            for (int sx = 0; sx < W; ++sx) {
-                const std::size_t i = row + static_cast<std::size_t>(sx);
-                const int s = frame.shape[i];
-                if (s < 0) {
-                    // The environment and the suns, or a sphere light in front.
-                    const Vec3 d = rays.direction(sx, sy);
-                    const SceneLight* l = any_sphere ? light_in_front(i, d) : nullptr;
-                    const RGB surf = l ? l->color : sky(d);
-                    for (std::size_t c = 0; c < 3; ++c)
-                        g.surface[3 * i + c] = static_cast<float>(surf[c]);
-                    g.view_z[i] = std::numeric_limits<float>::infinity();
-                    g.ray_t[i] = 0.f;
-                    g.shape[i] = -1;
-                    g.material[i] = -1;
-                    for (std::size_t c = 0; c < 3; ++c) g.normal[3 * i + c] = 0.f;
-                    continue;
-                }
-                const auto su = static_cast<std::size_t>(s);
-                const int mat = shape_material[su];
-                g.view_z[i] = static_cast<float>(frame.view_z[i]);
-                g.ray_t[i] = static_cast<float>(frame.ray_t[i]);
-                g.shape[i] = s;
-                g.material[i] = mat;
-                const Vec3 fn = facet_at(i);
-                for (int c = 0; c < 3; ++c)
-                    g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(fn[c]);
-                const Kind k = kind[i];
-                if (k == Kind::kNone) {
-                    // A sphere light in front shows its radiance; a medium seen from inside
-                    // nothing.
-                    if (const SceneLight* l =
-                            any_sphere ? light_in_front(i, rays.direction(sx, sy)) : nullptr)
-                        for (std::size_t c = 0; c < 3; ++c)
-                            g.surface[3 * i + c] = static_cast<float>(l->color[c]);
-                    continue;
-                }
-                if (k == Kind::kMedium) {
-                    const Receiver r = receiver_at(i, sx, sy);
-                    const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(mat)];
-                    g.exit_weight[i] = static_cast<float>(T.exit_weight(dot(r.n, r.wo)));
-                    if (T.alpha() == 0) {
-                        // Mirror: F times what the reflected ray sees of the sphere lights,
-                        // the environment and the suns (unoccluded).
-                        const Vec3 rd = r.n * (2 * dot(r.n, r.wo)) - r.wo;
-                        const double F = dielectric::fresnel_dielectric(dot(r.n, r.wo), T.eta());
-                        double tb = kInf;
-                        const SceneLight* sl = nearest_sphere(r.p, rd, tb);
-                        const RGB Lr = sl ? sl->color : sky(rd);
-                        for (std::size_t c = 0; c < 3; ++c)
-                            g.specular[3 * i + c] = static_cast<float>(F * Lr[c]);
-                    }
-                }
-                if (fused) light_sample_at(first, i, sx, sy);
-            }
-        }
-    });
-
-    for (std::size_t si = fused ? 1 : 0; si < samples.size(); ++si) {
-        const LightSample& s = samples[si];
+    for (const LightSample& s : samples) {
         const bool any = tbb::parallel_reduce(
             tbb::blocked_range<std::size_t>(0, N, 4096), false,
             [&](const tbb::blocked_range<std::size_t>& br, bool acc) {
@@ -797,18 +632,123 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
             },
             [](bool a, bool b) { return a || b; });
         if (!any) continue;
-        LightView lv = views_of(s);
-        for (std::size_t vi = 0; vi < lv.views.size(); ++vi) {
-            draw_view(lv, vi);
-            tbb::parallel_for(tbb::blocked_range<int>(0, H, std::max(1, 1024 / W)),
-                              [&](const tbb::blocked_range<int>& rows) {
-                                  for (int sy = rows.begin(); sy != rows.end(); ++sy)
-                                      for (int sx = 0; sx < W; ++sx) {
-                                          const std::size_t i = frame.sample_index(sx, sy);
-                                          if (kind[i] != Kind::kNone)
-                                              light_sample_at(lv, i, sx, sy);
-                                      }
-                              });
+        std::vector<ShadowView> views;
+        if (s.directional)
+            views.push_back(
+                fit_directional(s.w, receivers, casters,
+                                s.environment ? o.environment_map_size : o.shadow_map_size));
+        else
+            views = fit_point(s.pos, receivers, near, o.shadow_map_size);
+        const bool need_map =
+            o.shadows || s.thickness_view ||
+            std::any_of(slabs.begin(), slabs.end(),
+                        [](const SlabTransmittance& t) { return !t.thickness_mm.empty(); });
+        for (std::size_t vi = 0; vi < views.size(); ++vi) {
+            if (need_map) {
+                const auto t0 = clock::now();
+                render_shadow_map(scene, views[vi], sm);
+                shadow_ms += std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+                ++maps;
+            }
+            const ShadowView::Projection proj = views[vi].projection();
+            const bool ortho = views[vi].orthographic;
+            const double texel0 = views[vi].texel_size(1.0);  // at depth 1 when perspective
+            tbb::parallel_for(
+                tbb::blocked_range<int>(0, H, std::max(1, 1024 / W)),
+                [&](const tbb::blocked_range<int>& rows) {
+                    for (int sy = rows.begin(); sy != rows.end(); ++sy)
+                        for (int sx = 0; sx < W; ++sx) {
+                            const std::size_t i = frame.sample_index(sx, sy);
+                            if (kind[i] == Kind::kNone) continue;
+                            const Receiver r = receiver_at(i, sx, sy);
+                            // Cube faces: a receiver belongs to the first face it projects into.
+                            auto in_view = [&](const ShadowView& v) {
+                                const ClipVertex c = v.to_clip(r.p);
+                                if (v.orthographic) return true;
+                                return c.w > 0 && std::abs(c.x) <= c.w && std::abs(c.y) <= c.w;
+                            };
+                            if (views.size() > 1) {
+                                if (!in_view(views[vi])) continue;
+                                bool earlier = false;
+                                for (std::size_t k = 0; k < vi && !earlier; ++k)
+                                    earlier = in_view(views[k]);
+                                if (earlier) continue;
+                            }
+                            Vec3 wi;
+                            RGB E;
+                            if (!incident(s, r.p, wi, E)) continue;
+                            const double cs = dot(r.ns, wi);
+                            // The point's map coordinates, once for both lookups below.
+                            const ClipVertex pc = need_map ? proj.at(r.p) : ClipVertex{};
+                            // Thickness along the light's ray from the map's first hit, if that is
+                            // the receiver's own shape [Jimenez10].
+                            double d_thick = -1;
+                            if (r.kind == Kind::kMedium && need_map &&
+                                (s.thickness_view || (cs < 0 && slab_of(r.material)))) {
+                                const ShadowMap::Lookup lk = sm.lookup(pc, r.p, true);
+                                if (lk.inside && lk.shape == r.shape && std::isfinite(lk.map_depth))
+                                    d_thick = std::max(0.0, lk.point_depth - lk.map_depth_smooth) *
+                                              lk.distance_per_depth;
+                            }
+                            if (s.thickness_view)
+                                g.thickness[i] = static_cast<float>(std::max(0.0, d_thick));
+                            if (!s.lights) continue;
+                            if (cs > 0) {
+                                bool lit = true;
+                                if (o.shadows) {
+                                    // ShadowView::texel_size at the point's depth (pc.w).
+                                    const double texel =
+                                        ortho ? texel0 : texel0 * std::max(pc.w, 0.0);
+                                    const Vec3 nl = dot(r.n, wi) >= 0 ? r.n : -r.n;
+                                    // The normal-offset point p + nl * offset, by linearity; lit
+                                    // where it lies outside the map or within the bias of the
+                                    // texel's first surface.
+                                    const double off = o.normal_offset_texels * texel;
+                                    const ClipVertex dn = proj.along(nl);
+                                    const ClipVertex qc{pc.x + dn.x * off, pc.y + dn.y * off,
+                                                        pc.w + dn.w * off};
+                                    std::size_t ti = 0;
+                                    lit = !sm.texel_of(qc, ti) ||
+                                          qc.w <= sm.depth[ti] + o.depth_bias_texels * texel;
+                                }
+                                if (!lit || (!spheres.empty() && behind_sphere(s, r.p, wi)))
+                                    continue;
+                                if (r.kind == Kind::kDiffuse) {
+                                    const RGB& a = albedo_pi[static_cast<std::size_t>(r.material)];
+                                    for (std::size_t c = 0; c < 3; ++c)
+                                        g.surface[3 * i + c] +=
+                                            static_cast<float>(a[c] * E[c] * cs);
+                                } else {
+                                    const BoundaryTransmittance& T =
+                                        *mat_T[static_cast<std::size_t>(r.material)];
+                                    const double t = T(cs);
+                                    for (std::size_t c = 0; c < 3; ++c)
+                                        g.irradiance[3 * i + c] +=
+                                            static_cast<float>(t * E[c] * cs);
+                                    if (T.alpha() > 0) {
+                                        Vec3 bs, bt;
+                                        basis(r.n, bs, bt);
+                                        auto local = [&](const Vec3& v) {
+                                            return Vec3{dot(v, bs), dot(v, bt), dot(v, r.n)};
+                                        };
+                                        const double f = dielectric::rough_dielectric_f(
+                                            local(r.wo), local(wi), T.eta(), T.alpha(),
+                                            dielectric::TransportMode::kRadiance);
+                                        for (std::size_t c = 0; c < 3; ++c)
+                                            g.specular[3 * i + c] +=
+                                                static_cast<float>(f * cs * E[c]);
+                                    }
+                                }
+                            } else if (r.kind == Kind::kMedium && d_thick >= 0) {
+                                if (const SlabTransmittance* st = slab_of(r.material)) {
+                                    const auto Ts = st->at(d_thick * scene.unit_mm);
+                                    for (std::size_t c = 0; c < 3; ++c)
+                                        g.translucency[3 * i + c] +=
+                                            static_cast<float>(E[c] * (-cs) * Ts[c]);
+                                }
+                            }
+                        }
+                });
         }
     }
 
