@@ -792,8 +792,14 @@ void sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materia
     // vertical pass reads nothing else).
     const Extent ext = scan_pixels(g, materials, reach_mm, px_per_mm_z, py_per_mm_z);
 
-    // The output starts as the input (what material -1 keeps).
-    out.assign(g.irradiance.begin(), g.irradiance.end());
+    // The output starts as the input (what material -1 keeps), copied in parallel blocks.
+    out.resize(g.irradiance.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.irradiance.size(), size_t{1} << 16),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          std::copy(g.irradiance.begin() + static_cast<ptrdiff_t>(r.begin()),
+                                    g.irradiance.begin() + static_cast<ptrdiff_t>(r.end()),
+                                    out.begin() + static_cast<ptrdiff_t>(r.begin()));
+                      });
     if (ext.x0 > ext.x1) return;  // no medium pixel
     if (p.rotate) {
         rotated_pass(g, prep, rank, p, lp, px_per_mm_z, py_per_mm_z, out);
