@@ -671,6 +671,52 @@ TEST(Lighting, VolpathMaxDepthIsKeyedOnlyWhenSet) {
     EXPECT_NE(a, b);
 }
 
+TEST(Lighting, RowShadowTestsEqualTheGeneralPass) {
+    // Directional light samples (a sun's disc, the environment) with one orthographic map each
+    // take the row-wise shadow test (four samples at a time, then the rest one by one); with a
+    // slab table the same samples take the general per-sample pass. Both must give the same
+    // bits in every layer but translucency, at widths with and without a remainder of four.
+    Scene s = parse_scene(kDiffuseScene, "diffuse.toml", ".");
+    s.lights.erase(s.lights.begin());  // no sphere light: it would take the general pass
+    s.materials[1].kind = SceneMaterial::Kind::kMedium;  // the sphere: a rough medium
+    s.materials[1].medium.eta = 1.3;
+    s.materials[1].roughness = 0.2;
+    s.materials[1].medium.sigma_a_per_cm = {1, 1, 1};
+    s.materials[1].medium.sigma_s_per_cm = {10, 10, 10};
+    const SlabTransmittance table{{0.1, 1.0}, {{{0.5, 0.5, 0.5}}, {{0.1, 0.1, 0.1}}}};
+    LightingOptions o;
+    o.light_samples = 4;
+    o.environment_samples = 8;
+    o.shadow_map_size = 128;
+    for (const auto& [w, ss] : {std::pair{23, 1}, std::pair{24, 2}, std::pair{25, 1}}) {
+        const Rendered rows = render_rt(s, w, w, ss, o);
+        const Rendered general = render_rt(s, w, w, ss, o, {{}, table});
+        auto same = [](const std::vector<float>& a, const std::vector<float>& b) {
+            return a.size() == b.size() &&
+                   std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+        };
+        EXPECT_TRUE(same(rows.g.irradiance, general.g.irradiance)) << w;
+        EXPECT_TRUE(same(rows.g.surface, general.g.surface)) << w;
+        EXPECT_TRUE(same(rows.g.specular, general.g.specular)) << w;
+        EXPECT_TRUE(same(rows.g.exit_weight, general.g.exit_weight)) << w;
+        // The row path for 1 and 2 threads.
+        GBuffer one;
+        tbb::task_arena arena(1);
+        arena.execute([&] { one = render_rt(s, w, w, ss, o).g; });
+        EXPECT_TRUE(same(rows.g.irradiance, one.irradiance)) << w;
+        EXPECT_TRUE(same(rows.g.surface, one.surface)) << w;
+        EXPECT_TRUE(same(rows.g.specular, one.specular)) << w;
+        // Something was lit and something shadowed: the test compares real work.
+        const auto lit = std::count_if(rows.g.irradiance.begin(), rows.g.irradiance.end(),
+                                       [](float v) { return v > 0; });
+        EXPECT_GT(lit, 0) << w;
+        EXPECT_GT(std::count_if(general.g.translucency.begin(), general.g.translucency.end(),
+                                [](float v) { return v > 0; }),
+                  0)
+            << w;
+    }
+}
+
 TEST(Lighting, BitIdenticalForOneAndTwoThreads) {
     Scene s = parse_scene(kDiffuseScene, "diffuse.toml", ".");
     // And a medium with translucency, so that every layer is exercised.
