@@ -746,6 +746,10 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     // (A reference: the light passes' worker threads must see this thread's map, not theirs.)
     static thread_local ShadowMap scratch_map;
     ShadowMap& sm = scratch_map;
+    // The cube face of each receiver (light samples with several views; per calling thread).
+    static thread_local std::vector<std::uint8_t> face_scratch;
+    std::vector<std::uint8_t>& face = face_scratch;
+    constexpr std::uint8_t kNoFace = 255;
     double shadow_ms = 0;
     int maps = 0;
     for (const LightSample& s : samples) {
@@ -768,6 +772,29 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         else
             views = fit_point(s.pos, receivers, near, o.shadow_map_size);
         const bool need_map = o.shadows || s.thickness_view || any_slab;
+        // Cube faces: a receiver belongs to the first face it projects into, found once per
+        // light sample (kNoFace: none), so that each face's pass skips the others' receivers.
+        if (views.size() > 1) {
+            face.resize(N);
+            tbb::parallel_for(
+                tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
+                    for (int sy = rows.begin(); sy != rows.end(); ++sy)
+                        for (int sx = 0; sx < W; ++sx) {
+                            const std::size_t i = frame.sample_index(sx, sy);
+                            face[i] = kNoFace;
+                            if (kind[i] == Kind::kNone) continue;
+                            const Vec3 p = receiver_at(i, sx, sy).p;
+                            for (std::size_t k = 0; k < views.size(); ++k) {
+                                const ClipVertex c = views[k].to_clip(p);
+                                if (views[k].orthographic ||
+                                    (c.w > 0 && std::abs(c.x) <= c.w && std::abs(c.y) <= c.w)) {
+                                    face[i] = static_cast<std::uint8_t>(k);
+                                    break;
+                                }
+                            }
+                        }
+                });
+        }
         for (std::size_t vi = 0; vi < views.size(); ++vi) {
             if (need_map) {
                 const auto t0 = clock::now();
@@ -833,20 +860,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                         for (int sx = 0; sx < W; ++sx) {
                             const std::size_t i = frame.sample_index(sx, sy);
                             if (kind[i] == Kind::kNone) continue;
+                            if (views.size() > 1 && face[i] != vi) continue;
                             const Receiver r = receiver_at(i, sx, sy);
-                            // Cube faces: a receiver belongs to the first face it projects into.
-                            auto in_view = [&](const ShadowView& v) {
-                                const ClipVertex c = v.to_clip(r.p);
-                                if (v.orthographic) return true;
-                                return c.w > 0 && std::abs(c.x) <= c.w && std::abs(c.y) <= c.w;
-                            };
-                            if (views.size() > 1) {
-                                if (!in_view(views[vi])) continue;
-                                bool earlier = false;
-                                for (std::size_t k = 0; k < vi && !earlier; ++k)
-                                    earlier = in_view(views[k]);
-                                if (earlier) continue;
-                            }
                             Vec3 wi;
                             RGB E;
                             if (!incident(s, r.p, wi, E)) continue;
