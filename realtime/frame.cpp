@@ -90,8 +90,9 @@ void composite_supersampled(const Scene& scene, const RasterizedFrame& frame, co
                 normal.at(x, y, c) = static_cast<float>(nrm[cc] * inv);
                 if (sub_se) sub_se->at(x, y, c) = static_cast<float>(std::sqrt(var[cc]) * inv);
             }
-            depth.at(x, y, 0) =
-                static_cast<float>(frame.raster.depth[frame.raster.pixel_index(x, y)]);
+            if (all_layers)
+                depth.at(x, y, 0) =
+                    static_cast<float>(frame.raster.depth[frame.raster.pixel_index(x, y)]);
             const auto best = std::max_element(votes.begin(), votes.end());
             material.at(x, y, 0) = static_cast<float>(best - votes.begin() - 1);
         }
@@ -159,7 +160,10 @@ void rasterize_frame(const Scene& scene, const FrameOptions& o, RasterizedFrame&
     const int w = o.width > 0 ? o.width : scene.camera.width;
     const int h = o.height > 0 ? o.height : scene.camera.height;
     const auto t0 = Clock::now();
-    rasterize(scene, o.raster, w, h, f.raster);
+    RasterOptions ro = o.raster;
+    // Only the layers' composite reads coverage and depth.
+    ro.pixel_layers = ro.pixel_layers && o.all_layers;
+    rasterize(scene, ro, w, h, f.raster);
     f.ms = ms_since(t0);
     f.camera = RasterCamera::from_scene(scene.camera, w, h);
     // The shapes seen (in parallel blocks), then their materials.

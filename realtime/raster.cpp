@@ -397,10 +397,14 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
     const int ss = o.supersample;
     const RasterCamera::SampleRays rays =
         o.depth_only ? RasterCamera::SampleRays{} : camera.sample_rays(ss);
-    if (!o.depth_only) {
+    const bool pixels = !o.depth_only && o.pixel_layers;
+    if (pixels) {
         // Every entry is written below.
         f.coverage.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
         f.depth.resize(f.coverage.size());
+    } else {
+        f.coverage.clear();
+        f.depth.clear();
     }
     // The ray distance of a covered sample.
     auto ray_t = [&](int sx, int sy, std::size_t k) {
@@ -436,6 +440,7 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
                 const std::size_t k = f.sample_index(x, y);
                 const bool covered = f.shape[k] >= 0;
                 f.ray_t[k] = covered ? ray_t(x, y, k) : 0.0;
+                if (!pixels) continue;
                 f.coverage[k] = covered ? 1.0 : 0.0;
                 f.depth[k] = f.ray_t[k];
             }
@@ -459,6 +464,7 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
                     ++covered;
                     sum_t += f.ray_t[k];
                 }
+            if (!pixels) continue;
             const std::size_t p = f.pixel_index(x, y);
             f.coverage[p] = static_cast<double>(covered) / (ss * ss);
             f.depth[p] = sum_t / (ss * ss);

@@ -96,6 +96,9 @@ struct RasterOptions {
     bool barycentrics = true;
     /// Fill `fragments` (the watertightness tests' count); off, it is left empty.
     bool count_fragments = true;
+    /// Fill the per-pixel `coverage` and `depth` (volpath's box filter; 16 bytes a pixel); off,
+    /// they are left empty (a frame that presents radiance only does not read them).
+    bool pixel_layers = true;
     /// An orthographic projection (the shadow maps of directional lights): vertices' x and y
     /// are [-1, 1] across the image already (not divided by w) and w is the depth along the
     /// view axis; depth and barycentrics interpolate linearly, ray_t = view_z. The near plane
@@ -124,6 +127,7 @@ struct RasterFrame {
     std::vector<std::uint32_t> fragments;
 
     // Per pixel (box filter over its samples, as volpath's pixels are box filtered).
+    /// (RasterOptions::pixel_layers; both empty without.)
     std::vector<double> coverage;  ///< fraction of the pixel's samples covered
     std::vector<double> depth;     ///< mean ray_t over the samples, 0 where nothing: volpath's
                                    ///< "depth" layer
