@@ -72,11 +72,20 @@ enum class SssMethod {
 };
 const char* to_string(SssMethod m);
 
+/// The raster options of a frame: RasterOptions' defaults without barycentrics and fragment
+/// counts, which no pass of a frame reads.
+inline RasterOptions frame_raster_options() {
+    RasterOptions r;
+    r.barycentrics = false;
+    r.count_fragments = false;
+    return r;
+}
+
 struct FrameOptions {
     int width = 0, height = 0;  ///< 0: the scene camera's size
     /// Supersample, tiles, near plane, culling. Pass 1 reads depth, shape and triangle only,
     /// so a frame's raster fills no barycentrics and counts no fragments.
-    RasterOptions raster = {.barycentrics = false, .count_fragments = false};
+    RasterOptions raster = frame_raster_options();
     LightingOptions lighting;
     SssMethod method = SssMethod::kSeparable;
     /// Edge mode, follow-surface strength, rejection depth, jitter, seed; tan_half, aspect and

@@ -434,6 +434,7 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
             else
                 draw<false>(*s, x0, y0, x1, y1, o, f);
         }
+        if (o.on_tile) o.on_tile(x0, y0, x1, y1);
         if (o.depth_only || ss != 1) return;
         for (int y = y0; y <= y1; ++y)
             for (int x = x0; x <= x1; ++x) {

@@ -23,6 +23,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -99,6 +100,11 @@ struct RasterOptions {
     /// Fill the per-pixel `coverage` and `depth` (volpath's box filter; 16 bytes a pixel); off,
     /// they are left empty (a frame that presents radiance only does not read them).
     bool pixel_layers = true;
+    /// Called from each tile's task once its samples are final, with the tile's samples
+    /// [x0, x1] x [y0, y1] (inclusive): a resolve of the tile into another target while it is
+    /// in cache (a shadow map's float depth). Tiles run in parallel: it must touch only what
+    /// belongs to its tile. Empty: none.
+    std::function<void(int x0, int y0, int x1, int y1)> on_tile;
     /// An orthographic projection (the shadow maps of directional lights): vertices' x and y
     /// are [-1, 1] across the image already (not divided by w) and w is the depth along the
     /// view axis; depth and barycentrics interpolate linearly, ray_t = view_z. The near plane

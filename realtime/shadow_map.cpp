@@ -237,16 +237,18 @@ void render_shadow_map(const Scene& scene, const ShadowView& view, ShadowMap& sm
             m.triangles = scene.shapes[k].mesh.triangles;
             m.cull_back_faces = false;
         }
+        // Each tile of the band is copied into the map as soon as it is drawn (in cache).
+        o.on_tile = [&](int x0, int y0, int x1, int y1) {
+            for (int y = y0; y <= y1; ++y)
+                for (int x = x0; x <= x1; ++x) {
+                    const std::size_t i = f.sample_index(x, y);
+                    const std::size_t j =
+                        static_cast<std::size_t>(r0 + y) * S + static_cast<std::size_t>(x);
+                    sm.depth[j] = static_cast<float>(f.view_z[i]);
+                    sm.shape[j] = f.shape[i];
+                }
+        };
         rasterize(cam, meshes, o, f);
-        tbb::parallel_for(0, r1 - r0, [&](int y) {
-            for (int x = 0; x < view.size; ++x) {
-                const std::size_t i = f.sample_index(x, y);
-                const std::size_t j =
-                    static_cast<std::size_t>(r0 + y) * S + static_cast<std::size_t>(x);
-                sm.depth[j] = static_cast<float>(f.view_z[i]);
-                sm.shape[j] = f.shape[i];
-            }
-        });
     }
 }
 

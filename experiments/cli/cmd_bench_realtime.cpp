@@ -1,7 +1,7 @@
 // `ssslab bench --realtime`: the real-time renderer's passes on the built-in scenes (issue 13),
 // each the fastest of --repeat runs, with 1 thread and all threads: the rasterizer ("raster"),
 // pass 1 ("shadow maps", "lighting": realtime/lighting.h with one stratified sample per light,
-// so one shadow map per light, plus the thickness view of the first), the separable SSS pass
+// so one shadow map per light; the thickness layer is off, as in a frame), the separable SSS pass
 // ("sss": the scene's own media, svd:rank=1 with 17 taps from short MCML runs, follow-surface,
 // no jitter), the composite, and the whole frame (realtime/frame.h, all of them in sequence).
 // The SSS pass is set beside a streaming floor measured in the same run: the bytes the pass
