@@ -477,6 +477,17 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                 std::fill_n(g.surface.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w, 0.f);
                 std::fill_n(g.exit_weight.begin() + static_cast<std::ptrdiff_t>(row), w, 0.f);
                 std::fill_n(g.thickness.begin() + static_cast<std::ptrdiff_t>(row), w, 0.f);
+                // Depths and shapes as they are (the raster frame holds +inf, 0 and -1 where
+                // nothing is seen, what the G-buffer holds there), in loops that vectorise.
+                {
+                    const double* vz = &frame.view_z[row];
+                    const double* rt = &frame.ray_t[row];
+                    float* gz = &g.view_z[row];
+                    float* gt = &g.ray_t[row];
+                    for (std::size_t x = 0; x < w; ++x) gz[x] = static_cast<float>(vz[x]);
+                    for (std::size_t x = 0; x < w; ++x) gt[x] = static_cast<float>(rt[x]);
+                    std::copy_n(&frame.shape[row], w, &g.shape[row]);
+                }
                 for (int sx = 0; sx < W; ++sx) {
                     const std::size_t i = row + static_cast<std::size_t>(sx);
                     const int s = frame.shape[i];
@@ -496,9 +507,6 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                         }
                     }
                     if (s < 0) {
-                        g.view_z[i] = std::numeric_limits<float>::infinity();
-                        g.ray_t[i] = 0.f;
-                        g.shape[i] = -1;
                         g.material[i] = -1;
                         for (std::size_t c = 0; c < 3; ++c) g.normal[3 * i + c] = 0.f;
                         continue;
@@ -506,9 +514,6 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                     const auto su = static_cast<std::size_t>(s);
                     const int mat = shape_material[su];
                     const bool medium = shape_medium[su] != 0;
-                    g.view_z[i] = static_cast<float>(frame.view_z[i]);
-                    g.ray_t[i] = static_cast<float>(frame.ray_t[i]);
-                    g.shape[i] = s;
                     g.material[i] = mat;
                     const Vec3& fn = facet[su][frame.triangle[i]];
                     for (int c = 0; c < 3; ++c)
@@ -518,10 +523,21 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                             g.surface[3 * i + c] = static_cast<float>(light_in_front->color[c]);
                         continue;
                     }
+                    if (!medium) {
+                        kind[i] = Kind::kDiffuse;
+                        // receiver_at's point, all the box needs.
+                        const Vec3 p =
+                            camera.position + rays.unnormalized(sx, sy) * frame.view_z[i];
+                        for (int c = 0; c < 3; ++c) {
+                            lo[c] = std::min(lo[c], p[c]);
+                            hi[c] = std::max(hi[c], p[c]);
+                        }
+                        continue;
+                    }
                     // A medium is provisional until it is seen from outside (below).
-                    kind[i] = medium ? Kind::kMedium : Kind::kDiffuse;
+                    kind[i] = Kind::kMedium;
                     const Receiver r = receiver_at(i, sx, sy);
-                    if (medium && !(dot(r.n, r.wo) > 0)) {
+                    if (!(dot(r.n, r.wo) > 0)) {
                         kind[i] = Kind::kNone;  // a medium seen from inside: not lit here
                         continue;
                     }
@@ -529,7 +545,6 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                         lo[c] = std::min(lo[c], r.p[c]);
                         hi[c] = std::max(hi[c], r.p[c]);
                     }
-                    if (!medium) continue;
                     const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(mat)];
                     g.exit_weight[i] = static_cast<float>(T.exit_weight(dot(r.n, r.wo)));
                     if (T.alpha() == 0) {
