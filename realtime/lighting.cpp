@@ -109,25 +109,46 @@ typedef double D4 __attribute__((vector_size(32)));
 typedef std::int64_t M4 __attribute__((vector_size(32)));  // lane masks: -1 true, 0 false
 typedef std::int32_t I4 __attribute__((vector_size(16)));
 
-// Four samples at a time in GCC's vector extensions (one AVX register, or two SSE2 ones).
+// Four samples at a time in GCC's vector extensions (one AVX register, or two SSE2 ones); a
+// row's last samples as a padded quad.
 __attribute__((target_clones("avx2", "default"))) void directional_row(
     const DirectionalRow& k, int n, const double* ndc_x, double ndc_y, const double* view_z,
     const float* normal, const Kind* kind, const float* depth, double* cos_out,
     std::uint8_t* lit_out) {
     const double size = k.size;
     const D4 zero4{}, one4 = zero4 + 1.0, size4 = zero4 + size;
-    int x = 0;
-    for (; x + 4 <= n; x += 4) {
+    for (int x = 0; x < n; x += 4) {
+        // The last, partial quad reads padded copies (nothing seen there) and writes back only
+        // its samples: one body for every sample.
+        const int m = std::min(4, n - x);
+        double pad_ndc[4] = {0, 0, 0, 0}, pad_z[4] = {1, 1, 1, 1}, pad_cos[4];
+        float pad_n[12] = {};
+        Kind pad_kind[4] = {Kind::kNone, Kind::kNone, Kind::kNone, Kind::kNone};
+        std::uint8_t pad_lit[4];
+        const double* in_ndc = ndc_x + x;
+        const double* in_z = view_z + x;
+        const float* in_n = normal + 3 * x;
+        const Kind* in_kind = kind + x;
+        double* out_cos = cos_out + x;
+        std::uint8_t* out_lit = lit_out + x;
+        if (m < 4) {
+            std::copy_n(in_ndc, m, pad_ndc);
+            std::copy_n(in_z, m, pad_z);
+            std::copy_n(in_n, 3 * m, pad_n);
+            std::copy_n(in_kind, m, pad_kind);
+            in_ndc = pad_ndc, in_z = pad_z, in_n = pad_n, in_kind = pad_kind;
+            out_cos = pad_cos, out_lit = pad_lit;
+        }
         D4 nx_, z, nx, ny, nz;
         M4 medium, diffuse;
-        std::memcpy(&nx_, ndc_x + x, sizeof nx_);
-        std::memcpy(&z, view_z + x, sizeof z);
+        std::memcpy(&nx_, in_ndc, sizeof nx_);
+        std::memcpy(&z, in_z, sizeof z);
         for (int j = 0; j < 4; ++j) {
-            nx[j] = normal[3 * (x + j)];
-            ny[j] = normal[3 * (x + j) + 1];
-            nz[j] = normal[3 * (x + j) + 2];
-            medium[j] = kind[x + j] == Kind::kMedium ? -1 : 0;
-            diffuse[j] = kind[x + j] == Kind::kDiffuse ? -1 : 0;
+            nx[j] = in_n[3 * j];
+            ny[j] = in_n[3 * j + 1];
+            nz[j] = in_n[3 * j + 2];
+            medium[j] = in_kind[j] == Kind::kMedium ? -1 : 0;
+            diffuse[j] = in_kind[j] == Kind::kDiffuse ? -1 : 0;
         }
         // receiver_at: the point on the camera ray, the normal, the direction to the camera.
         const D4 dx = k.forward.x + k.right.x * nx_ + k.up.x * ndc_y;
@@ -143,7 +164,7 @@ __attribute__((target_clones("avx2", "default"))) void directional_row(
         const M4 flip = diffuse & (nx * ox + ny * oy + nz * oz < 0);
         const D4 sx = flip ? -nx : nx, sy = flip ? -ny : ny, sz = flip ? -nz : nz;
         const D4 cs = sx * k.w.x + sy * k.w.y + sz * k.w.z;
-        std::memcpy(cos_out + x, &cs, sizeof cs);
+        std::memcpy(out_cos, &cs, sizeof cs);
         // The map coordinates of the normal-offset point, the nearest texel, the depth test.
         const D4 ax = px - k.proj.origin.x, ay = py - k.proj.origin.y, az = pz - k.proj.origin.z;
         const D4 cx = ax * k.proj.x.x + ay * k.proj.x.y + az * k.proj.x.z;
@@ -162,37 +183,11 @@ __attribute__((target_clones("avx2", "default"))) void directional_row(
         D4 map_depth;
         for (int j = 0; j < 4; ++j) map_depth[j] = depth[ti[j]];
         const M4 lit = ~inside | (qw <= map_depth + k.bias);
-        for (int j = 0; j < 4; ++j) lit_out[x + j] = lit[j] != 0;
-    }
-    // The last samples one at a time, the same expressions.
-    for (; x < n; ++x) {
-        const double dx = k.forward.x + k.right.x * ndc_x[x] + k.up.x * ndc_y;
-        const double dy = k.forward.y + k.right.y * ndc_x[x] + k.up.y * ndc_y;
-        const double dz = k.forward.z + k.right.z * ndc_x[x] + k.up.z * ndc_y;
-        const double z = view_z[x];
-        const double px = k.camera.x + dx * z, py = k.camera.y + dy * z, pz = k.camera.z + dz * z;
-        const double nx = normal[3 * x], ny = normal[3 * x + 1], nz = normal[3 * x + 2];
-        const bool medium = kind[x] == Kind::kMedium;
-        const double inv = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
-        const double ox = medium ? -(dx * inv) : -dx, oy = medium ? -(dy * inv) : -dy,
-                     oz = medium ? -(dz * inv) : -dz;
-        const bool flip = kind[x] == Kind::kDiffuse && nx * ox + ny * oy + nz * oz < 0;
-        const double sx = flip ? -nx : nx, sy = flip ? -ny : ny, sz = flip ? -nz : nz;
-        cos_out[x] = sx * k.w.x + sy * k.w.y + sz * k.w.z;
-        const double ax = px - k.proj.origin.x, ay = py - k.proj.origin.y,
-                     az = pz - k.proj.origin.z;
-        const double cx = ax * k.proj.x.x + ay * k.proj.x.y + az * k.proj.x.z;
-        const double cy = ax * k.proj.y.x + ay * k.proj.y.y + az * k.proj.y.z;
-        const double cw = ax * k.proj.w.x + ay * k.proj.w.y + az * k.proj.w.z;
-        const bool front = nx * k.w.x + ny * k.w.y + nz * k.w.z >= 0;
-        const double lx = front ? nx : -nx, ly = front ? ny : -ny, lz = front ? nz : -nz;
-        const double qx = cx + (lx * k.proj.x.x + ly * k.proj.x.y + lz * k.proj.x.z) * k.offset;
-        const double qy = cy + (lx * k.proj.y.x + ly * k.proj.y.y + lz * k.proj.y.z) * k.offset;
-        const double qw = cw + (lx * k.proj.w.x + ly * k.proj.w.y + lz * k.proj.w.z) * k.offset;
-        const double fx = (qx + 1) * 0.5 * size, fy = (1 - qy) * 0.5 * size;
-        const bool inside = fx >= 0 && fy >= 0 && fx < size && fy < size;
-        lit_out[x] =
-            !inside || qw <= depth[static_cast<int>(fy) * k.size + static_cast<int>(fx)] + k.bias;
+        for (int j = 0; j < 4; ++j) out_lit[j] = lit[j] != 0;
+        if (m < 4) {
+            std::copy_n(pad_cos, m, cos_out + x);
+            std::copy_n(pad_lit, m, lit_out + x);
+        }
     }
 }
 
