@@ -405,10 +405,13 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     // is that of the ray-plane intersection, to rounding), the facet normal as the G-buffer
     // holds it (float), and the camera ray normalized only where its length matters (a
     // medium's boundary terms). Every pass sees the same receiver.
+    auto point_at = [&](std::size_t i, const Vec3& du) {
+        return camera.position + du * frame.view_z[i];
+    };
     auto receiver_at = [&](std::size_t i, int sx, int sy) {
         Receiver r;
         const Vec3 du = rays.unnormalized(sx, sy);
-        r.p = camera.position + du * frame.view_z[i];
+        r.p = point_at(i, du);
         r.n = {g.normal[3 * i], g.normal[3 * i + 1], g.normal[3 * i + 2]};
         r.kind = kind[i];
         r.wo = r.kind == Kind::kMedium ? -normalize(du) : -du;
@@ -459,6 +462,12 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         [&](const tbb::blocked_range<int>& rows, Box box) {
             // The box's corners as plain numbers (Box::add per sample is a call).
             double lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
+            auto grow = [&](const Vec3& p) {
+                for (int c = 0; c < 3; ++c) {
+                    lo[c] = std::min(lo[c], p[c]);
+                    hi[c] = std::max(hi[c], p[c]);
+                }
+            };
             for (int sy = rows.begin(); sy != rows.end(); ++sy) {
                 // Every entry of the row is written here (the G-buffer is only sized): the
                 // lighting layers start at 0, the rest per sample below.
@@ -520,13 +529,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                     }
                     if (!medium) {
                         kind[i] = Kind::kDiffuse;
-                        // receiver_at's point, all the box needs.
-                        const Vec3 p =
-                            camera.position + rays.unnormalized(sx, sy) * frame.view_z[i];
-                        for (int c = 0; c < 3; ++c) {
-                            lo[c] = std::min(lo[c], p[c]);
-                            hi[c] = std::max(hi[c], p[c]);
-                        }
+                        grow(point_at(i, rays.unnormalized(sx, sy)));  // all the box needs
                         continue;
                     }
                     // A medium is provisional until it is seen from outside (below).
@@ -536,10 +539,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                         kind[i] = Kind::kNone;  // a medium seen from inside: not lit here
                         continue;
                     }
-                    for (int c = 0; c < 3; ++c) {
-                        lo[c] = std::min(lo[c], r.p[c]);
-                        hi[c] = std::max(hi[c], r.p[c]);
-                    }
+                    grow(r.p);
                     const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(mat)];
                     g.exit_weight[i] = static_cast<float>(T.exit_weight(dot(r.n, r.wo)));
                     if (T.alpha() == 0) {
@@ -728,6 +728,13 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         return r.kind == Kind::kMedium && (s.thickness_view || slab_of(r.material) != nullptr);
     };
 
+    // What a lit diffuse sample i of material m reflects (Lambert) of irradiance E at normal
+    // incidence arriving at cosine cs > 0.
+    auto add_diffuse = [&](int m, const RGB& E, double cs, std::size_t i) {
+        const RGB& a = albedo_pi[static_cast<std::size_t>(m)];
+        for (std::size_t c = 0; c < 3; ++c)
+            g.surface[3 * i + c] += static_cast<float>(a[c] * E[c] * cs);
+    };
     // What a lit medium sample i receives from direction wi (irradiance E at normal
     // incidence, cosine cs > 0 to its normal): the irradiance transmitted through its boundary
     // and, for a rough one, the GGX reflection towards the camera.
@@ -814,7 +821,6 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
             }
             const ShadowView::Projection proj = views[vi].projection();
             const bool ortho = views[vi].orthographic;
-            const double texel0 = views[vi].texel_size(1.0);  // at depth 1 when perspective
             // The common case (a delta or sun direction, a direction of the environment):
             // the shadow tests of a row at once (directional_row), then what the lit samples
             // receive.
@@ -827,8 +833,9 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                 k.up = rays.up;
                 k.w = s.w;
                 k.proj = proj;
-                k.offset = o.normal_offset_texels * texel0;
-                k.bias = o.depth_bias_texels * texel0;
+                const double texel = views[vi].texel_size(0.0);  // orthographic: any depth
+                k.offset = o.normal_offset_texels * texel;
+                k.bias = o.depth_bias_texels * texel;
                 k.size = views[vi].size;
                 tbb::parallel_for(
                     tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
@@ -850,11 +857,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                                     continue;
                                 const RGB& E = s.value;
                                 if (kind[i] == Kind::kDiffuse) {
-                                    const RGB& a =
-                                        albedo_pi[static_cast<std::size_t>(g.material[i])];
-                                    for (std::size_t c = 0; c < 3; ++c)
-                                        g.surface[3 * i + c] +=
-                                            static_cast<float>(a[c] * E[c] * cs);
+                                    add_diffuse(g.material[i], E, cs, i);
                                 } else {
                                     add_medium(receiver_at(i, sx, sy), s.w, E, cs, i);
                                 }
@@ -894,9 +897,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                             if (cs > 0) {
                                 bool lit = true;
                                 if (o.shadows) {
-                                    // ShadowView::texel_size at the point's depth (pc.w).
-                                    const double texel =
-                                        ortho ? texel0 : texel0 * std::max(pc.w, 0.0);
+                                    // The texel's size at the point's depth (pc.w).
+                                    const double texel = views[vi].texel_size(ortho ? 0.0 : pc.w);
                                     const Vec3 nl = dot(r.n, wi) >= 0 ? r.n : -r.n;
                                     // The normal-offset point p + nl * offset, by linearity; lit
                                     // where it lies outside the map or within the bias of the
@@ -912,10 +914,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                                 if (!lit || (!spheres.empty() && behind_sphere(s, r.p, wi)))
                                     continue;
                                 if (r.kind == Kind::kDiffuse) {
-                                    const RGB& a = albedo_pi[static_cast<std::size_t>(r.material)];
-                                    for (std::size_t c = 0; c < 3; ++c)
-                                        g.surface[3 * i + c] +=
-                                            static_cast<float>(a[c] * E[c] * cs);
+                                    add_diffuse(r.material, E, cs, i);
                                 } else {
                                     add_medium(r, wi, E, cs, i);
                                 }
