@@ -1,0 +1,230 @@
+// Golden-seed pins of the path tracer's engines (issue 14): with a fixed seed each engine's
+// result is a deterministic function of its random-number order, so a refactoring that keeps
+// that order (the one medium walk of volpath/walk.h replacing the four copies) must reproduce
+// it to rounding. These are regression pins, not evidence of correctness: the values were
+// written by the engine versions named beside them (volpath-pencil-2, volpath-sphere-3,
+// volpath-render-3) before the walk was moved, and are compared with a relative tolerance of
+// 1e-9 (a different random-number order moves them by ~1e-3; rounding by ~1e-15). Correctness
+// is what the closed-form and cross-engine tests show. An engine change that alters the
+// numbers bumps the engine's version and re-pins here, after showing (in the tests of that
+// engine) that the old and new results agree statistically; a failure prints the new values.
+#include "core/material.h"
+#include "core/scene.h"
+#include "volpath/pencil.h"
+#include "volpath/render.h"
+#include "volpath/sphere.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace ssslab::volpath {
+namespace {
+
+void expect_pinned(const std::string& what, const std::vector<double>& got,
+                   const std::vector<double>& pinned) {
+    bool same = got.size() == pinned.size();
+    for (std::size_t i = 0; same && i < got.size(); ++i)
+        same = same && std::fabs(got[i] - pinned[i]) <= 1e-9 * std::fabs(pinned[i]) + 1e-300;
+    if (same) return;
+    std::string text;
+    for (double v : got) {
+        char buf[40];
+        std::snprintf(buf, sizeof buf, "%.17g, ", v);
+        text += buf;
+    }
+    ADD_FAILURE() << what << ": the engine's numbers moved; now {" << text << "}";
+}
+
+// The tally of a run folded into a few numbers that move with any change of a path: the
+// totals and the first moment of every block of `block` elements.
+std::vector<double> fold(const std::vector<double>& mean, std::size_t block) {
+    std::vector<double> out;
+    for (std::size_t b = 0; b < mean.size(); b += block) {
+        double sum = 0, moment = 0;
+        for (std::size_t i = b; i < std::min(mean.size(), b + block); ++i) {
+            sum += mean[i];
+            moment += mean[i] * static_cast<double>(i - b + 1);
+        }
+        out.push_back(sum);
+        out.push_back(moment);
+    }
+    return out;
+}
+
+Medium chromatic() {
+    Medium m;
+    m.name = "golden";
+    m.sigma_a_per_cm = {0.5, 1.0, 2.0};
+    m.sigma_s_per_cm = {10.0, 30.0, 80.0};
+    m.g = {0.0, 0.5, 0.9};
+    m.eta = 1.4;
+    return m;
+}
+
+std::vector<double> pencil(const Medium& m, ChromaticMode mode, Absorption a, HeroSelection h,
+                           FlightRule f = FlightRule::kContinue) {
+    PencilOptions o;
+    o.seed = 7;
+    o.budget.samples = 6000;
+    o.batch_paths = 1000;
+    o.mode = mode;
+    o.absorption = a;
+    o.hero_selection = h;
+    o.flight = f;
+    const PencilRun r = simulate_pencil(m, {0.05, 20}, o);
+    std::vector<double> out;
+    for (const BatchRunResult& run : r.runs)
+        for (double v : fold(run.mean, r.layout.per_channel())) out.push_back(v);
+    return out;
+}
+
+TEST(WalkGolden, PencilEngineVolpathPencil2) {
+    const Medium m = chromatic();
+    expect_pinned(
+        "pencil per-channel analog",
+        pencil(m, ChromaticMode::kPerChannel, Absorption::kAnalog, HeroSelection::kUniform),
+        {0.85944444444444645, 30.581087962963093, 0.67245370370370539, 22.909606481481585,
+         0.27578703703703744, 9.3787037037037315});
+    expect_pinned(
+        "pencil per-channel weighted",
+        pencil(m, ChromaticMode::kPerChannel, Absorption::kWeighted, HeroSelection::kUniform),
+        {0.84135668835367183, 29.901811399010167, 0.66092628390792385, 22.50476919827884,
+         0.26861278928455257, 9.1303665167052266});
+    expect_pinned("pencil hero analog uniform",
+                  pencil(m, ChromaticMode::kHero, Absorption::kAnalog, HeroSelection::kUniform),
+                  {0.84852609451174876, 30.206085820430843, 0.64115242053019539, 21.876123286708147,
+                   0.28073815162472282, 9.524596448416581});
+    expect_pinned(
+        "pencil hero analog mfp",
+        pencil(m, ChromaticMode::kHero, Absorption::kAnalog, HeroSelection::kMeanFreePath),
+        {0.83212651348159006, 29.707263666931244, 0.66488751702866633, 22.646417601093507,
+         0.2853929345201196, 9.6946088645848594});
+    expect_pinned("pencil hero weighted",
+                  pencil(m, ChromaticMode::kHero, Absorption::kWeighted, HeroSelection::kUniform),
+                  {0.85264354914354057, 30.420113319155504, 0.65586462421249692, 22.383859965782666,
+                   0.24925548398795824, 8.4934510174696989});
+    expect_pinned("pencil hero resample",
+                  pencil(m, ChromaticMode::kHero, Absorption::kAnalog, HeroSelection::kUniform,
+                         FlightRule::kResample),
+                  {0.85776028014425765, 30.569389716230607, 0.65957523660878248, 22.451943517423899,
+                   0.25988670546918197, 8.8435973219010542});
+    // A finite stack under a clear top layer (MCML's entry), index steps between the layers.
+    Medium s = chromatic();
+    s.thickness_cm = 0.05;
+    s.sigma_a_per_cm = {0, 0, 0};
+    s.sigma_s_per_cm = {0, 0, 0};
+    s.eta = 1.5;
+    MediumLayer mid;
+    mid.sigma_a_per_cm = {1.0, 2.0, 3.0};
+    mid.sigma_s_per_cm = {20.0, 40.0, 60.0};
+    mid.g = {0.8, 0.8, 0.8};
+    mid.eta = 1.37;
+    mid.thickness_cm = 0.1;
+    MediumLayer low = mid;
+    low.sigma_s_per_cm = {50.0, 50.0, 50.0};
+    low.g = {0.0, 0.3, 0.6};
+    low.eta = 1.45;
+    low.thickness_cm = 0.2;
+    s.lower_layers = {mid, low};
+    s.eta_below = 1.2;
+    expect_pinned(
+        "pencil stack per-channel",
+        pencil(s, ChromaticMode::kPerChannel, Absorption::kAnalog, HeroSelection::kUniform),
+        {0.72305289414178286, 27.127577686085367, 0.43498146723547132, 15.982694594027574,
+         0.31202415087302121, 11.489482947525456});
+    expect_pinned("pencil stack hero",
+                  pencil(s, ChromaticMode::kHero, Absorption::kAnalog, HeroSelection::kUniform),
+                  {0.69369861026124158, 25.779443878467323, 0.40077404739594791, 14.560810294278582,
+                   0.31586372950275171, 11.496314818092623});
+}
+
+std::vector<double> sphere(ChromaticMode mode) {
+    SphereScene sc;
+    sc.medium = chromatic();
+    sc.radius_cm = 0.2;
+    sc.to_light = {0, 0, 1};
+    sc.to_camera = {1, 0, 1};
+    sc.width = 8;
+    sc.height = 8;
+    sc.beta_bins = 18;
+    SphereOptions o;
+    o.seed = 9;
+    o.budget.samples = 6000;
+    o.batch_paths = 1002;
+    o.mode = mode;
+    o.image = true;
+    const SphereRun r = simulate_sphere(sc, o);
+    std::vector<double> out;
+    for (const BatchRunResult& run : r.runs)
+        for (double v : fold(run.mean, r.layout.per_channel())) out.push_back(v);
+    return out;
+}
+
+TEST(WalkGolden, SphereEngineVolpathSphere3) {
+    expect_pinned("sphere per-channel", sphere(ChromaticMode::kPerChannel),
+                  {2.0282849899824185, 47.438040056600684, 1.514180150555301, 36.097498998944317,
+                   1.0069233765648524, 23.16190166081126});
+    expect_pinned("sphere hero", sphere(ChromaticMode::kHero),
+                  {2.0591782431419805, 49.629563149808476, 1.4982147624100786, 36.579527588645128,
+                   0.95767601236557531, 21.797494205516589});
+}
+
+std::vector<double> render_pin(const std::string& material, const std::string& lights) {
+    const std::string text = R"(
+[scene]
+name = "golden"
+[camera]
+position = [0, 2, 10]
+target = [0, 0, 0]
+fov_y_deg = 30
+width = 12
+height = 12
+)" + lights + material + R"(
+[[materials]]
+name = "floor"
+type = "diffuse"
+albedo = [0.6, 0.5, 0.4]
+[[shapes]]
+type = "sphere"
+radius = 1.5
+subdivisions = 3
+material = "m"
+[[shapes]]
+type = "box"
+size = [20, 1, 20]
+translate = [0, -2.1, 0]
+material = "floor"
+)";
+    const Scene s = parse_scene(text, "golden.toml", ".");
+    RenderOptions o;
+    o.seed = 11;
+    o.budget.samples = 12;
+    const RenderResult r = render(s, o);
+    return fold(r.run.mean, r.run.mean.size() / 4);
+}
+
+TEST(WalkGolden, RenderEngineVolpathRender3) {
+    const std::string lights =
+        "[[lights]]\ntype = \"sphere\"\nposition = [4, 4, 3]\nradius = 1\nradiance = 5\n"
+        "[[lights]]\ntype = \"environment\"\nradiance = 0.2\n";
+    const std::string coefficients =
+        "[[materials]]\nname = \"m\"\nsigma_a_per_mm = [0.05, 0.1, 0.2]\n"
+        "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = [0.0, 0.5, 0.9]\n";
+    expect_pinned("render rough boundary",
+                  render_pin(coefficients + "eta = 1.3\nroughness = 0.3\n", lights),
+                  {27.107234863279125, 7128.8832630966008, 243.37806122489005, 69870.614155344694,
+                   470.42598961986795, 108572.11771846135, 391.48006320408138, 89667.301486023527});
+    expect_pinned("render smooth boundary", render_pin(coefficients + "eta = 1.4\n", lights),
+                  {28.125754117195907, 7533.9745794099908, 253.51638479194668, 70522.587770574581,
+                   470.78130986750426, 108715.38178526392, 395.08681219167062, 89960.215650018057});
+    expect_pinned("render index-matched", render_pin(coefficients + "eta = 1.0\n", lights),
+                  {29.166848045886589, 7923.5597315735249, 246.1239012962069, 68996.108877780847,
+                   474.03758364311011, 109262.72884155295, 393.32353390800421, 90046.778629073888});
+}
+
+}  // namespace
+}  // namespace ssslab::volpath
