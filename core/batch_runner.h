@@ -84,6 +84,34 @@ struct BatchRunOptions {
     bool snapshots = false;
 };
 
+/// The run control every engine built on this driver takes besides its physics: its option
+/// structs inherit it (volpath's PencilOptions, SphereOptions, RenderOptions), and `apply`
+/// hands it to the driver. Where the checkpoints go and the progress callbacks stay with the
+/// engine (one file per channel run, or one per image).
+struct RunControl {
+    std::uint64_t seed = 1;
+    int threads = 0;  ///< 0: the caller's task arena; > 0: an arena of that many threads
+    /// Samples, wall time or relative error; engines choose a default when none is set.
+    SampleBudget budget;
+    double checkpoint_seconds = 30.0;
+    /// Ignore existing checkpoints (start afresh) instead of resuming or refusing them.
+    bool fresh = false;
+    /// Set asynchronously (e.g. by a signal handler) to stop after the batches in flight.
+    const std::atomic<bool>* cancel = nullptr;
+    /// Keep the whole tally after 4, 8, 16, ... batches (BatchRunResult::snapshots).
+    bool snapshots = false;
+
+    /// Copies threads, checkpoint interval, fresh, cancel and snapshots into `o` (not the
+    /// budget, which engines adjust first).
+    void apply(BatchRunOptions& o) const {
+        o.threads = threads;
+        o.checkpoint_seconds = checkpoint_seconds;
+        o.fresh = fresh;
+        o.cancel = cancel;
+        o.snapshots = snapshots;
+    }
+};
+
 struct BatchRunResult {
     std::vector<double> mean, se;  ///< per sample
     std::uint64_t samples = 0, batches = 0, work = 0;

@@ -1,24 +1,65 @@
-// A homogeneous medium inside a closed triangle mesh (through EmbreeScene): the random walk of
-// the pencil and sphere engines with the boundary found by ray queries instead of a plane or a
-// sphere. Smooth dielectric boundary (exact Fresnel, total internal reflection), the sampled
-// free path continued after an internal reflection [Bitterli13 Alg. 1], analog absorption per
-// channel, or one path for RGB with the analog hero estimator of volpath/pencil.h, and the
-// long-path roulette of Bitterli13 §3.2.
+// A medium inside a closed triangle mesh (through EmbreeScene): the geometry the one walk of
+// volpath/walk.h uses for the renderer's media, and `walk_mesh_medium`, the walk with a smooth
+// dielectric boundary (exact Fresnel, total internal reflection, the sampled free path
+// continued after an internal reflection [Bitterli13 Alg. 1]) from a given point, per channel
+// or analog hero, with the long-path roulette of Bitterli13 §3.2.
 //
-// This is the transport the image renderer of scene files uses for its media; the tests hold it
-// to the analytic-geometry engines (a huge box against the half-space profile, a tessellated
-// sphere against the lit sphere) and to the white furnace.
+// The renderer (volpath/render.cpp) runs the same walk over the same geometry with its own
+// boundary vertex (smooth or rough, NEE); the tests hold this walk to the analytic-geometry
+// engines (a huge box against the half-space profile, a tessellated sphere against the lit
+// sphere) and to the white furnace.
 #pragma once
 
 #include "core/rng.h"
 #include "core/vec3.h"
 #include "volpath/density_grid.h"
 #include "volpath/embree_scene.h"
+#include "volpath/walk.h"
 
 #include <array>
 #include <cstdint>
 
 namespace ssslab::volpath {
+
+/// The walk's geometry for the inside of one closed mesh of an EmbreeScene: one region (its
+/// medium), boundaries by ray queries. A path on the surface skips hits closer than the scene's
+/// epsilon (restarting from the surface itself, not eps inside it: an origin moved off the
+/// surface starts every walk eps deep, a bias of sigma_t eps). A hit met from outside within
+/// 4 eps is a slip across a concave crease (single-precision hits): the path crosses back and
+/// goes on; farther, or another shape, or no hit: the walk is lost.
+struct MeshGeometry {
+    const EmbreeScene* scene = nullptr;
+    std::uint32_t shape = 0;
+    WalkRegion inside;
+    static constexpr bool multi_region = false;
+
+    const WalkRegion& region(int) const { return inside; }
+    template <int NC>
+    WalkBoundary next(WalkState<NC>& s) const {
+        ++s.queries;
+        const double eps = scene->epsilon();
+        const RayHit hit = scene->intersect(s.p, s.w, s.on_surface ? eps : 0.0);
+        WalkBoundary b;
+        if (!hit.hit() || hit.shape != shape) {
+            b.kind = WalkBoundary::Kind::kLeak;
+            return b;
+        }
+        b.t = hit.t;
+        b.n = hit.normal;
+        b.shape = hit.shape;
+        b.triangle = hit.triangle;
+        const double cos_i = dot(s.w, hit.normal);  // leaving: along the outward normal
+        if (!(cos_i > 0))
+            b.kind = hit.t < 4 * eps && cos_i == cos_i ? WalkBoundary::Kind::kSlip
+                                                       : WalkBoundary::Kind::kWrongSide;
+        return b;
+    }
+    template <int NC>
+    void arrive(WalkState<NC>& s, WalkBoundary& b) const {
+        s.p += s.w * b.t;
+        s.on_surface = true;
+    }
+};
 
 /// The medium of one shape, in the scene's world unit.
 struct MeshMedium {
@@ -51,13 +92,17 @@ struct WalkResult {
     std::int64_t events = 0;  ///< scattering events
 };
 
-/// Walk from `p` (on or inside the boundary) in direction `w` (into the medium) with unit
-/// weight. NC = 1: channel 0 of the medium, analog absorption; NC = 3: hero channel `hero`
-/// samples, every channel weighted by the one-sample balance heuristic (analog hero).
+/// Walk from `p` (on the boundary, or inside it: `on_surface` says which) in direction `w`
+/// (into the medium) with unit weight. NC = 1: channel 0 of the medium, analog absorption;
+/// NC = 3: hero channel `hero` samples, every channel weighted by the one-sample balance
+/// heuristic (analog hero).
 template <int NC>
-WalkResult walk_mesh_medium(const MeshMedium& m, Vec3 p, Vec3 w, RngStream& rng, int hero = 0);
+WalkResult walk_mesh_medium(const MeshMedium& m, Vec3 p, Vec3 w, RngStream& rng, int hero = 0,
+                            bool on_surface = true);
 
-extern template WalkResult walk_mesh_medium<1>(const MeshMedium&, Vec3, Vec3, RngStream&, int);
-extern template WalkResult walk_mesh_medium<3>(const MeshMedium&, Vec3, Vec3, RngStream&, int);
+extern template WalkResult walk_mesh_medium<1>(const MeshMedium&, Vec3, Vec3, RngStream&, int,
+                                               bool);
+extern template WalkResult walk_mesh_medium<3>(const MeshMedium&, Vec3, Vec3, RngStream&, int,
+                                               bool);
 
 }  // namespace ssslab::volpath

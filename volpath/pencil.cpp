@@ -19,17 +19,10 @@ constexpr const char* kEngineVersion = "volpath-pencil-2";
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Russian roulette of the hero mode: a path whose largest channel weight falls below this
-// survives with probability weight / kRouletteThreshold.
-constexpr double kRouletteThreshold = 0.1;
-
-// Interface hits within one free flight after which a path is given up (tallied as lost).
-constexpr std::int64_t kMaxInterfaceHits = 1'000'000;
-
-// One layer of the slab, per tally channel (one channel in kPerChannel mode, three in kHero).
+// One layer of the slab: its coefficients per tally channel (one channel in kPerChannel mode,
+// three in kHero) and its place.
 struct LayerSetup {
-    std::array<double, 3> sigma_t{}, sigma_s{}, albedo{}, g{};
-    bool same_g = true;
+    WalkRegion region;
     double z0 = 0, z1 = kInf;  // [cm]
     double eta = 1;            // index of refraction
 };
@@ -44,13 +37,11 @@ struct Setup {
     double dr = 0;
     int nr = 0;
     PencilLayout layout;
-    std::int64_t long_events = 0;
     // Hero mode: probability of each channel to be the hero (the one-sample MIS weights use
     // them); uniform selection cycles R, G, B over the paths, otherwise a random draw.
     std::array<double, 3> hero_prob{1.0 / 3, 1.0 / 3, 1.0 / 3};
     bool hero_random = false;
-    double long_survival = 0.1;
-    FlightRule flight = FlightRule::kContinue;
+    WalkRules rules;
 };
 
 double fresnel_normal(double n1, double n2) {
@@ -65,213 +56,106 @@ std::size_t radial_bin(const Setup& s, const Vec3& p) {
     return b < s.nr ? static_cast<std::size_t>(b) : static_cast<std::size_t>(s.nr);
 }
 
-// Trace one path from the entry point; add its contributions to `tally` (NC channels of
-// layout.per_channel() elements). Returns the number of scattering events.
-//   NC = 1, !kWeighted: analog [Bitterli13 Alg. 1]: absorption by roulette with the albedo.
-//   NC = 1, kWeighted: implicit absorption (the weight carries the albedo; Russian roulette).
-//   NC = 3: hero channel `hero` samples; spectral MIS weights for all three channels.
-//     kWeighted: the strategies are free paths and directions; absorption enters the weights,
-//     Russian roulette bounds them from below.
-//     !kWeighted (analog hero): each strategy also absorbs by roulette with its own albedo, so
-//     a path's density under channel c is its contribution to c (equal phase functions): the
-//     estimate (1 - Rsp) q_c / sum_k P(k) q_k is at most (1 - Rsp) / P(c), no roulette needed.
-template <int NC, bool kWeighted>
-std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
-    static_assert(NC == 1 || NC == 3);
-    constexpr bool kHeroMode = NC == 3;
-    constexpr int nc = NC;
-    const int h = kHeroMode ? hero : 0;
-    const size_t hi = static_cast<size_t>(h);
-    const int nlayers = static_cast<int>(s.layers.size());
-    // beta: the channel's path weight (contribution / sampling density of the hero's strategy,
-    // times the MIS weight); q: the channels' sampling densities over the mean of all three.
-    // Both are rescaled by mean(q) after every event, which leaves the balance-heuristic
-    // estimate beta_k / mean(q) unchanged and keeps mean(q) = 1.
-    double beta[NC], q[NC];
-    for (int c = 0; c < nc; ++c) {
-        beta[c] = 1.0 - s.rsp;
-        q[c] = 1.0;
+// The walk's geometry: the layers as regions between planes z = z0 .. z1 (volpath/walk.h).
+struct SlabGeometry {
+    const Setup& s;
+    bool multi_region = false;
+    const WalkRegion& region(int i) const { return s.layers[static_cast<size_t>(i)].region; }
+    template <int NC>
+    WalkBoundary next(const WalkState<NC>& st) const {
+        const LayerSetup& L = s.layers[static_cast<size_t>(st.region)];
+        const Vec3& w = st.w;
+        WalkBoundary b;
+        b.t = w.z > 0 ? (L.z1 - st.p.z) / w.z : (w.z < 0 ? (L.z0 - st.p.z) / w.z : kInf);
+        return b;
     }
-    int li = s.first;  // the layer the path is in
-    Vec3 p{0, 0, s.layers[static_cast<size_t>(li)].z0}, w{0, 0, 1};
-    std::uint64_t events = 0;
+    template <int NC>
+    void arrive(WalkState<NC>& st, WalkBoundary& b) const {
+        const LayerSetup& L = s.layers[static_cast<size_t>(st.region)];
+        st.p += st.w * b.t;
+        const bool up = st.w.z < 0;
+        st.p.z = up ? L.z0 : L.z1;  // exactly on the plane
+        b.n = {0, 0, up ? -1.0 : 1.0};
+        st.on_surface = true;
+    }
+};
 
-    auto rescale = [&]() {
-        if constexpr (kHeroMode) {
-            const double m = s.hero_prob[0] * q[0] + s.hero_prob[1] * q[1] + s.hero_prob[2] * q[2];
-            const double inv = 1.0 / m;
-            for (int c = 0; c < 3; ++c) {
-                q[c] *= inv;
-                beta[c] *= inv;
-            }
-        }
-    };
-    // Hero mode: (sigma_t of channel c - sigma_t of the hero) x distance, summed over the
-    // layers the flight crossed; the flight's densities differ between the channels by
-    // exp(-dod[c]).
-    double dod[NC];
-    // A flight ended at an interaction in layer L (scatter = true) or at an exit, after `d` in
-    // its last layer. Hero mode: the densities of the three strategies for that flight.
-    auto flight_weights = [&](const LayerSetup& L, double d, bool scatter) {
-        if constexpr (kHeroMode) {
-            const double sigma_t = L.sigma_t[hi];
-            for (int c = 0; c < 3; ++c) {
-                const size_t i = static_cast<size_t>(c);
-                const double e = c == h ? 1.0 : std::exp(-(dod[c] + (L.sigma_t[i] - sigma_t) * d));
-                if (scatter && !kWeighted) {  // survived the hero's absorption roulette
-                    const double f = L.sigma_s[i] / L.sigma_s[hi] * e;
-                    q[c] *= f;
-                    beta[c] *= f;
-                } else if (scatter) {
-                    q[c] *= L.sigma_t[i] / sigma_t * e;
-                    beta[c] *= L.sigma_s[i] / sigma_t * e;
-                } else {
-                    q[c] *= e;
-                    beta[c] *= e;
-                }
-            }
-            rescale();
-        } else if constexpr (kWeighted) {
-            if (scatter) beta[0] *= L.albedo[0];
-        }
-    };
+// What the pencil does with a walk: Fresnel and Snell at every interface, exits tallied into
+// the radial bins of reflectance (and its single-scattering part) or transmittance.
+template <int NC>
+struct PencilHooks : TallyLostHooks<NC> {
+    const Setup& s;
+    // PencilLayout::lost(): the weight at risk and of paths given up.
+    PencilHooks(const Setup& setup, double* t) : s(setup) {
+        this->tally = t;
+        this->stride = s.layout.per_channel();
+        this->index = s.layout.lost();
+    }
 
-    for (;;) {
-        // The free path is sampled as an optical depth (of the hero channel) and consumed layer
-        // by layer: t is what is left of it as a distance in the current layer, or, in a layer
-        // that does not attenuate (t infinite), `held` keeps it as optical depth.
-        const LayerSetup* L = &s.layers[static_cast<size_t>(li)];
-        double t = kInf, held = 0;
-        auto sample_flight = [&]() {
-            t = kInf;
-            held = 0;
-            if (L->sigma_t[hi] > 0)
-                t = -std::log(rng.uniform()) / L->sigma_t[hi];
-            else if (nlayers > 1)
-                held = -std::log(rng.uniform());
-        };
-        sample_flight();
-        double travelled = 0;  // in the current layer
-        for (int c = 0; c < nc; ++c) dod[c] = 0;
-        bool exited = false;
-        for (std::int64_t hits = 0;; ++hits) {
-            // Snell's invariant n sin(theta) keeps a path from being trapped between interfaces
-            // (it can always go back where it came from); this bounds the loop against rounding.
-            if (hits > kMaxInterfaceHits) {
-                for (int c = 0; c < nc; ++c)
-                    tally[static_cast<size_t>(c) * s.layout.per_channel() + s.layout.lost()] +=
-                        beta[c];
-                return events;
-            }
-            const double tb =
-                w.z > 0 ? (L->z1 - p.z) / w.z : (w.z < 0 ? (L->z0 - p.z) / w.z : kInf);
-            if (t < tb) {
-                p += w * t;
-                travelled += t;
-                break;
-            }
-            p += w * tb;
-            travelled += tb;
-            const bool up = w.z < 0;
-            p.z = up ? L->z0 : L->z1;
-            const int next = up ? li - 1 : li + 1;
-            const bool outside = next < 0 || next >= nlayers;
-            const double n2 = outside ? (up ? s.eta_above : s.eta_below)
-                                      : s.layers[static_cast<size_t>(next)].eta;
-            // Inner interfaces between equal indices are crossed without a random number.
-            const bool matched = !outside && n2 == L->eta;
-            double cos_t = std::abs(w.z);
-            const double F = matched ? 0.0 : fresnel_dielectric(std::abs(w.z), n2 / L->eta, cos_t);
-            if (!matched && rng.uniform() < F) {
-                w.z = -w.z;
-                if (s.flight == FlightRule::kContinue) {
-                    t -= tb;
-                } else if (s.flight == FlightRule::kResample) {
-                    sample_flight();
-                } else {  // kInteractAtBoundary: the interaction happens here
-                    break;
-                }
-                continue;
-            }
-            if (outside) {  // the path leaves the slab
-                flight_weights(*L, travelled, false);
-                const std::size_t bin = radial_bin(s, p);
-                const PencilLayout& PL = s.layout;
-                const std::size_t stride = PL.per_channel();
-                for (int c = 0; c < nc; ++c) {
-                    double* T = tally + static_cast<size_t>(c) * stride;
-                    if (up) {
-                        T[PL.rd_r() + bin] += beta[c];
-                        T[PL.rd()] += beta[c];
-                        if (events == 1) {
-                            T[PL.ss_r() + bin] += beta[c];
-                            T[PL.rd_ss()] += beta[c];
-                        }
-                    } else {
-                        T[PL.tt_r() + bin] += beta[c];
-                        T[PL.tt()] += beta[c];
+    BoundaryAction boundary(WalkState<NC>& st, const WalkBoundary&, RngStream& rng) {
+        const int nlayers = static_cast<int>(s.layers.size());
+        const LayerSetup& L = s.layers[static_cast<size_t>(st.region)];
+        Vec3& w = st.w;
+        const bool up = w.z < 0;
+        const int next = up ? st.region - 1 : st.region + 1;
+        const bool outside = next < 0 || next >= nlayers;
+        const double n2 =
+            outside ? (up ? s.eta_above : s.eta_below) : s.layers[static_cast<size_t>(next)].eta;
+        // Inner interfaces between equal indices are crossed without a random number.
+        const bool matched = !outside && n2 == L.eta;
+        double cos_t = std::abs(w.z);
+        const double F = matched ? 0.0 : fresnel_dielectric(std::abs(w.z), n2 / L.eta, cos_t);
+        if (!matched && rng.uniform() < F) {
+            w.z = -w.z;
+            return BoundaryAction::kReflect;
+        }
+        if (outside) {  // the path leaves the slab
+            const std::size_t bin = radial_bin(s, st.p);
+            const PencilLayout& PL = s.layout;
+            for (int c = 0; c < NC; ++c) {
+                double* T = this->tally + static_cast<size_t>(c) * this->stride;
+                const double b = st.weights.beta[c];
+                if (up) {
+                    T[PL.rd_r() + bin] += b;
+                    T[PL.rd()] += b;
+                    if (st.events == 1) {
+                        T[PL.ss_r() + bin] += b;
+                        T[PL.rd_ss()] += b;
                     }
+                } else {
+                    T[PL.tt_r() + bin] += b;
+                    T[PL.tt()] += b;
                 }
-                exited = true;
-                break;
             }
-            // Refraction into the next layer (Snell: the tangential part scales by n1 / n2);
-            // the rest of the free path goes with it as optical depth.
-            if (n2 != L->eta) {
-                const double k = L->eta / n2;
-                w = {w.x * k, w.y * k, up ? -cos_t : cos_t};
-            }
-            const double tau = L->sigma_t[hi] > 0 ? (t - tb) * L->sigma_t[hi] : held;
-            if constexpr (kHeroMode)
-                for (int c = 0; c < 3; ++c)
-                    dod[c] += (L->sigma_t[static_cast<size_t>(c)] - L->sigma_t[hi]) * travelled;
-            travelled = 0;
-            li = next;
-            L = &s.layers[static_cast<size_t>(li)];
-            t = L->sigma_t[hi] > 0 ? tau / L->sigma_t[hi] : kInf;
-            held = L->sigma_t[hi] > 0 ? 0.0 : tau;
+            return BoundaryAction::kExit;
         }
-        if (exited) return events;
-
-        // Interaction in layer L.
-        ++events;
-        if constexpr (kWeighted) {
-            flight_weights(*L, travelled, true);
-            double m = beta[0];
-            for (int c = 1; c < nc; ++c) m = std::max(m, beta[c]);
-            if (m < kRouletteThreshold) {
-                const double survive = m / kRouletteThreshold;
-                if (!(rng.uniform() < survive)) return events;
-                for (int c = 0; c < nc; ++c) beta[c] /= survive;
-            }
-        } else {
-            if (!(rng.uniform() < L->albedo[hi])) return events;  // absorbed
-            if constexpr (kHeroMode) flight_weights(*L, travelled, true);
+        // Refraction into the next layer (Snell: the tangential part scales by n1 / n2).
+        if (n2 != L.eta) {
+            const double k = L.eta / n2;
+            w = {w.x * k, w.y * k, up ? -cos_t : cos_t};
         }
-        if (static_cast<std::int64_t>(events) > s.long_events) {
-            if (static_cast<std::int64_t>(events) == s.long_events + 1)
-                for (int c = 0; c < nc; ++c)
-                    tally[static_cast<size_t>(c) * s.layout.per_channel() + s.layout.lost()] +=
-                        beta[c];
-            if (!(rng.uniform() < s.long_survival)) return events;
-            for (int c = 0; c < nc; ++c) beta[c] /= s.long_survival;
-        }
-        const double g = L->g[hi];
-        const double mu = sample_hg(g, rng.uniform());
-        const double phi = 2.0 * kPi * rng.uniform();
-        if constexpr (kHeroMode) {
-            if (!L->same_g) {
-                const double ph = hg_pdf(g, mu);
-                for (int c = 0; c < 3; ++c) {
-                    const double pc = hg_pdf(L->g[static_cast<size_t>(c)], mu) / ph;
-                    q[c] *= pc;
-                    beta[c] *= pc;
-                }
-                rescale();
-            }
-        }
-        w = rotate(w, mu, phi);
+        st.region = next;
+        return BoundaryAction::kCross;
     }
+};
+
+// Trace one path from the entry point (hero channel `hero` in hero mode) through the one walk
+// (volpath/walk.h); add its contributions to `tally` (NC channels of layout.per_channel()
+// elements). Returns the number of scattering events.
+template <int NC>
+std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
+    WalkState<NC> st;
+    st.weights.hero = hero;
+    st.weights.prob = s.hero_prob;
+    st.weights.start(1.0 - s.rsp);
+    st.region = s.first;
+    st.p = {0, 0, s.layers[static_cast<size_t>(s.first)].z0};
+    st.w = {0, 0, 1};
+    st.on_surface = true;
+    const SlabGeometry geo{s, s.layers.size() > 1};
+    PencilHooks<NC> hooks(s, tally);
+    walk(geo, st, s.rules, rng, hooks);
+    return static_cast<std::uint64_t>(st.events);
 }
 
 std::string fingerprint(const Medium& m, const PencilGrid& grid, const PencilOptions& o,
@@ -297,6 +181,38 @@ std::string fingerprint(const Medium& m, const PencilGrid& grid, const PencilOpt
 
 const char* engine_version() {
     return kEngineVersion;
+}
+
+void ChannelRunControl::apply_run(BatchRunOptions& o, int run) const {
+    apply(o);
+    if (!checkpoint_prefix.empty())
+        o.checkpoint_path =
+            checkpoint_prefix + "." + (run == 3 ? "hero" : kChannelNames[run]) + ".ckpt";
+    if (on_batch) o.on_batch = [this, run](const BatchProgress& p) { on_batch(run, p); };
+    if (on_resume)
+        o.on_resume = [this, run, path = o.checkpoint_path](const BatchProgress& p) {
+            on_resume(run, p, path);
+        };
+}
+
+BudgetQuantity least_precise_channel(
+    std::size_t stride, int nc,
+    std::function<std::size_t(const BatchAccumulator&, std::size_t block)> pick) {
+    return [stride, nc, pick = std::move(pick)](const BatchAccumulator& acc, double& value,
+                                                double& se) {
+        double worst = -1;
+        for (int c = 0; c < nc; ++c) {
+            const std::size_t b = static_cast<std::size_t>(c) * stride;
+            const std::size_t i = b + pick(acc, b);
+            const double v = acc.mean(i), e = acc.standard_error(i);
+            const double rel = v > 0 ? e / v : kInf;
+            if (rel > worst) {
+                worst = rel;
+                value = v;
+                se = e;
+            }
+        }
+    };
 }
 
 const char* to_string(ChromaticMode m) {
@@ -439,8 +355,9 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
     base.nr = grid.nr;
     base.layout = out.layout;
 
-    base.long_survival = o.long_path_survival;
-    base.flight = o.flight;
+    base.rules.long_survival = o.long_path_survival;
+    base.rules.flight = o.flight;
+    base.rules.absorption = o.absorption;
 
     const bool hero = o.mode == ChromaticMode::kHero;
     if (hero && o.only_channel >= 0)
@@ -453,18 +370,17 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
         if (o.only_channel >= 0 && run != o.only_channel) continue;
         Setup s = base;
         s.nc = hero ? 3 : 1;
-        s.long_events = long_path_threshold(m, o, hero ? -1 : run);
+        s.rules.long_events = long_path_threshold(m, o, hero ? -1 : run);
         for (size_t k = 0; k < layers.size(); ++k) {
-            LayerSetup& ls = s.layers[k];
+            std::array<double, 3> sigma_t{}, sigma_s{}, g{};
             for (int c = 0; c < s.nc; ++c) {
                 const int mc = hero ? c : run;
                 const size_t i = static_cast<size_t>(c);
-                ls.sigma_t[i] = layers[k].sigma_t(mc);
-                ls.sigma_s[i] = layers[k].sigma_s_per_cm[mc];
-                ls.albedo[i] = ls.sigma_t[i] > 0 ? ls.sigma_s[i] / ls.sigma_t[i] : 0.0;
-                ls.g[i] = layers[k].g[mc];
+                sigma_t[i] = layers[k].sigma_t(mc);
+                sigma_s[i] = layers[k].sigma_s_per_cm[mc];
+                g[i] = layers[k].g[mc];
             }
-            ls.same_g = ls.g[0] == ls.g[1] && ls.g[1] == ls.g[2];
+            s.layers[k].region = WalkRegion::make(sigma_t, sigma_s, g);
         }
         if (hero && o.hero_selection == HeroSelection::kMeanFreePath) {
             // Channels with a longer reduced mean free path spread further and need more paths
@@ -481,45 +397,18 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
         bo.tally_size = stride * static_cast<size_t>(s.nc);
         bo.batch_samples = batch;
         bo.budget = budget;
-        bo.threads = o.threads;
         bo.fingerprint = fingerprint(m, grid, o, batch, stream);
-        if (!o.checkpoint_prefix.empty())
-            bo.checkpoint_path =
-                o.checkpoint_prefix + "." + (hero ? "hero" : kChannelNames[run]) + ".ckpt";
-        bo.checkpoint_seconds = o.checkpoint_seconds;
-        bo.cancel = o.cancel;
-        bo.snapshots = o.snapshots;
-        const PencilLayout L = out.layout;
-        const int nc = s.nc;
+        o.apply_run(bo, stream);
         // Budget quantity: the least precise channel's larger of Rd and Tt.
-        bo.quantity = [L, stride, nc](const BatchAccumulator& acc, double& value, double& se) {
-            double worst = -1;
-            for (int c = 0; c < nc; ++c) {
-                const size_t b = static_cast<size_t>(c) * stride;
-                const double rd = acc.mean(b + L.rd()), tt = acc.mean(b + L.tt());
-                const size_t i = b + (rd >= tt ? L.rd() : L.tt());
-                const double v = acc.mean(i), e = acc.standard_error(i);
-                const double rel = v > 0 ? e / v : kInf;
-                if (rel > worst) {
-                    worst = rel;
-                    value = v;
-                    se = e;
-                }
-            }
-        };
-        if (o.on_batch)
-            bo.on_batch = [&o, stream](const BatchProgress& p) { o.on_batch(stream, p); };
-        if (o.on_resume)
-            bo.on_resume = [&o, stream, path = bo.checkpoint_path](const BatchProgress& p) {
-                o.on_resume(stream, p, path);
-            };
-        bo.fresh = o.fresh;
+        bo.quantity = least_precise_channel(
+            stride, s.nc, [L = out.layout](const BatchAccumulator& acc, std::size_t b) {
+                return acc.mean(b + L.rd()) >= acc.mean(b + L.tt()) ? L.rd() : L.tt();
+            });
 
         const std::uint64_t seed = o.seed;
-        const bool weighted = o.absorption == Absorption::kWeighted;
         const std::uint64_t bsz = static_cast<std::uint64_t>(batch);
-        auto simulate = [&s, seed, stream, hero, weighted, bsz](std::uint64_t index, std::int64_t n,
-                                                                double* tally) -> std::uint64_t {
+        auto simulate = [&s, seed, stream, hero, bsz](std::uint64_t index, std::int64_t n,
+                                                      double* tally) -> std::uint64_t {
             RngStream rng(seed, rng_domain::kVolpath + static_cast<std::uint32_t>(stream), index);
             std::uint64_t events = 0;
             for (std::int64_t i = 0; i < n; ++i) {
@@ -529,12 +418,9 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
                         const double u = rng.uniform();
                         h = u < s.hero_prob[0] ? 0 : (u < s.hero_prob[0] + s.hero_prob[1] ? 1 : 2);
                     }
-                    events += weighted ? trace<3, true>(s, rng, h, tally)
-                                       : trace<3, false>(s, rng, h, tally);
-                } else if (weighted) {
-                    events += trace<1, true>(s, rng, 0, tally);
+                    events += trace<3>(s, rng, h, tally);
                 } else {
-                    events += trace<1, false>(s, rng, 0, tally);
+                    events += trace<1>(s, rng, 0, tally);
                 }
             }
             return events;

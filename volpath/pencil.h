@@ -8,6 +8,7 @@
 #include "core/batch_runner.h"
 #include "core/material.h"
 #include "core/profile.h"
+#include "volpath/walk.h"
 
 #include <array>
 #include <atomic>
@@ -43,38 +44,40 @@ enum class HeroSelection {
     kMeanFreePath,  ///< at random, with probability proportional to the reduced mean free path
 };
 
-/// How absorption enters a run.
-enum class Absorption {
-    /// Absorb by roulette with the single-scattering albedo; weights stay 1 [Bitterli13 Alg. 1].
-    kAnalog,
-    /// Multiply the weight by the albedo at every interaction and end paths by Russian roulette
-    /// when the weight falls below 0.1 (implicit capture, as MCML does with its own threshold).
-    kWeighted,
-};
-
-/// What happens to the sampled free path when it reaches the boundary and is reflected.
-enum class FlightRule {
-    /// Travel the rest of the sampled free path after the reflection [Bitterli13 Alg. 1, line 8].
-    kContinue,
-    /// Draw a fresh free path from the reflection point. Unbiased as well (the exponential
-    /// distribution is memoryless); kept to show that it agrees with kContinue.
-    kResample,
-    /// Interact (absorb or scatter) at the reflection point: biased; for the tests that show
-    /// the boundary treatment matters.
-    kInteractAtBoundary,
-};
+// Absorption and FlightRule: volpath/walk.h.
 
 struct PencilGrid {
     double dr_cm = 0;
     int nr = 0;
 };
 
-struct PencilOptions {
-    std::uint64_t seed = 1;
-    int threads = 0;
-    /// Per channel in kPerChannel mode, for the single run in kHero mode; samples = paths. With
-    /// no limit, 1e6 paths.
-    SampleBudget budget;
+/// The run control of the engines that make one batch run per channel (kPerChannel: runs 0..2)
+/// or one hero run (run 3): the pencil and the sphere. RunControl (core/batch_runner.h), the
+/// checkpoints <prefix>.<R|G|B|hero>.ckpt and callbacks that name the run.
+struct ChannelRunControl : RunControl {
+    /// Checkpoints are <prefix>.<R|G|B|hero>.ckpt (empty: none).
+    std::string checkpoint_prefix;
+    /// run: 0..2 (channel) in kPerChannel mode, 3 in kHero mode.
+    std::function<void(int run, const BatchProgress&)> on_batch;
+    /// Called before a run continues from its checkpoint, with what the checkpoint holds and
+    /// the checkpoint's path.
+    std::function<void(int run, const BatchProgress&, const std::string& checkpoint)> on_resume;
+
+    /// The driver's run control of run `run` (0..2, 3: hero): RunControl::apply, the
+    /// checkpoint's path and the callbacks (which must outlive the run).
+    void apply_run(BatchRunOptions& o, int run) const;
+};
+
+/// The budget quantity of a run of `nc` channels whose blocks are `stride` tally elements
+/// apart: the least precise channel's element block + pick(accumulator, block) (its value and
+/// standard error).
+BudgetQuantity least_precise_channel(
+    std::size_t stride, int nc,
+    std::function<std::size_t(const BatchAccumulator&, std::size_t block)> pick);
+
+/// Run control: ChannelRunControl. The budget is per channel in kPerChannel mode, for the single
+/// run in kHero mode; samples = paths. With no limit, 1e6 paths.
+struct PencilOptions : ChannelRunControl {
     std::int64_t batch_paths = 0;  ///< 0: budget paths / 1000 (at least 1000), 1000 otherwise
     ChromaticMode mode = ChromaticMode::kPerChannel;
     Absorption absorption = Absorption::kAnalog;
@@ -93,18 +96,6 @@ struct PencilOptions {
     /// paths unless the medium is nearly white.
     std::int64_t long_path_events = 0;
     double long_path_survival = 0.1;
-    /// Checkpoints are <prefix>.<R|G|B|hero>.ckpt (empty: none).
-    std::string checkpoint_prefix;
-    double checkpoint_seconds = 30.0;
-    /// Ignore existing checkpoints (start afresh) instead of resuming or refusing them.
-    bool fresh = false;
-    const std::atomic<bool>* cancel = nullptr;
-    /// run: 0..2 (channel) in kPerChannel mode, 3 in kHero mode.
-    std::function<void(int run, const BatchProgress&)> on_batch;
-    /// Called before a run continues from its checkpoint, with what the checkpoint holds and
-    /// the checkpoint's path.
-    std::function<void(int run, const BatchProgress&, const std::string& checkpoint)> on_resume;
-    bool snapshots = false;
 };
 
 /// Tally layout of one channel: radial bins (the last is "beyond the grid") of all diffuse

@@ -4,8 +4,10 @@
 #include "core/rng.h"
 #include "volpath/density_grid.h"
 #include "volpath/embree_scene.h"
+#include "volpath/mesh_medium.h"
 #include "volpath/microfacet.h"
 #include "volpath/sampling.h"
+#include "volpath/walk.h"
 
 #include <algorithm>
 #include <cmath>
@@ -36,6 +38,7 @@ struct MediumData {
     bool same_g = true;
     double eta = 1, alpha = 0;
     std::shared_ptr<const DensityGrid> density;  // heterogeneous media (OpenVDB)
+    WalkRegion region;                           // the walk's view of the above
 };
 
 struct Frame {
@@ -207,6 +210,7 @@ struct Renderer {
                 }
             }
             md.alpha = md.eta == 1.0 ? 0.0 : m.roughness;  // nothing to be rough about
+            md.region = WalkRegion::make(md.sigma_t, md.sigma_s, md.g, md.density.get());
             shape_medium.push_back(static_cast<int>(media.size()));
             media.push_back(md);
             has_passable = has_passable || (o.index_matched_nee && md.eta == 1.0 && !md.density);
@@ -314,21 +318,30 @@ struct Renderer {
         }
     }
 
-    // One camera path through pixel (x, y); tally += its contributions.
+    // One camera path through pixel (x, y); tally += its contributions. Outside media the
+    // loop below; inside a medium the one walk of volpath/walk.h, whose boundary hook is the
+    // same surface vertex as a hit from outside.
     std::uint64_t trace(int x, int y, int hero, RngStream& rng, double* T) const {
         std::uint64_t rays = 0;
         const double jx = rng.uniform(), jy = rng.uniform();
         const double ndc_x = (2 * (x + jx) / width - 1) * tan_half * aspect;
         const double ndc_y = (1 - 2 * (y + jy) / height) * tan_half;
-        Vec3 o = cam_pos, d = normalize(cam_f + cam_r * ndc_x + cam_u * ndc_y);
-        const std::size_t h = static_cast<std::size_t>(hero);
-        double beta[3] = {1, 1, 1}, q[3] = {1, 1, 1};
+        WalkState<3> ws;  // position, direction, weights and events of the whole path
+        ws.p = cam_pos;
+        ws.w = normalize(cam_f + cam_r * ndc_x + cam_u * ndc_y);
+        ws.weights.hero = hero;
+        ws.weights.start(1.0);
+        Vec3& o = ws.p;
+        Vec3& d = ws.w;
+        bool& on_surface = ws.on_surface;
+        double* beta = ws.weights.beta;
+        const double* q = ws.weights.q;
         int medium = -1;  // index into media of the medium the path is in
         int medium_shape = -1;
-        bool prev_nee = false, entered = false, specular_path = false, on_surface = false;
+        bool prev_nee = false, entered = false, specular_path = false;
         double prev_pdf = 0;
-        Vec3 nee_pos;  // where NEE was last done (MIS of a light hit found by sampling)
-        std::int64_t events = 0;
+        Vec3 nee_pos;   // where NEE was last done (MIS of a light hit found by sampling)
+        int depth = 0;  // surface vertices (medium events do not count)
         auto flush = [&](const RGB& contribution) {
             for (int c = 0; c < 3; ++c) {
                 const double v = contribution[static_cast<size_t>(c)];
@@ -339,161 +352,18 @@ struct Renderer {
                     T[RenderLayout::kSpecular + c] += v;
             }
         };
-        auto rescale = [&] {
-            const double m = (q[0] + q[1] + q[2]) / 3;
-            for (int c = 0; c < 3; ++c) {
-                q[c] /= m;
-                beta[c] /= m;
-            }
-        };
-        for (int depth = 0; depth < 100000; ++depth) {
-            ++rays;
-            const RayHit hit = es->intersect(o, d, on_surface ? eps : 0.0);
-            if (depth == 0 && hit.hit()) {
-                T[RenderLayout::kDepth] += hit.t;
-                for (int c = 0; c < 3; ++c) T[RenderLayout::kNormal + c] += hit.normal[c];
-            }
-            if (medium >= 0) {
-                const MediumData& md = media[static_cast<size_t>(medium)];
-                if (!hit.hit() || static_cast<int>(hit.shape) != medium_shape)
-                    return rays;  // leak or overlap
-                // Majorant sigma_t max(d) (sigma_t for a homogeneous medium): delta tracking.
-                const double dmax = md.density ? md.density->max_density() : 1.0;
-                const double st = md.sigma_t[h] * dmax;
-                const double t = st > 0 ? -std::log(rng.uniform()) / st : kInf;
-                if (t < hit.t && md.density &&
-                    !(rng.uniform() * dmax < md.density->density(o + d * t))) {
-                    // Null collision: on in the same direction (see volpath/mesh_medium.cpp).
-                    for (int c = 0; c < 3; ++c) {
-                        const size_t i = static_cast<size_t>(c);
-                        const double sm = md.sigma_t[i] * dmax;
-                        const double f = i == h ? 1.0 : sm / st * std::exp(-(sm - st) * t);
-                        q[c] *= f;
-                        beta[c] *= f;
-                    }
-                    rescale();
-                    o = o + d * t;
-                    on_surface = false;
-                    --depth;
-                    continue;
-                }
-                if (t < hit.t) {  // scattering or absorption inside
-                    o = o + d * t;
-                    on_surface = false;
-                    ++events;
-                    // Analog absorption by the hero's albedo. Where NEE is done at this vertex
-                    // (index-matched media) the decision waits until after it, and the NEE
-                    // carries the survival probability instead: its expectation over the
-                    // decision, so that light is collected at every collision, not only at the
-                    // few that survive in an absorbing medium.
-                    const double survive = md.sigma_s[h] / md.sigma_t[h];
-                    const bool vertex_nee = passable(medium);
-                    if (!vertex_nee && !(rng.uniform() < survive)) return rays;
-                    for (int c = 0; c < 3; ++c) {
-                        const size_t i = static_cast<size_t>(c);
-                        const double e = i == h ? 1.0 : std::exp(-(md.sigma_t[i] * dmax - st) * t);
-                        const double f = md.sigma_s[i] / md.sigma_s[h] * e;
-                        q[c] *= f;
-                        beta[c] *= f;
-                    }
-                    rescale();
-                    if (events > opt.long_path_events) {
-                        if (!(rng.uniform() < 0.1)) return rays;
-                        for (double& b : beta) b /= 0.1;
-                    }
-                    // The density with which phase sampling picks a direction, as the hero
-                    // MIS sees it: the mixture of the channels' phase functions weighted by
-                    // their path densities so far (q), which does not depend on the hero; the
-                    // MIS weights of NEE against phase sampling use it, so that they sum to
-                    // one whichever channel is the hero (with per-channel g too).
-                    const double qs = q[0] + q[1] + q[2];
-                    const Vec3 din = d;
-                    auto phase_mix = [&](double mu_l) {
-                        if (md.same_g) return hg_pdf(md.g[0], mu_l);
-                        double v = 0;
-                        for (int c = 0; c < 3; ++c)
-                            v += q[c] / qs * hg_pdf(md.g[static_cast<size_t>(c)], mu_l);
-                        return v;
-                    };
-                    if (vertex_nee) {
-                        // Inside an index-matched medium shadow rays reach the lights: NEE at
-                        // every scattering vertex, MIS with phase sampling.
-                        RGB c{};
-                        const double bs[3] = {beta[0] * survive, beta[1] * survive,
-                                              beta[2] * survive};
-                        nee(
-                            o, nullptr, rng, bs,
-                            [&](const Vec3& wi) {
-                                const double mu_l = dot(din, wi);
-                                return RGB{hg_pdf(md.g[0], mu_l), hg_pdf(md.g[1], mu_l),
-                                           hg_pdf(md.g[2], mu_l)};
-                            },
-                            [&](const Vec3& wi) { return phase_mix(dot(din, wi)); }, c, rays,
-                            medium);
-                        flush(c);
-                        if (!(rng.uniform() < survive)) return rays;
-                    }
-                    const double mu = sample_hg(md.g[h], rng.uniform());
-                    const double phi = 2 * kPi * rng.uniform();
-                    prev_pdf = phase_mix(mu);
-                    if (!md.same_g) {
-                        const double ph = hg_pdf(md.g[h], mu);
-                        for (int c = 0; c < 3; ++c) {
-                            const double f = hg_pdf(md.g[static_cast<size_t>(c)], mu) / ph;
-                            q[c] *= f;
-                            beta[c] *= f;
-                        }
-                        rescale();
-                    }
-                    d = rotate(d, mu, phi);
-                    prev_nee = passable(medium);
-                    nee_pos = o;
-                    --depth;  // medium events do not count as path vertices
-                    continue;
-                }
-                for (int c = 0; c < 3; ++c) {
-                    const size_t i = static_cast<size_t>(c);
-                    const double e = i == h ? 1.0 : std::exp(-(md.sigma_t[i] * dmax - st) * hit.t);
-                    q[c] *= e;
-                    beta[c] *= e;
-                }
-                rescale();
-            } else {
-                // Sphere lights are not in the BVH: the nearest of them, if before the geometry.
-                double tl = kInf;
-                const Light* hit_light = nullptr;
-                for (const Light& l : lights)
-                    if (l.type == LightType::kSphere) {
-                        const double t = hit_sphere(o, d, l.pos, l.radius);
-                        if (t < tl) tl = t, hit_light = &l;
-                    }
-                if (hit_light && tl < hit.t) {
-                    const double sel = 1.0 / static_cast<double>(lights.size());
-                    const double w =
-                        prev_nee ? power(prev_pdf, sel * light_pdf(*hit_light, nee_pos, d)) : 1.0;
-                    RGB c{};
-                    for (int k = 0; k < 3; ++k)
-                        c[static_cast<size_t>(k)] =
-                            beta[k] * hit_light->L[static_cast<size_t>(k)] * w;
-                    flush(c);
-                    return rays;
-                }
-                if (!hit.hit()) {
-                    RGB c{};
-                    add_escape(nee_pos, d, prev_nee, prev_pdf, beta, c);
-                    flush(c);
-                    return rays;
-                }
-            }
-            if (opt.max_depth > 0 && depth >= opt.max_depth) return rays;
-            const Vec3 p = o + d * hit.t;
-            const int mi = shape_medium[hit.shape];
-            Vec3 n = hit.normal;
+
+        // A surface vertex at p (shape `shape`, its normal n), reached along d from either side
+        // of a medium's boundary or from outside a diffuse surface: the surface model, NEE,
+        // the next direction and the throughput roulette. False: the path ends.
+        auto vertex = [&](const Vec3& p, Vec3 n, std::uint32_t shape) -> bool {
+            if (opt.max_depth > 0 && depth >= opt.max_depth) return false;
+            const int mi = shape_medium[shape];
             const Vec3 wo = -d;
             if (mi < 0) {  // diffuse, two-sided
-                if (medium >= 0) return rays;
+                if (medium >= 0) return false;
                 const SceneMaterial& m =
-                    scene.materials[static_cast<size_t>(scene.shapes[hit.shape].material)];
+                    scene.materials[static_cast<size_t>(scene.shapes[shape].material)];
                 if (dot(n, wo) < 0) n = -n;
                 RGB c{};
                 nee(
@@ -518,17 +388,6 @@ struct Renderer {
             } else {  // a medium's dielectric boundary
                 const MediumData& md = media[static_cast<size_t>(mi)];
                 const bool outside = dot(wo, n) > 0;
-                if (outside != (medium < 0)) {
-                    // Within a few epsilons: the restart point slipped across a concave crease
-                    // of this mesh; cross back and go on. Farther: a leak; the path ends.
-                    if (hit.t < 4 * eps) {
-                        o = p;
-                        on_surface = true;
-                        --depth;
-                        continue;
-                    }
-                    return rays;
-                }
                 const Frame fr(n);
                 const Vec3 wo_l = fr.local(wo);
                 const double eta = md.eta;  // inside over outside (outside index 1)
@@ -542,7 +401,7 @@ struct Renderer {
                         reflected = true;
                     } else {
                         d = refract(-wo, outside ? n : -n, eta_side, cos_t);
-                        for (double& b : beta) b /= eta_side * eta_side;  // radiance mode
+                        for (int k = 0; k < 3; ++k) beta[k] /= eta_side * eta_side;  // radiance
                         transmitted = true;
                     }
                     // An index-matched boundary is no vertex: NEE before it still stands.
@@ -568,23 +427,23 @@ struct Renderer {
                     flush(c);
                     if (first_reflection) specular_path = false;  // decided by the sample below
                     const double uc = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
-                    const auto s = sample_rough_dielectric(wo_l, eta, md.alpha, uc, u1, u2,
-                                                           TransportMode::kRadiance);
-                    if (!s) return rays;
-                    const double wgt = s->f * std::abs(s->wi.z) / s->pdf;
-                    for (double& b : beta) b *= wgt;
-                    d = fr.world(s->wi);
-                    prev_pdf = s->pdf;
+                    const auto smp = sample_rough_dielectric(wo_l, eta, md.alpha, uc, u1, u2,
+                                                             TransportMode::kRadiance);
+                    if (!smp) return false;
+                    const double wgt = smp->f * std::abs(smp->wi.z) / smp->pdf;
+                    for (int k = 0; k < 3; ++k) beta[k] *= wgt;
+                    d = fr.world(smp->wi);
+                    prev_pdf = smp->pdf;
                     prev_nee = true;
                     nee_pos = p;
-                    reflected = s->reflection;
-                    transmitted = !s->reflection;
+                    reflected = smp->reflection;
+                    transmitted = !smp->reflection;
                 }
                 if (depth == 0 && reflected) specular_path = true;
                 if (transmitted) {
                     if (medium < 0) {
                         medium = mi;
-                        medium_shape = static_cast<int>(hit.shape);
+                        medium_shape = static_cast<int>(shape);
                         entered = true;
                     } else {
                         medium = -1;
@@ -609,13 +468,135 @@ struct Renderer {
             // Russian roulette on the throughput.
             if (depth + 1 >= opt.roulette_depth) {
                 const double m = std::max({beta[0], beta[1], beta[2]});
-                if (!(m > 0) || !std::isfinite(m)) return rays;
+                if (!(m > 0) || !std::isfinite(m)) return false;
                 if (m < 1) {
                     const double survive = std::max(0.05, m);
-                    if (!(rng.uniform() < survive)) return rays;
-                    for (double& b : beta) b /= survive;
+                    if (!(rng.uniform() < survive)) return false;
+                    for (int k = 0; k < 3; ++k) beta[k] /= survive;
                 }
             }
+            ++depth;
+            return true;
+        };
+
+        // Inside a medium: what the walk does at its boundary (the vertex above), at its
+        // scattering vertices (NEE inside index-matched media, MIS with phase sampling) and
+        // after sampling the phase function.
+        struct Hooks : WalkHooks {
+            decltype(vertex)& at_surface;
+            const Renderer& R;
+            int& medium;
+            double& prev_pdf;
+            bool& prev_nee;
+            Vec3& nee_pos;
+            std::uint64_t& rays;
+            decltype(flush)& add;
+            // The density with which phase sampling picks a direction, as the hero MIS sees
+            // it: the mixture of the channels' phase functions weighted by their path densities
+            // so far (q), which does not depend on the hero; the MIS weights of NEE against
+            // phase sampling use it, so that they sum to one whichever channel is the hero
+            // (with per-channel g too).
+            double phase_mix(const WalkState<3>& s, double mu_l) const {
+                const MediumData& md = R.media[static_cast<size_t>(medium)];
+                if (md.same_g) return hg_pdf(md.g[0], mu_l);
+                const double* qq = s.weights.q;
+                const double qs = qq[0] + qq[1] + qq[2];
+                double v = 0;
+                for (int c = 0; c < 3; ++c)
+                    v += qq[c] / qs * hg_pdf(md.g[static_cast<size_t>(c)], mu_l);
+                return v;
+            }
+            BoundaryAction boundary(WalkState<3>& s, const WalkBoundary& b, RngStream&) {
+                if (!at_surface(s.p, b.n, b.shape)) return BoundaryAction::kEnd;
+                return medium >= 0 ? BoundaryAction::kReflect : BoundaryAction::kExit;
+            }
+            // Analog absorption by the hero's albedo. Where NEE is done at a vertex
+            // (index-matched media) the decision waits until after it, and the NEE carries the
+            // survival probability instead: its expectation over the decision, so that light is
+            // collected at every collision, not only at the few that survive in an absorbing
+            // medium.
+            bool vertex_nee(const WalkState<3>&) const { return R.passable(medium); }
+            void at_vertex(WalkState<3>& s, double survive, RngStream& rng) {
+                const MediumData& md = R.media[static_cast<size_t>(medium)];
+                const double* beta = s.weights.beta;
+                const double bs[3] = {beta[0] * survive, beta[1] * survive, beta[2] * survive};
+                const Vec3 din = s.w;
+                RGB c{};
+                R.nee(
+                    s.p, nullptr, rng, bs,
+                    [&](const Vec3& wi) {
+                        const double mu_l = dot(din, wi);
+                        return RGB{hg_pdf(md.g[0], mu_l), hg_pdf(md.g[1], mu_l),
+                                   hg_pdf(md.g[2], mu_l)};
+                    },
+                    [&](const Vec3& wi) { return phase_mix(s, dot(din, wi)); }, c, rays, medium);
+                add(c);
+            }
+            void scattered(const WalkState<3>& s, double mu) {
+                prev_pdf = phase_mix(s, mu);
+                prev_nee = R.passable(medium);
+                nee_pos = s.p;
+            }
+        };
+        Hooks hooks{{}, vertex, *this, medium, prev_pdf, prev_nee, nee_pos, rays, flush};
+        WalkRules rules;
+        rules.flight = FlightRule::kResample;
+        rules.long_events = opt.long_path_events;
+        (void)q;
+
+        while (depth < 100000) {
+            if (medium >= 0) {
+                const MeshGeometry geo{es.get(), static_cast<std::uint32_t>(medium_shape),
+                                       media[static_cast<size_t>(medium)].region};
+                const std::uint64_t before = ws.queries;
+                const WalkEnd end = walk(geo, ws, rules, rng, hooks);
+                rays += ws.queries - before;
+                if (end != WalkEnd::kExited) return rays;
+                continue;
+            }
+            ++rays;
+            const RayHit hit = es->intersect(o, d, on_surface ? eps : 0.0);
+            if (depth == 0 && hit.hit()) {
+                T[RenderLayout::kDepth] += hit.t;
+                for (int c = 0; c < 3; ++c) T[RenderLayout::kNormal + c] += hit.normal[c];
+            }
+            // Sphere lights are not in the BVH: the nearest of them, if before the geometry.
+            double tl = kInf;
+            const Light* hit_light = nullptr;
+            for (const Light& l : lights)
+                if (l.type == LightType::kSphere) {
+                    const double t = hit_sphere(o, d, l.pos, l.radius);
+                    if (t < tl) tl = t, hit_light = &l;
+                }
+            if (hit_light && tl < hit.t) {
+                const double sel = 1.0 / static_cast<double>(lights.size());
+                const double w =
+                    prev_nee ? power(prev_pdf, sel * light_pdf(*hit_light, nee_pos, d)) : 1.0;
+                RGB c{};
+                for (int k = 0; k < 3; ++k)
+                    c[static_cast<size_t>(k)] = beta[k] * hit_light->L[static_cast<size_t>(k)] * w;
+                flush(c);
+                return rays;
+            }
+            if (!hit.hit()) {
+                RGB c{};
+                add_escape(nee_pos, d, prev_nee, prev_pdf, beta, c);
+                flush(c);
+                return rays;
+            }
+            const Vec3 p = o + d * hit.t;
+            if (shape_medium[hit.shape] >= 0 && !(dot(d, hit.normal) < 0)) {
+                // A medium's boundary met from inside while outside. Within a few epsilons: the
+                // restart point slipped across a concave crease of this mesh; cross back and go
+                // on. Farther: a leak; the path ends.
+                if (hit.t < 4 * eps) {
+                    o = p;
+                    on_surface = true;
+                    continue;
+                }
+                return rays;
+            }
+            if (!vertex(p, hit.normal, hit.shape)) return rays;
         }
         return rays;
     }
@@ -699,18 +680,14 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
     bo.budget = o.budget;
     if (!bo.budget.any()) bo.budget.samples = 64;
     if (bo.budget.samples) bo.budget.samples = (*bo.budget.samples + 2) / 3 * 3;
-    bo.threads = o.threads;
+    o.apply(bo);
     if (!o.checkpoint_path.empty()) {
         bo.fingerprint = render_fingerprint(scene, o);
         out.content_key = hash_hex(bo.fingerprint);
     }
     bo.checkpoint_path = o.checkpoint_path;
-    bo.checkpoint_seconds = o.checkpoint_seconds;
-    bo.cancel = o.cancel;
     bo.on_batch = o.on_batch;
     bo.on_resume = o.on_resume;
-    bo.fresh = o.fresh;
-    bo.snapshots = o.snapshots;
     bo.quantity = [pixels, measure = o.error_measure](const BatchAccumulator& acc, double& value,
                                                       double& se) {
         auto mean = [&](std::size_t i) { return acc.mean(radiance_element(i)); };

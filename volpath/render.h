@@ -52,11 +52,11 @@ enum class RenderErrorMeasure {
 };
 const char* to_string(RenderErrorMeasure m);
 
-struct RenderOptions {
-    std::uint64_t seed = 1;
-    int threads = 0;
-    /// Samples per pixel (three per batch), seconds, or a relative error (error_measure).
-    SampleBudget budget;
+/// Run control: RunControl (core/batch_runner.h); the budget is samples per pixel (three per
+/// batch), seconds, or a relative error (error_measure). Snapshots keep the image after 4, 8,
+/// 16, ... samples per pixel (RenderResult::run.snapshots), for error against time; each holds
+/// the whole tally (13 doubles per pixel).
+struct RenderOptions : RunControl {
     RenderErrorMeasure error_measure = RenderErrorMeasure::kMedianPixel;
     /// Camera path vertices before Russian roulette may end a path (then survival
     /// max(beta) clamped to [0.05, 1]).
@@ -73,18 +73,11 @@ struct RenderOptions {
     /// Off: such boundaries are crossed by the path alone, as before (tests compare the two).
     bool index_matched_nee = true;
     std::string checkpoint_path;  ///< empty: none
-    double checkpoint_seconds = 30.0;
-    /// Ignore an existing checkpoint (start afresh) instead of resuming or refusing it.
-    bool fresh = false;
-    const std::atomic<bool>* cancel = nullptr;
     std::function<void(const BatchProgress&)> on_batch;
     /// Called before the render continues from its checkpoint, with what the checkpoint holds.
     std::function<void(const BatchProgress&)> on_resume;
     /// Render at this size instead of the camera's (0: the camera's), e.g. for tests.
     int width = 0, height = 0;
-    /// Keep the image after 4, 8, 16, ... samples per pixel (RenderResult::run.snapshots), for
-    /// error against time. Each snapshot holds the whole tally (13 doubles per pixel).
-    bool snapshots = false;
 };
 
 /// Per-pixel tally layout: radiance RGB, subsurface RGB, specular RGB, depth, normal xyz.

@@ -22,23 +22,13 @@ constexpr const char* kEngineVersion = "volpath-sphere-3";
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Russian roulette of the hero mode, as in pencil.cpp.
-constexpr double kRouletteThreshold = 0.1;
-
-// A flight that hits the boundary this often is terminated (its weight counted as lost): only a
-// ray trapped at grazing incidence by total internal reflection (a whispering-gallery orbit whose
-// angle rounding has made exactly tangent) gets there; a legitimate grazing path needs
-// ~1 / cos(theta) hits, and cos(theta) < 1e-6 has probability ~1e-12 per boundary hit.
-constexpr int kMaxBoundaryHits = 1'000'000;
-
 // Largest tally per batch, in doubles (1 GiB).
 constexpr std::size_t kMaxTally = std::size_t(1) << 27;
 
 // Everything a path needs, per tally channel (one channel in kPerChannel mode, three in kHero).
 struct Setup {
     int nc = 1;
-    std::array<double, 3> sigma_t{}, sigma_s{}, albedo{}, g{};
-    bool same_g = true;
+    WalkRegion region;
     double radius = 1;
     double eta_in = 1;   // medium / ambient index (entering)
     double eta_out = 1;  // ambient / medium index (leaving)
@@ -48,8 +38,7 @@ struct Setup {
     double half_x = 0, half_y = 0, inv_pixel = 0;  // in units of R
     double bins_per_rad = 0;
     SphereLayout layout;
-    std::int64_t long_events = 0;
-    double long_survival = 0.1;
+    WalkRules rules;
 };
 
 // Distance from p (inside the sphere or on it) along the unit vector w to the sphere: the larger
@@ -94,15 +83,69 @@ void tally_camera(const Setup& s, const Vec3& n, const Vec3& d, const double* wt
     }
 }
 
+// The walk's geometry: the inside of the sphere (volpath/walk.h).
+struct SphereGeometry {
+    const Setup& s;
+    static constexpr bool multi_region = false;
+    const WalkRegion& region(int) const { return s.region; }
+    template <int NC>
+    WalkBoundary next(const WalkState<NC>& st) const {
+        WalkBoundary b;
+        b.t = distance_to_sphere(st.p, st.w, s.radius);
+        return b;
+    }
+    template <int NC>
+    void arrive(WalkState<NC>& st, WalkBoundary& b) const {
+        st.p += st.w * b.t;
+        // Back onto the sphere, so that rounding cannot accumulate over many reflections.
+        b.n = normalize(st.p);
+        st.p = b.n * s.radius;
+        st.on_surface = true;
+    }
+};
+
+// What the sphere does with a walk: Fresnel at the boundary; an exit tallied by its angle from
+// the subsolar point, and for the camera.
+template <int NC>
+struct SphereHooks : TallyLostHooks<NC> {
+    const Setup& s;
+    // SphereLayout::lost(): the weight at risk when a path reaches the long-path roulette, plus
+    // (a truncation, practically never) the weight of a flight ended by kMaxBoundaryHits.
+    SphereHooks(const Setup& setup, double* t) : s(setup) {
+        this->tally = t;
+        this->stride = s.layout.per_channel();
+        this->index = s.layout.lost();
+    }
+
+    BoundaryAction boundary(WalkState<NC>& st, const WalkBoundary& b, RngStream& rng) {
+        if (fresnel_reflects(st.w, b.n, s.eta_out, rng)) return BoundaryAction::kReflect;
+        // The path leaves the sphere.
+        const SphereLayout& L = s.layout;
+        const double cb = std::clamp(dot(b.n, s.l), -1.0, 1.0);
+        const double x = std::acos(cb) * s.bins_per_rad;
+        const std::size_t bin =
+            std::min(static_cast<size_t>(x), static_cast<size_t>(L.beta_bins - 1));
+        const double* beta = st.weights.beta;
+        for (int c = 0; c < NC; ++c) {
+            double* T = this->tally + static_cast<size_t>(c) * L.per_channel();
+            T[L.beta() + bin] += beta[c];
+            T[L.diffuse()] += beta[c];
+            if (st.events == 1) {
+                T[L.beta_single() + bin] += beta[c];
+                T[L.diffuse_single()] += beta[c];
+            }
+        }
+        tally_camera(s, b.n, st.w, beta, false, this->tally);
+        return BoundaryAction::kExit;
+    }
+};
+
 // Trace one photon from the light; add its contributions to `tally` (nc channels of
 // layout.per_channel() elements). Returns the number of scattering events. `hero` is the
-// sampling channel in hero mode (ignored with nc == 1). The random walk is pencil.cpp's trace()
-// with the sphere in place of the slab.
-template <bool kHeroMode>
+// sampling channel in hero mode (ignored with NC == 1). Inside, the one walk of
+// volpath/walk.h: per channel analog, or hero with weighted absorption.
+template <int NC>
 std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
-    constexpr int kMaxC = 3;
-    const int nc = kHeroMode ? 3 : 1;
-    const int h = kHeroMode ? hero : 0;
     const SphereLayout& L = s.layout;
     const std::size_t stride = L.per_channel();
 
@@ -115,8 +158,8 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
     double cos_t = 0;
     const double F = fresnel_dielectric(mu, s.eta_in, cos_t);
     {
-        double wt[kMaxC];
-        for (int c = 0; c < nc; ++c) {
+        double wt[NC];
+        for (int c = 0; c < NC; ++c) {
             tally[static_cast<size_t>(c) * stride + L.specular()] += F;
             wt[c] = F;
         }
@@ -124,132 +167,15 @@ std::uint64_t trace(const Setup& s, RngStream& rng, int hero, double* tally) {
     }
     if (F >= 1.0) return 0;  // total reflection at grazing entry (eta below the ambient index)
 
-    // beta, q: as in pencil.cpp (path weights and the channels' relative sampling densities,
-    // rescaled by mean(q) after every event in hero mode).
-    double beta[kMaxC], q[kMaxC];
-    for (int c = 0; c < nc; ++c) {
-        beta[c] = 1.0 - F;
-        q[c] = 1.0;
-    }
-    Vec3 p = n0 * s.radius;
-    Vec3 w = refract(-s.l, n0, s.eta_in, cos_t);
-    std::uint64_t events = 0;
-    const double sigma_t = s.sigma_t[static_cast<size_t>(h)];
-
-    auto rescale = [&]() {
-        if constexpr (kHeroMode) {
-            const double m = (q[0] + q[1] + q[2]) * (1.0 / 3.0);
-            const double inv = 1.0 / m;
-            for (int c = 0; c < 3; ++c) {
-                q[c] *= inv;
-                beta[c] *= inv;
-            }
-        }
-    };
-    auto flight_weights = [&](double d, bool scatter) {
-        if constexpr (kHeroMode) {
-            for (int c = 0; c < 3; ++c) {
-                const size_t i = static_cast<size_t>(c);
-                const double e = c == h ? 1.0 : std::exp(-(s.sigma_t[i] - sigma_t) * d);
-                if (scatter) {
-                    q[c] *= s.sigma_t[i] / sigma_t * e;
-                    beta[c] *= s.sigma_s[i] / sigma_t * e;
-                } else {
-                    q[c] *= e;
-                    beta[c] *= e;
-                }
-            }
-            rescale();
-        }
-    };
-    // PencilLayout::lost(): the weight at risk when a path reaches the long-path roulette, plus
-    // (a truncation, practically never) the weight of a flight ended by kMaxBoundaryHits.
-    auto lose = [&]() {
-        for (int c = 0; c < nc; ++c) tally[static_cast<size_t>(c) * stride + L.lost()] += beta[c];
-    };
-
-    for (;;) {
-        double t = sigma_t > 0 ? -std::log(rng.uniform()) / sigma_t : kInf;
-        double travelled = 0;
-        int hits = 0;
-        for (;;) {
-            const double tb = distance_to_sphere(p, w, s.radius);
-            if (t < tb) {
-                p += w * t;
-                travelled += t;
-                break;
-            }
-            p += w * tb;
-            travelled += tb;
-            // Back onto the sphere, so that rounding cannot accumulate over many reflections.
-            const Vec3 n = normalize(p);
-            p = n * s.radius;
-            const double cos_i = std::clamp(dot(w, n), 0.0, 1.0);
-            double cos_o = 0;
-            const double Fi = fresnel_dielectric(cos_i, s.eta_out, cos_o);
-            if (rng.uniform() < Fi) {
-                // Internal reflection; the rest of the sampled free path continues.
-                w = normalize(w - n * (2.0 * cos_i));
-                t -= tb;
-                if (++hits >= kMaxBoundaryHits) {
-                    lose();
-                    return events;
-                }
-                continue;
-            }
-            // The path leaves the sphere.
-            flight_weights(travelled, false);
-            const double cb = std::clamp(dot(n, s.l), -1.0, 1.0);
-            const double b = std::acos(cb) * s.bins_per_rad;
-            const std::size_t bin =
-                std::min(static_cast<size_t>(b), static_cast<size_t>(L.beta_bins - 1));
-            for (int c = 0; c < nc; ++c) {
-                double* T = tally + static_cast<size_t>(c) * stride;
-                T[L.beta() + bin] += beta[c];
-                T[L.diffuse()] += beta[c];
-                if (events == 1) {
-                    T[L.beta_single() + bin] += beta[c];
-                    T[L.diffuse_single()] += beta[c];
-                }
-            }
-            tally_camera(s, n, refract(w, -n, s.eta_out, cos_o), beta, false, tally);
-            return events;
-        }
-
-        // Interaction.
-        ++events;
-        if constexpr (kHeroMode) {
-            flight_weights(travelled, true);
-            double m = std::max({beta[0], beta[1], beta[2]});
-            if (m < kRouletteThreshold) {
-                const double survive = m / kRouletteThreshold;
-                if (!(rng.uniform() < survive)) return events;
-                for (int c = 0; c < 3; ++c) beta[c] /= survive;
-            }
-        } else {
-            if (!(rng.uniform() < s.albedo[0])) return events;  // absorbed
-        }
-        if (static_cast<std::int64_t>(events) > s.long_events) {
-            if (static_cast<std::int64_t>(events) == s.long_events + 1) lose();  // mass at risk
-            if (!(rng.uniform() < s.long_survival)) return events;
-            for (int c = 0; c < nc; ++c) beta[c] /= s.long_survival;
-        }
-        const double g = s.g[static_cast<size_t>(h)];
-        const double mu_s = sample_hg(g, rng.uniform());
-        const double phi_s = 2.0 * kPi * rng.uniform();
-        if constexpr (kHeroMode) {
-            if (!s.same_g) {
-                const double ph = hg_pdf(g, mu_s);
-                for (int c = 0; c < 3; ++c) {
-                    const double pc = hg_pdf(s.g[static_cast<size_t>(c)], mu_s) / ph;
-                    q[c] *= pc;
-                    beta[c] *= pc;
-                }
-                rescale();
-            }
-        }
-        w = rotate(w, mu_s, phi_s);
-    }
+    WalkState<NC> st;
+    st.weights.hero = hero;
+    st.weights.start(1.0 - F);
+    st.p = n0 * s.radius;
+    st.w = refract(-s.l, n0, s.eta_in, cos_t);
+    st.on_surface = true;
+    SphereHooks<NC> hooks(s, tally);
+    walk(SphereGeometry{s}, st, s.rules, rng, hooks);
+    return static_cast<std::uint64_t>(st.events);
 }
 
 std::string fingerprint(const SphereScene& sc, const SphereOptions& o, std::int64_t batch,
@@ -489,7 +415,7 @@ SphereRun simulate_sphere(const SphereScene& scene, const SphereOptions& o) {
     base.inv_pixel = sc.radius_cm / cam.pixel_cm;
     base.bins_per_rad = sc.beta_bins / kPi;
     base.layout = out.layout;
-    base.long_survival = o.long_path_survival;
+    base.rules.long_survival = o.long_path_survival;
 
     const bool hero = o.mode == ChromaticMode::kHero;
     const int nruns = hero ? 1 : 3;
@@ -497,55 +423,33 @@ SphereRun simulate_sphere(const SphereScene& scene, const SphereOptions& o) {
     for (int run = 0; run < nruns; ++run) {
         Setup s = base;
         s.nc = hero ? 3 : 1;
+        std::array<double, 3> sigma_t{}, sigma_s{}, g{};
         for (int c = 0; c < s.nc; ++c) {
             const int mc = hero ? c : run;
             const size_t i = static_cast<size_t>(c);
-            s.sigma_t[i] = m.sigma_a_per_cm[mc] + m.sigma_s_per_cm[mc];
-            s.sigma_s[i] = m.sigma_s_per_cm[mc];
-            s.albedo[i] = s.sigma_t[i] > 0 ? s.sigma_s[i] / s.sigma_t[i] : 0.0;
-            s.g[i] = m.g[mc];
+            sigma_t[i] = m.sigma_a_per_cm[mc] + m.sigma_s_per_cm[mc];
+            sigma_s[i] = m.sigma_s_per_cm[mc];
+            g[i] = m.g[mc];
         }
-        s.same_g = s.g[0] == s.g[1] && s.g[1] == s.g[2];
+        s.region = WalkRegion::make(sigma_t, sigma_s, g);
         PencilOptions rule;  // the pencil's rule for long_path_events = 0
         rule.long_path_events = o.long_path_events;
-        s.long_events = long_path_threshold(m, rule, hero ? -1 : run);
+        s.rules.long_events = long_path_threshold(m, rule, hero ? -1 : run);
+        // Hero mode weights absorption (the pencil's analog hero is faster on chromatic media;
+        // this engine's version pins the weighted one).
+        s.rules.absorption = hero ? Absorption::kWeighted : Absorption::kAnalog;
         const int stream = hero ? 3 : run;
 
         BatchRunOptions bo;
         bo.tally_size = stride * static_cast<size_t>(s.nc);
         bo.batch_samples = batch;
         bo.budget = budget;
-        bo.threads = o.threads;
         bo.fingerprint = fingerprint(sc, o, batch, stream);
-        if (!o.checkpoint_prefix.empty())
-            bo.checkpoint_path =
-                o.checkpoint_prefix + "." + (hero ? "hero" : kChannelNames[run]) + ".ckpt";
-        bo.checkpoint_seconds = o.checkpoint_seconds;
-        bo.cancel = o.cancel;
-        bo.snapshots = o.snapshots;
-        const SphereLayout L = out.layout;
-        const int nc = s.nc;
+        o.apply_run(bo, stream);
         // Budget quantity: the least precise channel's total diffuse exit.
-        bo.quantity = [L, stride, nc](const BatchAccumulator& acc, double& value, double& se) {
-            double worst = -1;
-            for (int c = 0; c < nc; ++c) {
-                const size_t i = static_cast<size_t>(c) * stride + L.diffuse();
-                const double v = acc.mean(i), e = acc.standard_error(i);
-                const double rel = v > 0 ? e / v : kInf;
-                if (rel > worst) {
-                    worst = rel;
-                    value = v;
-                    se = e;
-                }
-            }
-        };
-        if (o.on_batch)
-            bo.on_batch = [&o, stream](const BatchProgress& p) { o.on_batch(stream, p); };
-        if (o.on_resume)
-            bo.on_resume = [&o, stream, path = bo.checkpoint_path](const BatchProgress& p) {
-                o.on_resume(stream, p, path);
-            };
-        bo.fresh = o.fresh;
+        bo.quantity = least_precise_channel(
+            stride, s.nc,
+            [L = out.layout](const BatchAccumulator&, std::size_t) { return L.diffuse(); });
 
         const std::uint64_t seed = o.seed;
         const std::uint64_t bsz = static_cast<std::uint64_t>(batch);
@@ -558,9 +462,9 @@ SphereRun simulate_sphere(const SphereScene& scene, const SphereOptions& o) {
                 if (hero) {
                     const int h =
                         static_cast<int>((index * bsz + static_cast<std::uint64_t>(i)) % 3);
-                    events += trace<true>(s, rng, h, tally);
+                    events += trace<3>(s, rng, h, tally);
                 } else {
-                    events += trace<false>(s, rng, 0, tally);
+                    events += trace<1>(s, rng, 0, tally);
                 }
             }
             return events;

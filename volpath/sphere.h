@@ -71,12 +71,9 @@ struct SphereScene {
 };
 
 /// How a run is carried out; none of these change the expected values.
-struct SphereOptions {
-    std::uint64_t seed = 1;
-    int threads = 0;
-    /// Photons, per channel in kPerChannel mode, for the single run in kHero mode. With no
-    /// limit, 1e6 photons.
-    SampleBudget budget;
+/// Run control: ChannelRunControl (volpath/pencil.h); the budget counts photons, per channel in
+/// kPerChannel mode, for the single run in kHero mode. With no limit, 1e6 photons.
+struct SphereOptions : ChannelRunControl {
     /// Photons per batch; 0 chooses: at least 1000 and budget / 1000, and with the image on also
     /// min(2 width height, budget / 32) (2 width height without a fixed photon budget). The
     /// whole tally (image included) is zeroed and folded into the statistics once per batch, an
@@ -92,18 +89,6 @@ struct SphereOptions {
     /// clamped to [1e4, 1e6]).
     std::int64_t long_path_events = 0;
     double long_path_survival = 0.1;
-    /// Checkpoints are <prefix>.<R|G|B|hero>.ckpt (empty: none).
-    std::string checkpoint_prefix;
-    double checkpoint_seconds = 30.0;
-    /// Ignore existing checkpoints (start afresh) instead of resuming or refusing them.
-    bool fresh = false;
-    const std::atomic<bool>* cancel = nullptr;
-    /// run: 0..2 (channel) in kPerChannel mode, 3 in kHero mode.
-    std::function<void(int run, const BatchProgress&)> on_batch;
-    /// Called before a run continues from its checkpoint, with what the checkpoint holds and
-    /// the checkpoint's path.
-    std::function<void(int run, const BatchProgress&, const std::string& checkpoint)> on_resume;
-    bool snapshots = false;
     /// Tally the image layers (off: only the beta profile and the totals).
     bool image = true;
 };
