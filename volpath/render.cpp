@@ -393,14 +393,11 @@ struct Renderer {
                 const double eta = md.eta;  // inside over outside (outside index 1)
                 bool transmitted = false, reflected = false;
                 if (md.alpha == 0) {
+                    // The smooth boundary of every engine's walk (walk_mesh_medium's too).
                     const double eta_side = outside ? eta : 1 / eta;
-                    double cos_t = 0;
-                    const double F = fresnel_dielectric(std::abs(wo_l.z), eta_side, cos_t);
-                    if (rng.uniform() < F) {
-                        d = n * (2 * dot(wo, n)) - wo;
+                    if (fresnel_reflects(d, outside ? -n : n, eta_side, rng)) {
                         reflected = true;
                     } else {
-                        d = refract(-wo, outside ? n : -n, eta_side, cos_t);
                         for (int k = 0; k < 3; ++k) beta[k] /= eta_side * eta_side;  // radiance
                         transmitted = true;
                     }
