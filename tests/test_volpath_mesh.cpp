@@ -104,12 +104,14 @@ TEST(VolpathMesh, VeryLargeBoxEqualsTheHalfSpacePencilProfile) {
     // Skin1's red channel in a box 100 cm on a side (770 mean free paths): a pencil beam into the
     // middle of its top face sees a half-space. Exits through the top face, binned by distance
     // from the entry as MCML bins them, times the entry factor 1 - Rsp, against the pencil
-    // engine (independent seed), bin by bin.
+    // engine (independent seed), bin by bin. The walk skips the queries of flights inside the
+    // balls of a SurfaceDistanceGrid, as the renderer's walks do in dense media.
     const Medium skin = *find_material("Skin1");
     const TriangleMesh box = make_box({100, 100, 100});
     const EmbreeScene es({&box});
-    const MeshMedium m =
-        grey(es, skin.sigma_a_per_cm[0], skin.sigma_s_per_cm[0], skin.g[0], skin.eta);
+    const SurfaceDistanceGrid balls(es, box);
+    MeshMedium m = grey(es, skin.sigma_a_per_cm[0], skin.sigma_s_per_cm[0], skin.g[0], skin.eta);
+    m.balls = &balls;
     const PencilGrid grid{0.02, 100};
     const double rsp = entry_specular(skin);
     const std::size_t size = static_cast<std::size_t>(grid.nr) + 2;  // bins, beyond, other faces

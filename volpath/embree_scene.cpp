@@ -3,7 +3,9 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -13,6 +15,9 @@ struct EmbreeScene::Impl {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
     std::vector<std::vector<Vec3>> normals;  // per shape, per triangle (double precision)
+    // Per shape, the vertices of each triangle as Embree stores them (floats, held as doubles):
+    // the surface the ray queries see, for the point queries.
+    std::vector<std::vector<std::array<Vec3, 3>>> corners;
 };
 
 namespace {
@@ -34,6 +39,47 @@ std::string device_error(RTCDevice d) {
         default:
             return "unknown error";
     }
+}
+
+// The point of triangle (a, b, c) nearest to p [Ericson, Real-Time Collision Detection, 5.1.5].
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0) return a;
+    const Vec3 bp = p - b;
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return b;
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+    const Vec3 cp = p - c;
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return c;
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    const double denom = 1.0 / (va + vb + vc);
+    return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+struct PointQuery {
+    const std::vector<std::vector<std::array<Vec3, 3>>>* corners;
+    Vec3 p;
+    double best2;
+};
+
+bool point_query(RTCPointQueryFunctionArguments* args) {
+    auto* q = static_cast<PointQuery*>(args->userPtr);
+    const std::array<Vec3, 3>& t = (*q->corners)[args->geomID][args->primID];
+    const Vec3 d = closest_on_triangle(q->p, t[0], t[1], t[2]) - q->p;
+    const double d2 = dot(d, d);
+    if (!(d2 < q->best2)) return false;
+    q->best2 = d2;
+    // Shrink the search: a float radius not below the distance.
+    args->query->radius =
+        std::nextafter(static_cast<float>(std::sqrt(d2)), std::numeric_limits<float>::infinity());
+    return true;
 }
 
 }  // namespace
@@ -64,6 +110,9 @@ EmbreeScene::EmbreeScene(const std::vector<const TriangleMesh*>& meshes) : impl_
         }
         std::vector<Vec3> normals;
         normals.reserve(m.triangles.size());
+        std::vector<std::array<Vec3, 3>> corners;
+        corners.reserve(m.triangles.size());
+        auto stored = [&](std::uint32_t i) { return Vec3{v[3 * i], v[3 * i + 1], v[3 * i + 2]}; };
         for (std::size_t i = 0; i < m.triangles.size(); ++i) {
             const auto& t = m.triangles[i];
             ix[3 * i] = t[0];
@@ -71,8 +120,10 @@ EmbreeScene::EmbreeScene(const std::vector<const TriangleMesh*>& meshes) : impl_
             ix[3 * i + 2] = t[2];
             normals.push_back(normalize(cross(m.positions[t[1]] - m.positions[t[0]],
                                               m.positions[t[2]] - m.positions[t[0]])));
+            corners.push_back({stored(t[0]), stored(t[1]), stored(t[2])});
         }
         impl_->normals.push_back(std::move(normals));
+        impl_->corners.push_back(std::move(corners));
         rtcCommitGeometry(g);
         const unsigned id = rtcAttachGeometry(impl_->scene, g);
         rtcReleaseGeometry(g);
@@ -116,6 +167,21 @@ RayHit EmbreeScene::intersect(const Vec3& o, const Vec3& d, double t_min, double
     out.triangle = rh.hit.primID;
     out.normal = impl_->normals[out.shape][out.triangle];
     return out;
+}
+
+double EmbreeScene::distance_to_surface(const Vec3& p, double max_distance) const {
+    RTCPointQuery query;
+    query.x = static_cast<float>(p.x);
+    query.y = static_cast<float>(p.y);
+    query.z = static_cast<float>(p.z);
+    query.time = 0;
+    query.radius = std::isfinite(max_distance) ? static_cast<float>(max_distance)
+                                               : std::numeric_limits<float>::infinity();
+    RTCPointQueryContext ctx;
+    rtcInitPointQueryContext(&ctx);
+    PointQuery q{&impl_->corners, p, max_distance * max_distance};
+    rtcPointQuery(impl_->scene, &query, &ctx, point_query, &q);
+    return std::min(max_distance, std::sqrt(q.best2));
 }
 
 bool EmbreeScene::occluded(const Vec3& o, const Vec3& d, double t_min, double t_max) const {

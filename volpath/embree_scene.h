@@ -40,6 +40,10 @@ class EmbreeScene {
                      double t_max = std::numeric_limits<double>::infinity()) const;
     /// Whether anything lies on the segment t in (t_min, t_max). Thread-safe.
     bool occluded(const Vec3& o, const Vec3& d, double t_min, double t_max) const;
+    /// Distance from p to the nearest triangle of any mesh (closest points in double precision
+    /// on the meshes' own vertices), or `max_distance` if none is nearer: a ball around p that
+    /// no surface enters. Embree's point query over the same BVH. Thread-safe.
+    double distance_to_surface(const Vec3& p, double max_distance) const;
 
     std::size_t triangles() const { return triangles_; }
     /// A distance that moves a point off a surface safely for this scene's extent.

@@ -160,6 +160,8 @@ struct Renderer {
     std::vector<Light> lights;
     std::vector<int> shape_medium;  // per shape: index into media, or -1 (diffuse)
     std::vector<MediumData> media;
+    // Per shape of a medium (with skip_queries_in_balls): where its walks need no queries.
+    std::vector<std::unique_ptr<SurfaceDistanceGrid>> shape_balls;
     double eps = 1e-6;
     bool has_passable = false;  // any index-matched homogeneous medium (shadow rays cross them)
     Vec3 cam_pos, cam_f, cam_r, cam_u;
@@ -212,6 +214,11 @@ struct Renderer {
             md.alpha = md.eta == 1.0 ? 0.0 : m.roughness;  // nothing to be rough about
             md.region = WalkRegion::make(md.sigma_t, md.sigma_s, md.g, md.density.get());
             shape_medium.push_back(static_cast<int>(media.size()));
+            if (o.skip_queries_in_balls && SurfaceDistanceGrid::pays(md.region, sh.mesh)) {
+                shape_balls.resize(s.shapes.size());
+                shape_balls[shape_medium.size() - 1] =
+                    std::make_unique<SurfaceDistanceGrid>(*es, sh.mesh);
+            }
             media.push_back(md);
             has_passable = has_passable || (o.index_matched_nee && md.eta == 1.0 && !md.density);
         }
@@ -543,8 +550,12 @@ struct Renderer {
 
         while (depth < 100000) {
             if (medium >= 0) {
-                const MeshGeometry geo{es.get(), static_cast<std::uint32_t>(medium_shape),
-                                       media[static_cast<size_t>(medium)].region};
+                MeshGeometry geo;
+                geo.scene = es.get();
+                geo.shape = static_cast<std::uint32_t>(medium_shape);
+                geo.inside = media[static_cast<size_t>(medium)].region;
+                if (!shape_balls.empty())
+                    geo.balls = shape_balls[static_cast<size_t>(medium_shape)].get();
                 const std::uint64_t before = ws.queries;
                 const WalkEnd end = walk(geo, ws, rules, rng, hooks);
                 rays += ws.queries - before;

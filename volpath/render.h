@@ -72,6 +72,10 @@ struct RenderOptions : RunControl {
     /// NEE inside index-matched homogeneous media and shadow rays through their boundaries.
     /// Off: such boundaries are crossed by the path alone, as before (tests compare the two).
     bool index_matched_nee = true;
+    /// Skip the boundary queries of flights that stay in a ball no surface enters (deep inside
+    /// dense media; volpath/mesh_medium.h MeshGeometry). The image is the same to the bit
+    /// either way (a test shows it); off only to show that, and to time the difference.
+    bool skip_queries_in_balls = true;
     std::string checkpoint_path;  ///< empty: none
     std::function<void(const BatchProgress&)> on_batch;
     /// Called before the render continues from its checkpoint, with what the checkpoint holds.

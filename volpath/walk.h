@@ -286,9 +286,10 @@ inline constexpr double kWeightRouletteThreshold = 0.1;
 /// The walk from s (inside region s.region, or on its boundary going in) until the path leaves
 /// the medium, is absorbed or is lost. Geometry: `region(i)` (const WalkRegion&),
 /// `multi_region` (bool: a clear region holds the free path), `next(s)` (WalkBoundary: the
-/// next boundary along s.w, counting s.queries) and `arrive(s, b)` (moves s.p onto the
-/// boundary b, sets b.n, s.on_surface). Hooks: `boundary(s, b, rng)` (BoundaryAction) and
-/// those of WalkHooks.
+/// next boundary along s.w, counting s.queries), `arrive(s, b)` (moves s.p onto the
+/// boundary b, sets b.n, s.on_surface) and optionally `clear(s, t)` (true only if the segment
+/// of length t from s.p along s.w meets no boundary). Hooks: `boundary(s, b, rng)` (BoundaryAction)
+/// and those of WalkHooks.
 template <int NC, class Geometry, class Hooks>
 WalkEnd walk(const Geometry& geo, WalkState<NC>& s, const WalkRules& rules, RngStream& rng,
              Hooks& hooks) {
@@ -313,12 +314,21 @@ WalkEnd walk(const Geometry& geo, WalkState<NC>& s, const WalkRules& rules, RngS
         double travelled = 0;  // since the flight or the last boundary
         bool at_boundary = false;
         for (std::int64_t hits = 0;;) {
-            WalkBoundary b = geo.next(s);
-            if (b.kind == WalkBoundary::Kind::kLeak) {
-                hooks.lost(s);
-                return WalkEnd::kLost;
+            // A geometry may know that the flight's segment stays clear of every boundary
+            // (`clear`): then the collision comes first without a query, as the query would
+            // have said.
+            bool collide = false;
+            WalkBoundary b;
+            if constexpr (requires { geo.clear(s, t); }) collide = t < kInf && geo.clear(s, t);
+            if (!collide) {
+                b = geo.next(s);
+                if (b.kind == WalkBoundary::Kind::kLeak) {
+                    hooks.lost(s);
+                    return WalkEnd::kLost;
+                }
+                collide = t < b.t;
             }
-            if (t < b.t) {
+            if (collide) {
                 s.p += s.w * t;
                 travelled += t;
                 s.on_surface = false;
