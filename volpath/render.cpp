@@ -4,6 +4,7 @@
 #include "core/rng.h"
 #include "volpath/density_grid.h"
 #include "volpath/embree_scene.h"
+#include "volpath/lights.h"
 #include "volpath/mesh_medium.h"
 #include "volpath/microfacet.h"
 #include "volpath/sampling.h"
@@ -25,14 +26,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
 using RGB = std::array<double, 3>;
 
-struct Light {
-    LightType type;
-    RGB L{};  // radiance (sphere, environment, disc), irradiance (delta directional), intensity
-    Vec3 dir, pos;
-    double radius = 0;
-    double cos_max = 1;  // disc: cosine of the angular radius
-};
-
 struct MediumData {
     RGB sigma_t{}, sigma_s{}, g{};  // per world unit (scaled by the density, if any)
     bool same_g = true;
@@ -40,113 +33,6 @@ struct MediumData {
     std::shared_ptr<const DensityGrid> density;  // heterogeneous media (OpenVDB)
     WalkRegion region;                           // the walk's view of the above
 };
-
-struct Frame {
-    Vec3 s, t, n;
-    explicit Frame(const Vec3& normal) : n(normal) { basis(n, s, t); }
-    Vec3 local(const Vec3& v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
-    Vec3 world(const Vec3& v) const { return s * v.x + t * v.y + n * v.z; }
-};
-
-Vec3 sample_cone(const Vec3& axis, double cos_max, double u1, double u2) {
-    const double c = 1 - u1 * (1 - cos_max), sn = std::sqrt(std::max(0.0, 1 - c * c));
-    const double phi = 2 * kPi * u2;
-    return Frame(axis).world({sn * std::cos(phi), sn * std::sin(phi), c});
-}
-
-// Nearest t > 0 where o + t d meets the sphere; inf if none.
-double hit_sphere(const Vec3& o, const Vec3& d, const Vec3& c, double r) {
-    const Vec3 oc = o - c;
-    const double b = dot(oc, d), cc = dot(oc, oc) - r * r;
-    const double disc = b * b - cc;
-    if (disc < 0) return kInf;
-    const double s = std::sqrt(disc);
-    const double t0 = -b - s, t1 = -b + s;
-    if (t0 > 0) return t0;
-    if (t1 > 0) return t1;
-    return kInf;
-}
-
-struct LightSample {
-    Vec3 wi;
-    double dist = kInf;
-    RGB value{};     // radiance, or for delta lights the irradiance at p (normal incidence)
-    double pdf = 0;  // solid angle (0: delta)
-    bool ok = false;
-};
-
-LightSample sample_light(const Light& l, const Vec3& p, double u1, double u2) {
-    LightSample s;
-    switch (l.type) {
-        case LightType::kSphere: {
-            const Vec3 pc = l.pos - p;
-            const double d2 = dot(pc, pc);
-            if (d2 <= l.radius * l.radius) return s;
-            const double cos_max = std::sqrt(std::max(0.0, 1 - l.radius * l.radius / d2));
-            s.wi = sample_cone(normalize(pc), cos_max, u1, u2);
-            s.dist = hit_sphere(p, s.wi, l.pos, l.radius);
-            if (!std::isfinite(s.dist)) s.dist = std::sqrt(d2);  // grazing: rounding
-            s.value = l.L;
-            s.pdf = 1 / (2 * kPi * (1 - cos_max));
-            s.ok = cos_max < 1;
-            return s;
-        }
-        case LightType::kEnvironment: {
-            const double z = 1 - 2 * u1, r = std::sqrt(std::max(0.0, 1 - z * z)),
-                         phi = 2 * kPi * u2;
-            s.wi = {r * std::cos(phi), r * std::sin(phi), z};
-            s.value = l.L;
-            s.pdf = 1 / (4 * kPi);
-            s.ok = true;
-            return s;
-        }
-        case LightType::kDirectional:
-            if (l.cos_max < 1) {
-                s.wi = sample_cone(l.dir, l.cos_max, u1, u2);
-                s.pdf = 1 / (2 * kPi * (1 - l.cos_max));
-            } else {
-                s.wi = l.dir;
-            }
-            s.value = l.L;
-            s.ok = true;
-            return s;
-        case LightType::kPoint: {
-            const Vec3 pp = l.pos - p;
-            s.dist = length(pp);
-            if (!(s.dist > 0)) return s;
-            s.wi = pp * (1 / s.dist);
-            for (int c = 0; c < 3; ++c)
-                s.value[static_cast<size_t>(c)] = l.L[static_cast<size_t>(c)] / (s.dist * s.dist);
-            s.ok = true;
-            return s;
-        }
-    }
-    return s;
-}
-
-// Solid-angle density with which sample_light picks direction wi from p (0 for delta lights
-// and directions it never picks).
-double light_pdf(const Light& l, const Vec3& p, const Vec3& wi) {
-    switch (l.type) {
-        case LightType::kSphere: {
-            const Vec3 pc = l.pos - p;
-            const double d2 = dot(pc, pc);
-            if (d2 <= l.radius * l.radius) return 0;
-            const double cos_max = std::sqrt(std::max(0.0, 1 - l.radius * l.radius / d2));
-            if (dot(wi, normalize(pc)) < cos_max) return 0;
-            return 1 / (2 * kPi * (1 - cos_max));
-        }
-        case LightType::kEnvironment:
-            return 1 / (4 * kPi);
-        case LightType::kDirectional:
-            if (l.cos_max < 1 && dot(wi, l.dir) >= l.cos_max)
-                return 1 / (2 * kPi * (1 - l.cos_max));
-            return 0;
-        case LightType::kPoint:
-            return 0;
-    }
-    return 0;
-}
 
 double power(double a, double b) {
     return a * a / (a * a + b * b);
@@ -175,19 +61,7 @@ struct Renderer {
         es = std::make_unique<EmbreeScene>(meshes);
         eps = es->epsilon();
         for (const SceneLight& sl : s.lights) {
-            Light l;
-            l.type = sl.type;
-            l.L = sl.color;
-            l.dir = sl.direction;
-            l.pos = sl.position;
-            l.radius = sl.radius;
-            if (sl.type == LightType::kDirectional && sl.angular_radius_deg > 0) {
-                const double a = sl.angular_radius_deg * kPi / 180;
-                l.cos_max = std::cos(a);
-                // Irradiance E on a surface facing the disc: L pi sin^2(a).
-                for (double& x : l.L) x /= kPi * std::sin(a) * std::sin(a);
-            }
-            lights.push_back(l);
+            lights.push_back(make_light(sl));
         }
         for (const SceneShape& sh : s.shapes) {
             const SceneMaterial& m = s.materials[static_cast<size_t>(sh.material)];

@@ -19,6 +19,15 @@ inline constexpr double kInv4Pi = 0.25 / std::numbers::pi;
 
 using ssslab::basis;  // core/vec3.h, shared with realtime/
 
+/// An orthonormal frame about a unit normal n (core/vec3.h basis): local (x, y, z) with z
+/// along n, and back.
+struct Frame {
+    Vec3 s, t, n;
+    explicit Frame(const Vec3& normal) : n(normal) { basis(n, s, t); }
+    Vec3 local(const Vec3& v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
+    Vec3 world(const Vec3& v) const { return s * v.x + t * v.y + n * v.z; }
+};
+
 /// The direction with cosine `mu` to `w` and azimuth `phi` about it (w a unit vector).
 inline Vec3 rotate(const Vec3& w, double mu, double phi) {
     Vec3 s, t;

@@ -1,0 +1,170 @@
+// The renderer's lights (volpath/lights.h) on their own: sampled directions against the
+// density light_pdf states (chi-square over equal-solid-angle cells, Sidak over the lights),
+// the estimate of irradiance sum L cos / pdf against its closed form (a sphere light or a
+// disc seen from a surface facing it: L pi sin^2(alpha); the environment: L pi), sphere hits
+// on the sphere, and the delta lights' values.
+#include "core/rng.h"
+#include "core/stats.h"
+#include "testing.h"
+#include "volpath/lights.h"
+#include "volpath/sampling.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+namespace ssslab::volpath {
+namespace {
+
+SceneLight scene_light(LightType type) {
+    SceneLight l;
+    l.type = type;
+    l.color = {2.0, 1.0, 0.5};
+    return l;
+}
+
+// Lights seen from the origin, with the axis of their cone of directions (cos_max < 1 for the
+// cones; -1 for the whole sphere).
+struct Case {
+    const char* name;
+    Light light;
+    Vec3 axis;
+    double cos_max;
+};
+
+std::vector<Case> cases() {
+    std::vector<Case> out;
+    SceneLight s = scene_light(LightType::kSphere);
+    s.position = {1, 2, 2};  // distance 3
+    s.radius = 1.2;
+    out.push_back({"sphere", make_light(s), normalize(s.position), std::sqrt(1 - 0.16)});
+    SceneLight near = s;
+    near.radius = 2.99;  // nearly touching: a cone of almost a hemisphere
+    out.push_back({"sphere near", make_light(near), normalize(s.position),
+                   std::sqrt(1 - (2.99 / 3) * (2.99 / 3))});
+    SceneLight d = scene_light(LightType::kDirectional);
+    d.direction = normalize(Vec3{-1, 0.5, 2});
+    d.angular_radius_deg = 5;
+    out.push_back({"disc", make_light(d), d.direction, std::cos(5 * kPi / 180)});
+    SceneLight sun = d;
+    sun.angular_radius_deg = 0.27;
+    out.push_back({"sun", make_light(sun), d.direction, std::cos(0.27 * kPi / 180)});
+    out.push_back(
+        {"environment", make_light(scene_light(LightType::kEnvironment)), Vec3{0, 0, 1}, -1.0});
+    return out;
+}
+
+TEST(Lights, SampledDirectionsFollowTheStatedDensity) {
+    // Cells of equal solid angle within the cone: n_mu bands of equal width in cos(theta)
+    // about the axis, n_phi sectors each; every sample must carry pdf = light_pdf = 1 / cone.
+    const int n_mu = 20, n_phi = 20;
+    const std::int64_t n = static_cast<std::int64_t>(2e5 * testing::test_scale());
+    const std::vector<Case> all = cases();
+    const double alpha = testing::sidak(0.01, static_cast<int>(all.size()));
+    std::uint64_t index = 0;
+    for (const Case& c : all) {
+        SCOPED_TRACE(c.name);
+        const Frame f(c.axis);
+        const double cone = 2 * kPi * (1 - c.cos_max);
+        std::vector<double> observed(static_cast<std::size_t>(n_mu * n_phi), 0.0);
+        RngStream rng(3, rng_domain::kTest + 60, index++);
+        int bad_pdf = 0, outside = 0;
+        for (std::int64_t i = 0; i < n; ++i) {
+            const LightSample s = sample_light(c.light, {0, 0, 0}, rng.uniform(), rng.uniform());
+            ASSERT_TRUE(s.ok);
+            const double expect = 1 / cone;
+            if (std::fabs(s.pdf - expect) > 1e-9 * expect ||
+                std::fabs(light_pdf(c.light, {0, 0, 0}, s.wi) - expect) > 1e-9 * expect)
+                ++bad_pdf;
+            const Vec3 l = f.local(s.wi);
+            const double u = (1 - l.z) / (1 - c.cos_max);  // 0 at the axis, 1 at the rim
+            if (!(u >= -1e-9 && u <= 1 + 1e-9)) {
+                ++outside;
+                continue;
+            }
+            const int a = std::min(n_mu - 1, static_cast<int>(u * n_mu));
+            const double phi = std::atan2(l.y, l.x) + kPi;
+            const int b = std::min(n_phi - 1, static_cast<int>(phi / (2 * kPi) * n_phi));
+            observed[static_cast<std::size_t>(a * n_phi + b)] += 1;
+        }
+        EXPECT_EQ(bad_pdf, 0);
+        EXPECT_EQ(outside, 0);
+        const std::vector<double> expected(observed.size(),
+                                           static_cast<double>(n) / (n_mu * n_phi));
+        int dof = 0;
+        const double chi2 = testing::chi2_statistic(observed, expected, dof);
+        const double p = chi_square_p(chi2, dof);
+        EXPECT_GT(p, alpha) << "chi2 " << chi2 << " over " << dof;
+        std::printf("  [measured] %s: chi2 %.1f / %d, p %.3f\n", c.name, chi2, dof, p);
+        // Directions outside the cone are never picked.
+        const Vec3 away = f.world({std::sqrt(1 - 0.25), 0, -0.5});
+        if (c.cos_max > -0.5) {
+            EXPECT_EQ(light_pdf(c.light, {0, 0, 0}, away), 0.0);
+        }
+    }
+}
+
+TEST(Lights, IrradianceEstimatesMatchTheClosedForms) {
+    // A surface at the origin facing the light's axis: E = int L cos(theta) dw over the cone =
+    // L pi sin^2(alpha) for a cone of half-angle alpha (sphere light, disc: = the stated
+    // irradiance of a directional light); the upper hemisphere of the environment: L pi.
+    const std::int64_t n = static_cast<std::int64_t>(1e5 * testing::test_scale());
+    std::uint64_t index = 0;
+    for (const Case& c : cases()) {
+        SCOPED_TRACE(c.name);
+        RngStream rng(4, rng_domain::kTest + 61, index++);
+        BatchAccumulator e(1);  // one sample a batch
+        for (std::int64_t i = 0; i < n; ++i) {
+            const LightSample s = sample_light(c.light, {0, 0, 0}, rng.uniform(), rng.uniform());
+            const double cs = std::max(0.0, dot(s.wi, c.axis));
+            const double v = s.value[0] * cs / s.pdf;
+            e.add_batch(&v, 1);
+        }
+        const double sin2 = c.cos_max > -1 ? 1 - c.cos_max * c.cos_max : 1.0;
+        const double closed = c.light.L[0] * kPi * sin2;
+        const double z = (e.mean(0) - closed) / e.standard_error(0);
+        EXPECT_LT(std::fabs(z), 4.5) << e.mean(0) << " vs " << closed;
+        if (c.light.type == LightType::kDirectional) {
+            EXPECT_NEAR(closed, 2.0, 1e-12);  // the scene's irradiance, by construction
+        }
+    }
+}
+
+TEST(Lights, SphereHitsLieOnTheSphereAndDeltaLightsGiveTheirValues) {
+    SceneLight s = scene_light(LightType::kSphere);
+    s.position = {0, 0, 5};
+    s.radius = 1;
+    const Light l = make_light(s);
+    RngStream rng(5, rng_domain::kTest + 62, 0);
+    for (int i = 0; i < 1000; ++i) {
+        const LightSample x = sample_light(l, {0.3, -0.2, 0}, rng.uniform(), rng.uniform());
+        ASSERT_TRUE(std::isfinite(x.dist));
+        const Vec3 q = Vec3{0.3, -0.2, 0} + x.wi * x.dist;
+        EXPECT_NEAR(length(q - s.position), 1.0, 1e-9);
+        EXPECT_DOUBLE_EQ(hit_sphere({0.3, -0.2, 0}, x.wi, s.position, s.radius), x.dist);
+    }
+    // Inside the sphere light: nothing to sample.
+    EXPECT_FALSE(sample_light(l, {0, 0, 5.5}, 0.3, 0.4).ok);
+    EXPECT_EQ(hit_sphere({0, 0, 0}, {0, 0, -1}, s.position, s.radius),
+              std::numeric_limits<double>::infinity());
+
+    SceneLight pt = scene_light(LightType::kPoint);
+    pt.position = {0, 3, 4};
+    const LightSample a = sample_light(make_light(pt), {0, 0, 0}, 0.5, 0.5);
+    EXPECT_TRUE(a.ok);
+    EXPECT_DOUBLE_EQ(a.dist, 5.0);
+    EXPECT_DOUBLE_EQ(a.value[0], 2.0 / 25);  // intensity / d^2
+    EXPECT_EQ(a.pdf, 0.0);
+    SceneLight dl = scene_light(LightType::kDirectional);
+    dl.direction = {0, 1, 0};
+    const LightSample b = sample_light(make_light(dl), {0, 0, 0}, 0.5, 0.5);
+    EXPECT_EQ(b.wi.y, 1.0);
+    EXPECT_EQ(b.value[1], 1.0);  // the irradiance at normal incidence
+    EXPECT_EQ(b.pdf, 0.0);
+    EXPECT_EQ(light_pdf(make_light(dl), {0, 0, 0}, {0, 1, 0}), 0.0);
+}
+
+}  // namespace
+}  // namespace ssslab::volpath

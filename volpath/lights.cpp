@@ -1,0 +1,119 @@
+#include "volpath/lights.h"
+
+#include "volpath/sampling.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ssslab::volpath {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}  // namespace
+
+Light make_light(const SceneLight& sl) {
+    Light l;
+    l.type = sl.type;
+    l.L = sl.color;
+    l.dir = sl.direction;
+    l.pos = sl.position;
+    l.radius = sl.radius;
+    if (sl.type == LightType::kDirectional && sl.angular_radius_deg > 0) {
+        const double a = sl.angular_radius_deg * kPi / 180;
+        l.cos_max = std::cos(a);
+        // Irradiance E on a surface facing the disc: L pi sin^2(a).
+        for (double& x : l.L) x /= kPi * std::sin(a) * std::sin(a);
+    }
+    return l;
+}
+
+Vec3 sample_cone(const Vec3& axis, double cos_max, double u1, double u2) {
+    const double c = 1 - u1 * (1 - cos_max), sn = std::sqrt(std::max(0.0, 1 - c * c));
+    const double phi = 2 * kPi * u2;
+    return Frame(axis).world({sn * std::cos(phi), sn * std::sin(phi), c});
+}
+
+double hit_sphere(const Vec3& o, const Vec3& d, const Vec3& c, double r) {
+    const Vec3 oc = o - c;
+    const double b = dot(oc, d), cc = dot(oc, oc) - r * r;
+    const double disc = b * b - cc;
+    if (disc < 0) return kInf;
+    const double s = std::sqrt(disc);
+    const double t0 = -b - s, t1 = -b + s;
+    if (t0 > 0) return t0;
+    if (t1 > 0) return t1;
+    return kInf;
+}
+
+LightSample sample_light(const Light& l, const Vec3& p, double u1, double u2) {
+    LightSample s;
+    switch (l.type) {
+        case LightType::kSphere: {
+            const Vec3 pc = l.pos - p;
+            const double d2 = dot(pc, pc);
+            if (d2 <= l.radius * l.radius) return s;
+            const double cos_max = std::sqrt(std::max(0.0, 1 - l.radius * l.radius / d2));
+            s.wi = sample_cone(normalize(pc), cos_max, u1, u2);
+            s.dist = hit_sphere(p, s.wi, l.pos, l.radius);
+            if (!std::isfinite(s.dist)) s.dist = std::sqrt(d2);  // grazing: rounding
+            s.value = l.L;
+            s.pdf = 1 / (2 * kPi * (1 - cos_max));
+            s.ok = cos_max < 1;
+            return s;
+        }
+        case LightType::kEnvironment: {
+            const double z = 1 - 2 * u1, r = std::sqrt(std::max(0.0, 1 - z * z)),
+                         phi = 2 * kPi * u2;
+            s.wi = {r * std::cos(phi), r * std::sin(phi), z};
+            s.value = l.L;
+            s.pdf = 1 / (4 * kPi);
+            s.ok = true;
+            return s;
+        }
+        case LightType::kDirectional:
+            if (l.cos_max < 1) {
+                s.wi = sample_cone(l.dir, l.cos_max, u1, u2);
+                s.pdf = 1 / (2 * kPi * (1 - l.cos_max));
+            } else {
+                s.wi = l.dir;
+            }
+            s.value = l.L;
+            s.ok = true;
+            return s;
+        case LightType::kPoint: {
+            const Vec3 pp = l.pos - p;
+            s.dist = length(pp);
+            if (!(s.dist > 0)) return s;
+            s.wi = pp * (1 / s.dist);
+            for (int c = 0; c < 3; ++c)
+                s.value[static_cast<size_t>(c)] = l.L[static_cast<size_t>(c)] / (s.dist * s.dist);
+            s.ok = true;
+            return s;
+        }
+    }
+    return s;
+}
+
+double light_pdf(const Light& l, const Vec3& p, const Vec3& wi) {
+    switch (l.type) {
+        case LightType::kSphere: {
+            const Vec3 pc = l.pos - p;
+            const double d2 = dot(pc, pc);
+            if (d2 <= l.radius * l.radius) return 0;
+            const double cos_max = std::sqrt(std::max(0.0, 1 - l.radius * l.radius / d2));
+            if (dot(wi, normalize(pc)) < cos_max) return 0;
+            return 1 / (2 * kPi * (1 - cos_max));
+        }
+        case LightType::kEnvironment:
+            return 1 / (4 * kPi);
+        case LightType::kDirectional:
+            if (l.cos_max < 1 && dot(wi, l.dir) >= l.cos_max)
+                return 1 / (2 * kPi * (1 - l.cos_max));
+            return 0;
+        case LightType::kPoint:
+            return 0;
+    }
+    return 0;
+}
+
+}  // namespace ssslab::volpath
