@@ -11,8 +11,8 @@
 //   efficiency/  progressive estimates of both engines against wall time (<material>.csv)
 #pragma once
 
+#include "experiments/runner/nodes.h"
 #include "experiments/runner/plots.h"
-#include "experiments/runner/runner.h"
 
 #include <map>
 #include <sstream>

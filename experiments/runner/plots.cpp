@@ -5,7 +5,7 @@
 #include "core/atomic_file.h"
 #include "core/hash.h"
 #include "experiments/runner/cache.h"
-#include "experiments/runner/runner.h"
+#include "experiments/runner/nodes.h"
 
 #include <algorithm>
 

@@ -3,7 +3,7 @@
 #include "core/provenance.h"
 #include "experiments/runner/engines.h"
 #include "experiments/runner/kernel_study.h"
-#include "experiments/runner/runner.h"
+#include "experiments/runner/nodes.h"
 
 #include <algorithm>
 #include <array>
