@@ -1,60 +1,28 @@
-// `ssslab sphere`: a homogeneous sphere under a directional light rendered by the light-tracing
-// ground truth (volpath/sphere.h) and by analytic diffusion profiles integrated over the sphere
-// (approx/sphere_bssrdf.h) [Bitterli13 §3.1.3, §3.5], side by side, with the error of every model
-// against the path tracer.
-//
-// Geometry: the light and the camera directions are given as angles from +z in the x-z plane,
-// l = (sin a_l, 0, cos a_l), v = (sin a_v, 0, cos a_v) (towards the light, towards the camera);
-// the camera's up is volpath's default (+y). Lengths: the sphere radius in mm or cm; the
-// coefficients and the radius are passed to both engines in cm.
-//
-// Outputs (all or none, through OutputTransaction), for the prefix <out>:
-//   <out>.exr       volpath's layers (exitance, subsurface, specular, radiance and their
-//                   "<layer>.stderr"), then "model.<name>" per model: M / pi per pixel [1/sr per
-//                   unit E0], the pixel average of the integrated exitance (volpath's "exitance")
-//   <out>.png       sRGB preview, side by side from the left: volpath's exitance, then each model
-//                   in the order given, all at one exposure (the 99.5th percentile of volpath's
-//                   exitance values maps to 1)
-//   <out>_beta.csv  per beta bin: edges [deg], per channel volpath's M and its standard error,
-//                   its single-scattering part M_ss and that one's standard error, each model's
-//                   M and z = (model - volpath) / SE (nan where SE = 0), where volpath means M
-//                   for models with single scattering and M - M_ss for those without
-//   <out>.toml      resolved configuration, per-channel totals and errors, timing, provenance
+// `ssslab sphere`: the sphere study of experiments/runner/sphere_study.h (a homogeneous sphere
+// under a directional light by the light-tracing ground truth and by analytic diffusion
+// profiles, side by side) from the command line. Outputs (all or none, through
+// OutputTransaction), for the prefix <out>: <out>.exr (the study's image), <out>.png (its
+// preview), <out>_beta.csv, <out>.toml (resolved configuration, results, timing, provenance).
 // Checkpoints of the path tracer are <out>.<R|G|B|hero>.ckpt; an interrupted run (SIGINT) saves
 // them and the same command resumes it.
-#include "approx/diffusion.h"
-#include "approx/sphere_bssrdf.h"
 #include "core/atomic_file.h"
-#include "core/config.h"
 #include "core/error.h"
 #include "core/film_image.h"
 #include "core/material.h"
-#include "core/progress.h"
-#include "core/provenance.h"
 #include "experiments/cli/commands.h"
 #include "experiments/cli/common.h"
-#include "mcml/profile.h"
+#include "experiments/runner/sphere_study.h"
 #include "volpath/sphere.h"
 
-#include <unistd.h>
-
-#include <algorithm>
-#include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <sstream>
-#include <stdexcept>
 
 namespace ssslab::cli {
 
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-const char* const kCommandLine = "<command line>";
 
 struct SphereArgs {
     std::string config, material, models, mode, entry;
@@ -63,358 +31,33 @@ struct SphereArgs {
     CommonOptions common;
 };
 
-struct SphereJob {
-    std::shared_ptr<ConfigDocument> doc;
-    volpath::SphereScene scene;
-    std::uint64_t seed = 1;
-    SampleBudget budget;
-    std::int64_t batch = 0;
-    std::string mode = "analog";
-    double light_deg = 0, camera_deg = 60;
-    std::vector<std::string> models;
-    approx::SphereIntegration integration;
-    int supersampling = 4;
-    /// Per model, per channel: the profile (built at validation, so bad media fail early).
-    std::vector<std::array<std::unique_ptr<approx::DiffusionProfile>, 3>> profiles;
-};
-
-std::array<double, 3> direction(double deg) {
-    const double a = deg * kPi / 180.0;
-    return {std::sin(a), 0.0, std::cos(a)};
-}
-
-std::string fmt(double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.9g", v);
-    return buf;
-}
-
-// A number from the command line or the config (same key semantics as ConfigTable::number).
-double flag_or_config(ConfigTable& t, const std::string& key, const std::optional<double>& flag,
-                      const std::string& flag_name, double fallback, const Range& range) {
-    const double v = t.number(key, fallback, range);
-    if (!flag) return v;
-    if (!std::isfinite(*flag) || !range.contains(*flag))
-        throw InputError({kCommandLine, 0, 0}, flag_name,
-                         "expected a number in " + range.describe() + ", got " + fmt(*flag));
-    t.record(key, *flag);
-    return *flag;
-}
-
-Medium read_material(ConfigTable& root, const std::string& material, const std::string& src) {
-    if (!material.empty()) {
-        if (root.has("material"))
-            throw InputError({src, 0, 0}, "--material",
-                             "give the material either with --material or in [material], not both");
-        auto m = find_material(material);
-        if (!m) {
-            std::string msg = "unknown material \"" + material + "\"";
-            const std::string near = nearest_material(material);
-            if (!near.empty()) msg += " (did you mean \"" + near + "\"?)";
-            throw InputError({kCommandLine, 0, 0}, "--material",
-                             msg + "; known materials: " + material_names());
-        }
-        ConfigTable mt = root.table_or_empty("material");
-        mt.record("preset", m->name);
-        return *m;
-    }
-    if (!root.has("material"))
-        throw InputError({src, 0, 0}, "material",
-                         "no material: give --material <name> (one of " + material_names() +
-                             ") or a [material] table in --config");
-    ConfigTable mt = root.table_or_empty("material");
-    Medium m = medium_from_config(mt);
-    if (m.name.empty()) m.name = "custom";
-    return m;
-}
-
-std::vector<std::string> split_list(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream in(s);
-    std::string item;
-    while (std::getline(in, item, ',')) {
-        const auto b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
-        if (b == std::string::npos) continue;
-        out.push_back(item.substr(b, e - b + 1));
-    }
-    return out;
-}
-
-SphereJob read_sphere_job(const SphereArgs& a) {
-    SphereJob job;
-    const std::string src = a.config.empty() ? std::string(kCommandLine) : a.config;
-    job.doc = a.config.empty() ? ConfigDocument::empty(kCommandLine)
-                               : ConfigDocument::parse_file(a.config);
-    ConfigTable root = job.doc->root();
-    const CommonOptions& c = a.common;
-    volpath::SphereScene& sc = job.scene;
-    sc.medium = read_material(root, a.material, src);
-
-    job.seed = static_cast<std::uint64_t>(root.integer("seed", 1, Range::nonnegative()));
-    if (c.seed) {
-        job.seed = *c.seed;
-        root.record("seed", static_cast<std::int64_t>(job.seed));
-    }
-
-    // Models: `models` in the config (an array of names, or one comma-separated string, which is
-    // how the resolved configuration records them) or --models; default dipole, better dipole,
-    // photon beam diffusion.
-    std::vector<std::string> models = {"dipole", "better-dipole", "pbd"};
-    const bool models_in_config = root.has("models");
-    if (models_in_config && !a.models.empty())
-        throw InputError({src, 0, 0}, "--models",
-                         "give the models either with --models or in the config, not both");
-    if (models_in_config) {
-        try {
-            models = *root.optional_string_list("models");
-        } catch (const InputError&) {
-            models = split_list(root.string("models"));  // not an array: a string, or the error
-            if (models.size() == 1 && models[0] == "none") models.clear();
-        }
-    }
-    if (!a.models.empty()) {
-        models = split_list(a.models);
-        if (models.size() == 1 && models[0] == "none") models.clear();
-    }
-    auto models_error = [&](size_t i, const std::string& msg) {
-        if (a.models.empty() && models_in_config) root.fail_item("models", i, msg);
-        throw InputError({kCommandLine, 0, 0}, "--models", msg);
-    };
-    const auto& known = approx::diffusion_model_names();
-    std::string known_list;
-    for (const auto& n : known) known_list += (known_list.empty() ? "" : ", ") + n;
-    for (size_t i = 0; i < models.size(); ++i) {
-        if (std::find(known.begin(), known.end(), models[i]) == known.end())
-            models_error(i, "unknown model \"" + models[i] + "\"; known models: " + known_list +
-                                " (or \"none\")");
-        if (std::find(models.begin(), models.begin() + static_cast<long>(i), models[i]) !=
-            models.begin() + static_cast<long>(i))
-            models_error(i, "model \"" + models[i] + "\" given twice");
-    }
-    {
-        std::string list;
-        for (const auto& n : models) list += (list.empty() ? "" : ",") + n;
-        root.record("models", list.empty() ? std::string("none") : list);
-    }
-    job.models = models;
-
-    ConfigTable sp = root.table_or_empty("sphere");
-    if (a.radius_mm) {
-        if (sp.has("radius_mm") || sp.has("radius_cm"))
-            throw InputError({src, 0, 0}, "--radius-mm",
-                             "give the radius either with --radius-mm or in [sphere], not both");
-        if (!std::isfinite(*a.radius_mm) || !(*a.radius_mm > 0))
-            throw InputError({kCommandLine, 0, 0}, "--radius-mm",
-                             "expected a finite radius > 0 [mm], got " + fmt(*a.radius_mm));
-        sc.radius_cm = *a.radius_mm / 10.0;
-        sp.record("radius_mm", *a.radius_mm);
-    } else if (auto r = optional_length_cm(sp, "radius", Range::positive())) {
-        sc.radius_cm = *r;
-    } else {
-        sc.radius_cm = 0.5;
-        sp.record("radius_mm", 5.0);
-    }
-    job.light_deg =
-        flag_or_config(sp, "light_deg", a.light_deg, "--light-deg", 0.0, Range::closed(-180, 180));
-    job.camera_deg = flag_or_config(sp, "camera_deg", a.camera_deg, "--camera-deg", 60.0,
-                                    Range::closed(-180, 180));
-    std::optional<double> size_flag;
-    if (a.size) size_flag = *a.size;
-    const double size =
-        flag_or_config(sp, "size", size_flag, "--size", 256, Range::closed(1, 4096));
-    if (size != std::floor(size))
-        throw InputError({src, 0, 0}, "size", "expected a whole number of pixels");
-    sp.record("size", static_cast<std::int64_t>(size));
-    sc.width = sc.height = static_cast<int>(size);
-    sc.frame_scale = sp.number("frame_scale", 1.1, Range::positive());
-    sc.acceptance_deg = sp.number("acceptance_deg", 10.0, Range::left_open(0, 90));
-    sc.beta_bins = static_cast<int>(sp.integer("beta_bins", 180, Range::closed(1, 100000)));
-    sc.to_light = {direction(job.light_deg)[0], 0.0, direction(job.light_deg)[2]};
-    sc.to_camera = {direction(job.camera_deg)[0], 0.0, direction(job.camera_deg)[2]};
-
-    ConfigTable budget = root.table_or_empty("budget");
-    const mcml::Budget b = mcml::read_budget(budget);
-    job.budget.samples = b.photons;
-    job.budget.seconds = b.seconds;
-    job.budget.rel_error = b.rel_error;
-    job.batch = budget.integer("batch_photons", 0, Range::nonnegative());
-    if (c.photons) job.budget.samples = c.photons, budget.record("photons", *c.photons);
-    if (c.seconds) job.budget.seconds = c.seconds, budget.record("seconds", *c.seconds);
-    if (c.rel_error) job.budget.rel_error = c.rel_error, budget.record("rel_error", *c.rel_error);
-    if (c.batch) job.batch = c.batch, budget.record("batch_photons", c.batch);
-    if (!job.budget.any()) {
-        job.budget.samples = 1'000'000;
-        budget.record("photons", static_cast<std::int64_t>(1'000'000));
-    }
-
-    ConfigTable vp = root.table_or_empty("volpath");
-    job.mode = vp.choice("mode", "analog", {"analog", "hero"});
-    if (!a.mode.empty()) {
-        if (a.mode != "analog" && a.mode != "hero")
-            throw InputError(
-                {kCommandLine, 0, 0}, "--mode",
-                "expected analog (one run per channel) or hero, got \"" + a.mode + "\"");
-        job.mode = a.mode;
-        vp.record("mode", a.mode);
-    }
-
-    ConfigTable in = root.table_or_empty("integration");
-    std::string entry = in.choice("entry", "fresnel", {"fresnel", "cosine"});
-    if (!a.entry.empty()) {
-        if (a.entry != "fresnel" && a.entry != "cosine")
-            throw InputError({kCommandLine, 0, 0}, "--entry",
-                             "expected fresnel or cosine, got \"" + a.entry + "\"");
-        entry = a.entry;
-        in.record("entry", entry);
-    }
-    approx::SphereIntegration& ig = job.integration;
-    ig.entry = entry == "cosine" ? approx::EntryWeight::kCosineOnly : approx::EntryWeight::kFresnel;
-    ig.nodes_per_bin = static_cast<int>(in.integer("nodes_per_bin", 4, Range::closed(1, 16)));
-    ig.rel_tol = in.number("rel_tol", 1e-10, Range::closed(1e-15, 1e-2));
-    job.supersampling = static_cast<int>(in.integer("supersampling", 4, Range::closed(1, 16)));
-    ig.radius = sc.radius_cm;
-    ig.beta_bins = sc.beta_bins;
-    ig.threads = c.threads;
-    root.finish();
-
-    // Everything else the engines would refuse, before any work starts.
-    const volpath::ChromaticMode mode =
-        job.mode == "hero" ? volpath::ChromaticMode::kHero : volpath::ChromaticMode::kPerChannel;
-    try {
-        volpath::check_sphere(sc, true, mode);
-    } catch (const std::invalid_argument& e) {
-        throw InputError({src, 0, 0}, "sphere", e.what());
-    }
-    const Medium& m = sc.medium;
-    for (size_t k = 0; k < job.models.size(); ++k) {
-        const std::string& name = job.models[k];
-        auto& per_channel = job.profiles.emplace_back();
-        for (int ch = 0; ch < 3; ++ch) {
-            approx::DiffusionMedium dm;
-            dm.sigma_a = m.sigma_a_per_cm[ch];
-            dm.sigma_s = m.sigma_s_per_cm[ch];
-            dm.g = m.g[ch];
-            dm.eta = m.eta / m.eta_above;
-            try {
-                per_channel[static_cast<size_t>(ch)] = approx::make_diffusion_profile(name, dm);
-            } catch (const std::invalid_argument& e) {
-                models_error(k, "model \"" + name + "\" refuses channel " + kChannelNames[ch] +
-                                    " of the material: " + e.what());
-            }
-        }
-    }
-    return job;
-}
-
-// The approx view of the scene (the same camera; checked against volpath's below).
-approx::SphereView view_of(const volpath::SphereScene& sc, int supersampling) {
-    approx::SphereView v;
-    v.to_light = {sc.to_light.x, sc.to_light.y, sc.to_light.z};
-    v.to_camera = {sc.to_camera.x, sc.to_camera.y, sc.to_camera.z};
-    v.up = {sc.up.x, sc.up.y, sc.up.z};
-    v.width = sc.width;
-    v.height = sc.height;
-    v.frame_scale = sc.frame_scale;
-    v.supersampling = supersampling;
-    return v;
-}
-
-// approx replicates volpath::sphere_camera (approx must not depend on volpath): the frames and
-// every pixel centre must agree.
-void check_same_camera(const volpath::SphereScene& sc, const approx::SphereView& view) {
-    const volpath::SphereCamera cam = volpath::sphere_camera(sc);
-    const approx::SphereViewFrame f = approx::resolve_view(view);
-    const double R = sc.radius_cm;
-    double worst = 0;
-    auto cmp = [&](const Vec3& a, const std::array<double, 3>& b) {
-        worst = std::max({worst, std::abs(a.x - b[0]), std::abs(a.y - b[1]), std::abs(a.z - b[2])});
-    };
-    cmp(cam.v, f.v);
-    cmp(cam.right, f.right);
-    cmp(cam.up, f.up);
-    // volpath bins a point into pixel floor((n . right + half_x / R) R / pixel_cm), row
-    // floor((half_y / R - n . up) R / pixel_cm): the centre of pixel (x, y) is at
-    // ((x + 0.5) pixel_cm - half_x, half_y - (y + 0.5) pixel_cm) / R.
-    for (int y = 0; y < sc.height; ++y)
-        for (int x = 0; x < sc.width; ++x) {
-            const auto p = f.image_point(x, y);
-            worst = std::max({worst, std::abs(((x + 0.5) * cam.pixel_cm - cam.half_x) / R - p[0]),
-                              std::abs((cam.half_y - (y + 0.5) * cam.pixel_cm) / R - p[1])});
-        }
-    if (!(worst < 1e-9))
-        throw std::logic_error("sphere: the analytic image's camera differs from volpath's by " +
-                               fmt(worst) + " R (approx::resolve_view vs volpath::sphere_camera)");
-}
-
-struct Comparison {
-    double rel_l2_lit = 0, rel_l2_unlit = 0, chi2 = 0;
-    int dof = 0;
-};
-
-// Model against volpath over the beta bins: relative L2 errors (zone-area weighted) over the lit
-// (bin centre < 90 deg) and unlit hemispheres, and chi-square over the bins with SE > 0.
-Comparison compare(const std::vector<double>& model, const std::vector<double>& mc,
-                   const std::vector<double>& se, const approx::SphereExitance& t) {
-    Comparison c;
-    double num[2] = {0, 0}, den[2] = {0, 0};
-    for (size_t j = 0; j < model.size(); ++j) {
-        const int jj = static_cast<int>(j);
-        const double b0 = t.beta_edge(jj), b1 = t.beta_edge(jj + 1);
-        const double area = std::cos(b0) - std::cos(b1);
-        const int h = 0.5 * (b0 + b1) < 0.5 * kPi ? 0 : 1;
-        const double d = model[j] - mc[j];
-        num[h] += area * d * d;
-        den[h] += area * mc[j] * mc[j];
-        if (se[j] > 0) {
-            c.chi2 += (d / se[j]) * (d / se[j]);
-            ++c.dof;
-        }
-    }
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    c.rel_l2_lit = den[0] > 0 ? std::sqrt(num[0] / den[0]) : nan;
-    c.rel_l2_unlit = den[1] > 0 ? std::sqrt(num[1] / den[1]) : nan;
-    return c;
-}
-
 int run_sphere(const SphereArgs& a) {
-    SphereJob job = read_sphere_job(a);
     const CommonOptions& c = a.common;
-    volpath::SphereScene& sc = job.scene;
+    runner::SphereStudyInput in;
+    in.config = a.config;
+    in.material = a.material;
+    in.models = a.models;
+    in.mode = a.mode;
+    in.entry = a.entry;
+    in.radius_mm = a.radius_mm;
+    in.light_deg = a.light_deg;
+    in.camera_deg = a.camera_deg;
+    in.size = a.size;
+    in.seed = c.seed;
+    in.photons = c.photons;
+    in.seconds = c.seconds;
+    in.rel_error = c.rel_error;
+    in.batch = c.batch;
+    in.threads = c.threads;
+    runner::SphereJob job = runner::read_sphere_job(in);
+    const volpath::SphereScene& sc = job.scene;
     const fs::path out =
         c.out.empty() ? fs::path("results") / "sphere" / sc.medium.name : fs::path(c.out);
     const std::string prefix = out.string();
-    const approx::SphereView view = view_of(sc, job.supersampling);
-    check_same_camera(sc, view);
 
-    // The analytic models first (seconds): their failures come before the long run.
-    const auto t0 = std::chrono::steady_clock::now();
-    std::vector<std::array<approx::SphereExitance, 3>> tables(job.models.size());
-    for (size_t k = 0; k < job.models.size(); ++k)
-        for (int ch = 0; ch < 3; ++ch) {
-            try {
-                tables[k][static_cast<size_t>(ch)] = approx::integrate_sphere(
-                    *job.profiles[k][static_cast<size_t>(ch)], job.integration);
-            } catch (const std::invalid_argument& e) {
-                throw InputError({a.config.empty() ? kCommandLine : a.config, 0, 0}, "models",
-                                 "model \"" + job.models[k] + "\", channel " + kChannelNames[ch] +
-                                     ": " + e.what());
-            }
-        }
-    const double model_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-
-    // The path tracer.
-    const std::atomic<bool>* cancel = install_interrupt_handler();
     volpath::SphereOptions so;
-    so.seed = job.seed;
-    so.threads = c.threads;
-    so.budget = job.budget;
-    so.batch_paths = job.batch;
-    so.mode =
-        job.mode == "hero" ? volpath::ChromaticMode::kHero : volpath::ChromaticMode::kPerChannel;
-    so.cancel = cancel;
+    so.cancel = install_interrupt_handler();
     so.checkpoint_prefix = prefix;
-    so.image = true;
     so.fresh = c.fresh;
     const double total = job.budget.samples ? static_cast<double>(*job.budget.samples) : 0.0;
     RunsProgress progress(
@@ -429,9 +72,9 @@ int run_sphere(const SphereArgs& a) {
     so.on_resume = [&](int run, const BatchProgress& p, const std::string& checkpoint) {
         progress.resume(run, static_cast<double>(p.samples), checkpoint);
     };
-    volpath::SphereRun run = volpath::simulate_sphere(sc, so);
+    const runner::SphereStudy st = runner::run_sphere_study(job, so, command_line());
     progress.finish();
-    if (run.interrupted) {
+    if (st.run.interrupted) {
         std::fprintf(stderr,
                      "ssslab sphere: interrupted; checkpoints saved beside %s; run the same "
                      "command again to resume\n",
@@ -439,161 +82,15 @@ int run_sphere(const SphereArgs& a) {
         return kExitInterrupted;
     }
 
-    // Image: volpath's layers, then one per model.
-    LayeredImage img = std::move(*run.image);
-    const int W = sc.width, H = sc.height;
-    for (size_t k = 0; k < job.models.size(); ++k) {
-        ImageLayer& layer = img.add_layer("model." + job.models[k], 3);
-        for (int ch = 0; ch < 3; ++ch) {
-            const std::vector<double> pix =
-                approx::sphere_exitance_image(tables[k][static_cast<size_t>(ch)], view);
-            for (int y = 0; y < H; ++y)
-                for (int x = 0; x < W; ++x)
-                    layer.at(x, y, ch) =
-                        static_cast<float>(pix[static_cast<size_t>(y) * static_cast<size_t>(W) +
-                                               static_cast<size_t>(x)]);
-        }
-    }
-    {
-        std::string list;
-        for (const auto& n : job.models) list += (list.empty() ? "" : ",") + n;
-        img.metadata()["ssslab.models"] = list;
-        img.metadata()["ssslab.material"] = sc.medium.name;
-        img.metadata()["ssslab.radius_cm"] = fmt(sc.radius_cm);
-        img.metadata()["ssslab.entry"] = approx::to_string(job.integration.entry);
-    }
-
-    // Preview: volpath's exitance and the models side by side, one exposure.
-    const int panels = 1 + static_cast<int>(job.models.size());
-    LayeredImage preview(W * panels, H);
-    ImageLayer& pv = preview.add_layer("preview", 3);
-    std::vector<float> values;
-    for (int p = 0; p < panels; ++p) {
-        const ImageLayer& src = img.layer(
-            p == 0 ? std::string("exitance") : "model." + job.models[static_cast<size_t>(p - 1)]);
-        for (int y = 0; y < H; ++y)
-            for (int x = 0; x < W; ++x)
-                for (int ch = 0; ch < 3; ++ch) {
-                    pv.at(p * W + x, y, ch) = src.at(x, y, ch);
-                    if (p == 0 && src.at(x, y, ch) > 0) values.push_back(src.at(x, y, ch));
-                }
-    }
-    double exposure = 0;
-    if (!values.empty()) {
-        const size_t q = static_cast<size_t>(0.995 * static_cast<double>(values.size() - 1));
-        std::nth_element(values.begin(), values.begin() + static_cast<long>(q), values.end());
-        if (values[q] > 0) exposure = -std::log2(static_cast<double>(values[q]));
-    }
-
-    // Beta profile table and comparisons.
-    std::vector<std::array<Comparison, 3>> cmp(job.models.size());
-    std::array<std::vector<double>, 3> bins_mc, bins_se;
-    for (int ch = 0; ch < 3; ++ch) {
-        bins_mc[static_cast<size_t>(ch)] = run.exitance[static_cast<size_t>(ch)];
-        bins_se[static_cast<size_t>(ch)] = run.exitance_se[static_cast<size_t>(ch)];
-    }
-    // Like with like: a model without single scattering is compared with volpath's multiple-
-    // scattering part M - M_ss (its SE taken as the total's: the two parts come from disjoint
-    // paths, Var(ms) = Var(all) - Var(ss) + O(mean(ms) mean(ss) / N)).
-    std::array<std::vector<double>, 3> bins_ms;
-    for (int ch = 0; ch < 3; ++ch) {
-        const size_t c3 = static_cast<size_t>(ch);
-        bins_ms[c3] = bins_mc[c3];
-        for (size_t j = 0; j < bins_ms[c3].size(); ++j)
-            bins_ms[c3][j] -= run.exitance_single[c3][j];
-    }
-    auto reference = [&](size_t k, size_t c3) -> const std::vector<double>& {
-        return job.profiles[k][c3]->includes_single_scattering() ? bins_mc[c3] : bins_ms[c3];
-    };
-    for (size_t k = 0; k < job.models.size(); ++k)
-        for (int ch = 0; ch < 3; ++ch) {
-            const size_t c3 = static_cast<size_t>(ch);
-            cmp[k][c3] =
-                compare(tables[k][c3].bin_mean, reference(k, c3), bins_se[c3], tables[k][c3]);
-        }
-    std::string csv = "beta_lo_deg,beta_hi_deg";
-    for (int ch = 0; ch < 3; ++ch) {
-        const std::string cn = kChannelNames[ch];
-        csv += ",M_volpath_" + cn + ",M_volpath_se_" + cn + ",M_volpath_single_" + cn +
-               ",M_volpath_single_se_" + cn;
-        // z against the total for models with single scattering, else against M - M_ss.
-        for (const auto& n : job.models) csv += ",M_" + n + "_" + cn + ",z_" + n + "_" + cn;
-    }
-    csv += "\n";
-    for (int j = 0; j < sc.beta_bins; ++j) {
-        const size_t jj = static_cast<size_t>(j);
-        csv += fmt(run.beta_edge(j) * 180.0 / kPi) + "," + fmt(run.beta_edge(j + 1) * 180.0 / kPi);
-        for (int ch = 0; ch < 3; ++ch) {
-            const size_t c3 = static_cast<size_t>(ch);
-            const double v = bins_mc[c3][jj], se = bins_se[c3][jj];
-            csv += "," + fmt(v) + "," + fmt(se) + "," + fmt(run.exitance_single[c3][jj]) + "," +
-                   fmt(run.exitance_single_se[c3][jj]);
-            for (size_t k = 0; k < job.models.size(); ++k) {
-                const double m = tables[k][c3].bin_mean[jj];
-                const double ref = reference(k, c3)[jj];
-                csv += "," + fmt(m) + "," + (se > 0 ? fmt((m - ref) / se) : std::string("nan"));
-            }
-        }
-        csv += "\n";
-    }
-
-    // Resolved configuration and results.
-    ConfigTable root = job.doc->root();
-    for (int ch = 0; ch < 3; ++ch) {
-        const size_t c3 = static_cast<size_t>(ch);
-        const BatchRunResult& r = run.runs[run.mode == volpath::ChromaticMode::kHero ? 0 : c3];
-        ConfigTable t = root.table_or_empty(std::string("result_") + kChannelNames[ch]);
-        t.record("engine", std::string(volpath::sphere_engine_version()));
-        t.record("stop_reason", std::string(to_string(r.reason)));
-        t.record("photons", static_cast<std::int64_t>(r.samples));
-        t.record("batches", static_cast<std::int64_t>(r.batches));
-        t.record("threads", static_cast<std::int64_t>(r.threads));
-        t.record("wall_seconds", r.seconds);
-        t.record("diffuse_fraction", run.diffuse[c3]);
-        t.record("diffuse_fraction_se", run.diffuse_se[c3]);
-        t.record("diffuse_single_fraction", run.diffuse_single[c3]);
-        t.record("diffuse_single_fraction_se", run.diffuse_single_se[c3]);
-        t.record("specular_fraction", run.specular[c3]);
-        t.record("specular_fraction_se", run.specular_se[c3]);
-        t.record("specular_fraction_expected", run.specular_expected);
-        t.record("long_path_roulette_mass", run.lost[c3]);
-        for (size_t k = 0; k < job.models.size(); ++k) {
-            const std::string n = job.models[k];
-            const approx::SphereExitance& tb = tables[k][c3];
-            t.record(n + "_total_rd", job.profiles[k][c3]->total_rd());
-            t.record(n + "_diffuse_fraction", tb.total_fraction());
-            t.record(n + "_compared_with",
-                     std::string(job.profiles[k][c3]->includes_single_scattering()
-                                     ? "volpath_total"
-                                     : "volpath_multiple_scattering"));
-            t.record(n + "_rel_l2_lit", cmp[k][c3].rel_l2_lit);
-            t.record(n + "_rel_l2_unlit", cmp[k][c3].rel_l2_unlit);
-            t.record(n + "_chi2", cmp[k][c3].chi2);
-            t.record(n + "_chi2_dof", static_cast<std::int64_t>(cmp[k][c3].dof));
-            t.record(n + "_quadrature_rel_error", tb.max_rel_error);
-            t.record(n + "_profile_evaluations", static_cast<std::int64_t>(tb.evaluations));
-        }
-    }
-    {
-        ConfigTable t = root.table_or_empty("timing");
-        t.record("volpath_seconds", run.seconds);
-        t.record("volpath_paths", static_cast<std::int64_t>(run.paths));
-        t.record("volpath_scattering_events", static_cast<std::int64_t>(run.events));
-        t.record("models_seconds", model_seconds);
-    }
-    job.doc->add_resolved_section("provenance", provenance(command_line()));
-
     OutputTransaction tx;
     const fs::path exr_path = prefix + ".exr", png_path = prefix + ".png";
     tx.stage(exr_path,
-             encode_through_file(exr_path, [&](const std::string& p) { write_exr(img, p); }));
+             encode_through_file(exr_path, [&](const std::string& p) { write_exr(st.image, p); }));
     tx.stage(png_path, encode_through_file(png_path, [&](const std::string& p) {
-                 write_png_preview(preview, "preview", p, exposure);
+                 write_png_preview(st.preview, "preview", p, st.exposure);
              }));
-    tx.stage(prefix + "_beta.csv", csv);
-    tx.stage(prefix + ".toml",
-             "# ssslab sphere: resolved configuration, results per channel, timing, provenance\n" +
-                 job.doc->resolved_toml());
+    tx.stage(prefix + "_beta.csv", st.beta_csv);
+    tx.stage(prefix + ".toml", st.resolved_toml);
     tx.commit();
 
     if (!c.quiet) {
@@ -603,14 +100,14 @@ int run_sphere(const SphereArgs& a) {
             prefix.c_str(), prefix.c_str(), sc.medium.name.c_str(), sc.radius_cm * 10,
             job.light_deg, job.camera_deg);
         std::printf("  volpath (%s): %llu paths in %.3g s; models (%s entry): %.3g s\n",
-                    job.mode.c_str(), static_cast<unsigned long long>(run.paths), run.seconds,
-                    approx::to_string(job.integration.entry), model_seconds);
+                    job.mode.c_str(), static_cast<unsigned long long>(st.run.paths), st.run.seconds,
+                    approx::to_string(job.integration.entry), st.model_seconds);
         for (int ch = 0; ch < 3; ++ch) {
             const size_t c3 = static_cast<size_t>(ch);
             std::printf("  %s: exitance / incident power: volpath %s", kChannelNames[ch],
-                        pm(run.diffuse[c3], run.diffuse_se[c3]).c_str());
+                        pm(st.run.diffuse[c3], st.run.diffuse_se[c3]).c_str());
             for (size_t k = 0; k < job.models.size(); ++k)
-                std::printf(", %s %.4f", job.models[k].c_str(), tables[k][c3].total_fraction());
+                std::printf(", %s %.4f", job.models[k].c_str(), st.tables[k][c3].total_fraction());
             std::printf("\n");
         }
         if (!job.models.empty())
@@ -618,7 +115,7 @@ int run_sphere(const SphereArgs& a) {
                         "chi2/dof (dof)");
         for (size_t k = 0; k < job.models.size(); ++k)
             for (int ch = 0; ch < 3; ++ch) {
-                const Comparison& m = cmp[k][static_cast<size_t>(ch)];
+                const runner::SphereComparison& m = st.cmp[k][static_cast<size_t>(ch)];
                 std::printf("  %-16s %s   %12.4g  %12.4g  %10.4g (%d)\n", job.models[k].c_str(),
                             kChannelNames[ch], m.rel_l2_lit, m.rel_l2_unlit,
                             m.dof > 0 ? m.chi2 / m.dof : 0.0, m.dof);
