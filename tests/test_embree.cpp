@@ -87,3 +87,38 @@ TEST(Embree, ClosedMeshesAreWatertight) {
 
 }  // namespace
 }  // namespace ssslab::volpath
+
+namespace ssslab::volpath {
+namespace {
+
+TEST(Embree, DistanceToTheNearestSurfaceIsTheClosedForm) {
+    // Inside a 4 x 2 x 6 box (vertices exact in floats) the nearest surface is the nearest
+    // face: min over the axes of (half size - |p_i|); outside, the distance to the box; a
+    // second shape nearer than the faces wins; the cap bounds the answer.
+    const TriangleMesh box = make_box({4, 2, 6});
+    TriangleMesh small = make_box({0.25, 0.25, 0.25});  // exact in floats
+    for (Vec3& v : small.positions) v += Vec3{1.5, 0, 2.5};
+    const EmbreeScene one({&box}), two({&box, &small});
+    RngStream rng(2, rng_domain::kTest + 63, 0);
+    for (int i = 0; i < 2000; ++i) {
+        const Vec3 p{4 * rng.uniform() - 2, 2 * rng.uniform() - 1, 6 * rng.uniform() - 3};
+        const double faces = std::min({2 - std::fabs(p.x), 1 - std::fabs(p.y), 3 - std::fabs(p.z)});
+        EXPECT_NEAR(one.distance_to_surface(p, 100), faces, 1e-12);
+        EXPECT_EQ(one.distance_to_surface(p, 0.1), std::min(0.1, faces));
+        // The small box: the distance to its surface from outside it.
+        const Vec3 q = p - Vec3{1.5, 0, 2.5};
+        const double dx = std::max(std::fabs(q.x) - 0.125, 0.0),
+                     dy = std::max(std::fabs(q.y) - 0.125, 0.0),
+                     dz = std::max(std::fabs(q.z) - 0.125, 0.0);
+        const bool inside_small = dx == 0 && dy == 0 && dz == 0;
+        if (inside_small) continue;
+        const double to_small = std::sqrt(dx * dx + dy * dy + dz * dz);
+        EXPECT_NEAR(two.distance_to_surface(p, 100), std::min(faces, to_small), 1e-12);
+    }
+    // Outside: the distance to the box.
+    EXPECT_NEAR(one.distance_to_surface({5, 0, 0}, 100), 3.0, 1e-12);
+    EXPECT_NEAR(one.distance_to_surface({3, 2, 0}, 100), std::sqrt(2.0), 1e-12);
+}
+
+}  // namespace
+}  // namespace ssslab::volpath

@@ -17,7 +17,7 @@ struct EmbreeScene::Impl {
     std::vector<std::vector<Vec3>> normals;  // per shape, per triangle (double precision)
     // Per shape, the vertices of each triangle as Embree stores them (floats, held as doubles):
     // the surface the ray queries see, for the point queries.
-    std::vector<std::vector<std::array<Vec3, 3>>> corners;
+    std::vector<std::vector<std::array<Vec3, 4>>> corners;  // and the unit normal of their plane
 };
 
 namespace {
@@ -64,14 +64,17 @@ Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
 }
 
 struct PointQuery {
-    const std::vector<std::vector<std::array<Vec3, 3>>>* corners;
+    const std::vector<std::vector<std::array<Vec3, 4>>>* corners;
     Vec3 p;
     double best2;
 };
 
 bool point_query(RTCPointQueryFunctionArguments* args) {
     auto* q = static_cast<PointQuery*>(args->userPtr);
-    const std::array<Vec3, 3>& t = (*q->corners)[args->geomID][args->primID];
+    const std::array<Vec3, 4>& t = (*q->corners)[args->geomID][args->primID];
+    // No nearer than its plane: most candidates end here.
+    const double plane = dot(q->p - t[0], t[3]);
+    if (!(plane * plane < q->best2)) return false;
     const Vec3 d = closest_on_triangle(q->p, t[0], t[1], t[2]) - q->p;
     const double d2 = dot(d, d);
     if (!(d2 < q->best2)) return false;
@@ -110,7 +113,7 @@ EmbreeScene::EmbreeScene(const std::vector<const TriangleMesh*>& meshes) : impl_
         }
         std::vector<Vec3> normals;
         normals.reserve(m.triangles.size());
-        std::vector<std::array<Vec3, 3>> corners;
+        std::vector<std::array<Vec3, 4>> corners;
         corners.reserve(m.triangles.size());
         auto stored = [&](std::uint32_t i) { return Vec3{v[3 * i], v[3 * i + 1], v[3 * i + 2]}; };
         for (std::size_t i = 0; i < m.triangles.size(); ++i) {
@@ -120,7 +123,11 @@ EmbreeScene::EmbreeScene(const std::vector<const TriangleMesh*>& meshes) : impl_
             ix[3 * i + 2] = t[2];
             normals.push_back(normalize(cross(m.positions[t[1]] - m.positions[t[0]],
                                               m.positions[t[2]] - m.positions[t[0]])));
-            corners.push_back({stored(t[0]), stored(t[1]), stored(t[2])});
+            const Vec3 a = stored(t[0]), b = stored(t[1]), c = stored(t[2]);
+            const Vec3 n = cross(b - a, c - a);
+            const double len = length(n);
+            // A degenerate triangle has no plane to bound it: a zero normal never rejects.
+            corners.push_back({a, b, c, len > 0 ? n * (1 / len) : Vec3{0, 0, 0}});
         }
         impl_->normals.push_back(std::move(normals));
         impl_->corners.push_back(std::move(corners));
