@@ -216,7 +216,6 @@ struct Renderer {
         Vec3& d = ws.w;
         bool& on_surface = ws.on_surface;
         double* beta = ws.weights.beta;
-        const double* q = ws.weights.q;
         int medium = -1;  // index into media of the medium the path is in
         int medium_shape = -1;
         bool prev_nee = false, entered = false, specular_path = false;
@@ -420,7 +419,6 @@ struct Renderer {
         WalkRules rules;
         rules.flight = FlightRule::kResample;
         rules.long_events = opt.long_path_events;
-        (void)q;
 
         while (depth < 100000) {
             if (medium >= 0) {

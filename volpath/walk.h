@@ -312,7 +312,6 @@ WalkEnd walk(const Geometry& geo, WalkState<NC>& s, const WalkRules& rules, RngS
         };
         sample();
         double travelled = 0;  // since the flight or the last boundary
-        bool at_boundary = false;
         for (std::int64_t hits = 0;;) {
             // A geometry may know that the flight's segment stays clear of every boundary
             // (`clear`): then the collision comes first without a query, as the query would
@@ -375,11 +374,9 @@ WalkEnd walk(const Geometry& geo, WalkState<NC>& s, const WalkRules& rules, RngS
             } else if (rules.flight == FlightRule::kResample) {
                 sample();
             } else {
-                at_boundary = true;  // kInteractAtBoundary
-                break;
+                break;  // kInteractAtBoundary: the collision happens here
             }
         }
-        (void)at_boundary;
 
         // A collision in R at s.p.
         ++s.events;
