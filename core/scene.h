@@ -30,6 +30,8 @@
 #include "core/vec3.h"
 
 #include <array>
+#include <cmath>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -56,6 +58,15 @@ struct SceneLight {
     Vec3 position{};                ///< point, sphere [world units]
     double radius = 0;              ///< sphere [world units]
     SourceLocation where;
+
+    /// A directional light of angular radius a > 0 is a disc: cos(a), the cosine of its rim...
+    double disc_cos_max() const { return std::cos(angular_radius_deg * std::numbers::pi / 180); }
+    /// ... and pi sin^2(a), the cosine-weighted solid angle of the disc seen face-on: its
+    /// radiance is the irradiance `color` over this (both renderers).
+    double disc_projected_solid_angle() const {
+        const double a = angular_radius_deg * std::numbers::pi / 180;
+        return std::numbers::pi * std::sin(a) * std::sin(a);
+    }
 };
 
 struct SceneMaterial {

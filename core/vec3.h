@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cmath>
+#include <limits>
 
 namespace ssslab {
 
@@ -44,6 +45,19 @@ inline void basis(const Vec3& n, Vec3& s, Vec3& t) {
     const double b = n.x * n.y * a;
     s = {1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x};
     t = {b, sign + n.y * n.y * a, -n.y};
+}
+
+/// Nearest t > 0 where the ray o + t d (d a unit vector) meets the sphere of centre c and radius
+/// r; infinity if none. The sphere lights of both renderers.
+inline double ray_sphere_hit(const Vec3& o, const Vec3& d, const Vec3& c, double r) {
+    const Vec3 oc = o - c;
+    const double b = dot(oc, d), cc = dot(oc, oc) - r * r;
+    const double disc = b * b - cc;
+    if (disc < 0) return std::numeric_limits<double>::infinity();
+    const double s = std::sqrt(disc);
+    if (-b - s > 0) return -b - s;
+    if (-b + s > 0) return -b + s;
+    return std::numeric_limits<double>::infinity();
 }
 
 }  // namespace ssslab

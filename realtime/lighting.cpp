@@ -54,18 +54,6 @@ Vec3 around(const Vec3& axis, double c, double v) {
     return normalize(s * (sn * std::cos(phi)) + t * (sn * std::sin(phi)) + axis * c);
 }
 
-// Nearest t > 0 where o + t d meets the sphere; inf if none.
-double hit_sphere(const Vec3& o, const Vec3& d, const Vec3& c, double r) {
-    const Vec3 oc = o - c;
-    const double b = dot(oc, d), cc = dot(oc, oc) - r * r;
-    const double disc = b * b - cc;
-    if (disc < 0) return kInf;
-    const double s = std::sqrt(disc);
-    if (-b - s > 0) return -b - s;
-    if (-b + s > 0) return -b + s;
-    return kInf;
-}
-
 // One shadow-mapped light sample: a direction (orthographic map) or a point (perspective).
 struct LightSample {
     bool directional = true;
@@ -427,7 +415,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         tl = kInf;
         for (const SceneLight& l : scene.lights)
             if (l.type == LightType::kSphere) {
-                const double t = hit_sphere(from, d, l.position, l.radius);
+                const double t = ray_sphere_hit(from, d, l.position, l.radius);
                 if (t < tl) tl = t, hit = &l;
             }
         return hit;
@@ -438,10 +426,9 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
             if (l.type == LightType::kEnvironment)
                 for (std::size_t c = 0; c < 3; ++c) L[c] += l.color[c];
             if (l.type == LightType::kDirectional && l.angular_radius_deg > 0) {
-                const double a = l.angular_radius_deg * kPi / 180;
-                if (dot(d, l.direction) >= std::cos(a))
+                if (dot(d, l.direction) >= l.disc_cos_max())
                     for (std::size_t c = 0; c < 3; ++c)
-                        L[c] += l.color[c] / (kPi * std::sin(a) * std::sin(a));
+                        L[c] += l.color[c] / l.disc_projected_solid_angle();
             }
         }
         return L;
@@ -597,8 +584,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                     samples.push_back(s);
                     break;
                 }
-                const double a = l.angular_radius_deg * kPi / 180, cos_max = std::cos(a);
-                const double L_per = 1.0 / (kPi * std::sin(a) * std::sin(a));
+                const double cos_max = l.disc_cos_max();
+                const double L_per = 1.0 / l.disc_projected_solid_angle();
                 const double omega = 2 * kPi * (1 - cos_max);
                 const int n = o.light_samples;
                 for (int k = 0; k < n; ++k) {
@@ -694,7 +681,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         for (int k : spheres) {
             if (k == s.light) continue;
             const SceneLight& l = scene.lights[static_cast<std::size_t>(k)];
-            if (hit_sphere(p, wi, l.position, l.radius) < dist) return true;
+            if (ray_sphere_hit(p, wi, l.position, l.radius) < dist) return true;
         }
         return false;
     };

@@ -143,11 +143,11 @@ TEST(Lights, SphereHitsLieOnTheSphereAndDeltaLightsGiveTheirValues) {
         ASSERT_TRUE(std::isfinite(x.dist));
         const Vec3 q = Vec3{0.3, -0.2, 0} + x.wi * x.dist;
         EXPECT_NEAR(length(q - s.position), 1.0, 1e-9);
-        EXPECT_DOUBLE_EQ(hit_sphere({0.3, -0.2, 0}, x.wi, s.position, s.radius), x.dist);
+        EXPECT_DOUBLE_EQ(ray_sphere_hit({0.3, -0.2, 0}, x.wi, s.position, s.radius), x.dist);
     }
     // Inside the sphere light: nothing to sample.
     EXPECT_FALSE(sample_light(l, {0, 0, 5.5}, 0.3, 0.4).ok);
-    EXPECT_EQ(hit_sphere({0, 0, 0}, {0, 0, -1}, s.position, s.radius),
+    EXPECT_EQ(ray_sphere_hit({0, 0, 0}, {0, 0, -1}, s.position, s.radius),
               std::numeric_limits<double>::infinity());
 
     SceneLight pt = scene_light(LightType::kPoint);

@@ -7,10 +7,6 @@
 
 namespace ssslab::volpath {
 
-namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
-}  // namespace
-
 Light make_light(const SceneLight& sl) {
     Light l;
     l.type = sl.type;
@@ -19,10 +15,8 @@ Light make_light(const SceneLight& sl) {
     l.pos = sl.position;
     l.radius = sl.radius;
     if (sl.type == LightType::kDirectional && sl.angular_radius_deg > 0) {
-        const double a = sl.angular_radius_deg * kPi / 180;
-        l.cos_max = std::cos(a);
-        // Irradiance E on a surface facing the disc: L pi sin^2(a).
-        for (double& x : l.L) x /= kPi * std::sin(a) * std::sin(a);
+        l.cos_max = sl.disc_cos_max();
+        for (double& x : l.L) x /= sl.disc_projected_solid_angle();
     }
     return l;
 }
@@ -31,18 +25,6 @@ Vec3 sample_cone(const Vec3& axis, double cos_max, double u1, double u2) {
     const double c = 1 - u1 * (1 - cos_max), sn = std::sqrt(std::max(0.0, 1 - c * c));
     const double phi = 2 * kPi * u2;
     return Frame(axis).world({sn * std::cos(phi), sn * std::sin(phi), c});
-}
-
-double hit_sphere(const Vec3& o, const Vec3& d, const Vec3& c, double r) {
-    const Vec3 oc = o - c;
-    const double b = dot(oc, d), cc = dot(oc, oc) - r * r;
-    const double disc = b * b - cc;
-    if (disc < 0) return kInf;
-    const double s = std::sqrt(disc);
-    const double t0 = -b - s, t1 = -b + s;
-    if (t0 > 0) return t0;
-    if (t1 > 0) return t1;
-    return kInf;
 }
 
 LightSample sample_light(const Light& l, const Vec3& p, double u1, double u2) {
@@ -54,7 +36,7 @@ LightSample sample_light(const Light& l, const Vec3& p, double u1, double u2) {
             if (d2 <= l.radius * l.radius) return s;
             const double cos_max = std::sqrt(std::max(0.0, 1 - l.radius * l.radius / d2));
             s.wi = sample_cone(normalize(pc), cos_max, u1, u2);
-            s.dist = hit_sphere(p, s.wi, l.pos, l.radius);
+            s.dist = ray_sphere_hit(p, s.wi, l.pos, l.radius);
             if (!std::isfinite(s.dist)) s.dist = std::sqrt(d2);  // grazing: rounding
             s.value = l.L;
             s.pdf = 1 / (2 * kPi * (1 - cos_max));

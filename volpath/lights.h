@@ -1,10 +1,10 @@
 // The renderer's lights (volpath/render.cpp): a scene light as the path tracer sees it, sampling
 // a direction towards it from a point (the next-event estimation of every vertex) and the
-// solid-angle density of that sampling (for MIS with BSDF and phase sampling), and where a ray
-// meets a sphere light. Spherical area lights (the cone they subtend, uniformly), the constant
-// environment (uniform directions), directional lights (a disc of finite angular radius, or a
-// delta) and point lights. tests/test_lights.cpp holds the sampling to its density by a
-// chi-square test and the estimates to closed-form irradiance.
+// solid-angle density of that sampling (for MIS with BSDF and phase sampling). Where a ray meets
+// a sphere light: core/vec3.h ray_sphere_hit. Spherical area lights (the cone they subtend,
+// uniformly), the constant environment (uniform directions), directional lights (a disc of finite
+// angular radius, or a delta) and point lights. tests/test_lights.cpp holds the sampling to its
+// density by a chi-square test and the estimates to closed-form irradiance.
 #pragma once
 
 #include "core/scene.h"
@@ -46,8 +46,5 @@ double light_pdf(const Light& l, const Vec3& p, const Vec3& wi);
 
 /// A direction uniform in the cone of directions within acos(cos_max) of the unit `axis`.
 Vec3 sample_cone(const Vec3& axis, double cos_max, double u1, double u2);
-
-/// Nearest t > 0 where o + t d meets the sphere (centre c, radius r); infinity if none.
-double hit_sphere(const Vec3& o, const Vec3& d, const Vec3& c, double r);
 
 }  // namespace ssslab::volpath

@@ -82,14 +82,6 @@ bool SurfaceDistanceGrid::pays(const WalkRegion& r, const TriangleMesh& shape) {
     return false;
 }
 
-std::size_t SurfaceDistanceGrid::computed() const {
-    const std::size_t cells = static_cast<std::size_t>(n_[0]) * static_cast<std::size_t>(n_[1]) *
-                              static_cast<std::size_t>(n_[2]);
-    std::size_t k = 0;
-    for (std::size_t i = 0; d_ && i < cells; ++i) k += d_[i].load(std::memory_order_relaxed) >= 0;
-    return k;
-}
-
 namespace {
 
 // A smooth dielectric boundary; an exit ends the walk with its point, direction and normal.

@@ -36,8 +36,6 @@ class SurfaceDistanceGrid {
     /// A ball (centre c, radius r) around the cell of p that no surface enters, less the
     /// scene's epsilon; false where p is outside the grid or its cell touches a surface.
     bool ball(const Vec3& p, Vec3& c, double& r) const;
-    /// Cells computed so far (for tests and benchmarks).
-    std::size_t computed() const;
     /// Whether a grid pays for its point queries in a medium `r` inside `shape`: where some
     /// channel's walks are long (albedo >= 0.99: about 100 events and more) in a shape of at
     /// least 16 of that channel's mean free paths. Short walks stay near the surface, where
@@ -107,7 +105,6 @@ struct MeshGeometry {
         b.t = hit.t;
         b.n = hit.normal;
         b.shape = hit.shape;
-        b.triangle = hit.triangle;
         const double cos_i = dot(s.w, hit.normal);  // leaving: along the outward normal
         if (!(cos_i > 0))
             b.kind = hit.t < 4 * eps && cos_i == cos_i ? WalkBoundary::Kind::kSlip

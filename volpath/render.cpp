@@ -445,7 +445,7 @@ struct Renderer {
             const Light* hit_light = nullptr;
             for (const Light& l : lights)
                 if (l.type == LightType::kSphere) {
-                    const double t = hit_sphere(o, d, l.pos, l.radius);
+                    const double t = ray_sphere_hit(o, d, l.pos, l.radius);
                     if (t < tl) tl = t, hit_light = &l;
                 }
             if (hit_light && tl < hit.t) {

@@ -210,7 +210,7 @@ struct WalkState {
 /// The next boundary along a path, as a geometry reports it.
 struct WalkBoundary {
     double t = std::numeric_limits<double>::infinity();  ///< distance
-    Vec3 n;  ///< unit normal pointing out of the current region (set by `arrive`)
+    Vec3 n;  ///< unit normal pointing out of the current region (by `next` or `arrive`)
     enum class Kind {
         kFace,  ///< a boundary of the region
         kSlip,  ///< the path slipped across a crease and met the boundary from outside within a
@@ -218,7 +218,7 @@ struct WalkBoundary {
         kWrongSide,  ///< met from outside farther than that: lost if the path gets there
         kLeak,       ///< no boundary (a leak) or another shape: the walk is lost
     } kind = Kind::kFace;
-    std::uint32_t shape = 0, triangle = 0;  ///< mesh geometry
+    std::uint32_t shape = 0;  ///< mesh geometry: the shape met
 };
 
 /// What a boundary hook decided.
@@ -412,10 +412,10 @@ WalkEnd walk(const Geometry& geo, WalkState<NC>& s, const WalkRules& rules, RngS
     }
 }
 
-/// A smooth dielectric boundary met from inside the region along s.w with the outward unit
-/// normal n: exact Fresnel reflectance for the index ratio eta = n_beyond / n_region (total
-/// internal reflection included); reflected (true, s.w mirrored) or transmitted (false, s.w
-/// refracted). One random number.
+/// A smooth dielectric boundary met along w, n its unit normal on the far side (dot(w, n) > 0):
+/// exact Fresnel reflectance for the index ratio eta = n_beyond / n_here (total internal
+/// reflection included); reflected (true, w mirrored) or transmitted (false, w refracted). One
+/// random number. Every engine's smooth boundary, from either side.
 inline bool fresnel_reflects(Vec3& w, const Vec3& n, double eta, RngStream& rng) {
     const double cos_i = std::clamp(dot(w, n), 0.0, 1.0);
     double cos_t = 0;
