@@ -28,9 +28,10 @@ double seconds_since(Clock::time_point t0) {
 constexpr char kCheckpointMagic[8] = {'S', 'S', 'S', 'L', 'B', 'C', 'K', '1'};
 constexpr char kResultMagic[8] = {'S', 'S', 'S', 'L', 'B', 'R', 'S', '1'};
 
-// The per-batch history and the snapshots, in checkpoints and result files.
-void put_progress(BinaryWriter& w, const std::vector<BatchProgress>& h,
-                  const std::vector<BatchSnapshot>& s) {
+}  // namespace
+
+void put_batch_progress(BinaryWriter& w, const std::vector<BatchProgress>& h,
+                        const std::vector<BatchSnapshot>& s) {
     w.put<std::uint64_t>(h.size());
     for (const auto& p : h) {
         w.put(p.samples);
@@ -47,7 +48,8 @@ void put_progress(BinaryWriter& w, const std::vector<BatchProgress>& h,
     }
 }
 
-void get_progress(BinaryReader& r, std::vector<BatchProgress>& h, std::vector<BatchSnapshot>& s) {
+void get_batch_progress(BinaryReader& r, std::vector<BatchProgress>& h,
+                        std::vector<BatchSnapshot>& s) {
     const auto nh = r.get<std::uint64_t>();
     r.need(nh * 32);
     for (std::uint64_t i = 0; i < nh; ++i) {
@@ -69,6 +71,8 @@ void get_progress(BinaryReader& r, std::vector<BatchProgress>& h, std::vector<Ba
     }
 }
 
+namespace {
+
 struct Checkpoint {
     std::string fingerprint;
     std::uint64_t samples = 0, batches = 0, work = 0;
@@ -87,7 +91,7 @@ void save_checkpoint(const std::string& path, const Checkpoint& c) {
     w.put(c.seconds);
     w.put_vec(c.sum);
     w.put_vec(c.q);
-    put_progress(w, c.history, c.snapshots);
+    put_batch_progress(w, c.history, c.snapshots);
     write_file_atomic(path, w.bytes());
 }
 
@@ -104,17 +108,17 @@ std::optional<Checkpoint> load_checkpoint(const std::string& path) {
     k.seconds = r.get<double>();
     k.sum = r.get_vec();
     k.q = r.get_vec();
-    get_progress(r, k.history, k.snapshots);
+    get_batch_progress(r, k.history, k.snapshots);
     r.expect_end();
     return k;
 }
 
 }  // namespace
 
-const char* to_string(BatchStop s) {
+const char* to_string(BatchStop s, const char* samples_word) {
     switch (s) {
         case BatchStop::kSamples:
-            return "samples";
+            return samples_word;
         case BatchStop::kTime:
             return "time";
         case BatchStop::kRelError:
@@ -230,9 +234,8 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
             res.reason = BatchStop::kRelError;
             stop_flag = true;
         } else if (b.rel_error && !b.seconds && !b.samples && nb >= 10000 && p.value == 0) {
-            throw InfeasibleError(
-                "a relative-error budget cannot be met: the budget quantity is still 0 after "
-                "10000 batches");
+            throw InfeasibleError("a relative-error budget cannot be met: " + opt.quantity_name +
+                                  " stayed 0 for 10000 batches");
         }
         if (!opt.checkpoint_path.empty() && !stop_flag &&
             seconds_since(last_checkpoint) >= opt.checkpoint_seconds) {
@@ -311,7 +314,7 @@ std::string serialize_batch_result(const BatchRunResult& r) {
     w.put<std::int32_t>(r.threads);
     w.put<std::int32_t>(static_cast<std::int32_t>(r.reason));
     w.put<std::int32_t>(r.resumed ? 1 : 0);
-    put_progress(w, r.history, r.snapshots);
+    put_batch_progress(w, r.history, r.snapshots);
     return std::move(w.bytes());
 }
 
@@ -329,7 +332,7 @@ BatchRunResult deserialize_batch_result(const std::string& bytes, const std::str
     if (reason < 0 || reason > 3) throw InputError({name, 0, 0}, "", "corrupt stop reason");
     r.reason = static_cast<BatchStop>(reason);
     r.resumed = rd.get<std::int32_t>() != 0;
-    get_progress(rd, r.history, r.snapshots);
+    get_batch_progress(rd, r.history, r.snapshots);
     rd.expect_end();
     if (r.mean.size() != r.se.size())
         throw InputError({name, 0, 0}, "", "result file is inconsistent (sizes differ)");

@@ -10,8 +10,8 @@
 // - a per-batch history (samples, seconds, budget quantity and its standard error) and snapshots
 //   of the whole tally after 4, 8, 16, ... batches, for error-vs-time plots.
 //
-// The MCML port keeps its own driver (mcml/engine.cpp), which predates this one and whose
-// checkpoint format is fixed; the volumetric path tracer uses this one.
+// Both witnesses run on it: MCML's default engine (mcml/engine.cpp) and every engine of the
+// volumetric path tracer. Their independence is about transport code, not batching.
 #pragma once
 
 #include "core/error.h"
@@ -26,6 +26,9 @@
 
 namespace ssslab {
 
+class BinaryWriter;
+class BinaryReader;
+
 /// When to stop; the run stops at the first limit reached.
 struct SampleBudget {
     std::optional<std::int64_t> samples;
@@ -35,7 +38,8 @@ struct SampleBudget {
 };
 
 enum class BatchStop { kSamples, kTime, kRelError, kInterrupted };
-const char* to_string(BatchStop s);
+/// The stop reason as a word; `samples_word` names what the engine counts (MCML: "photons").
+const char* to_string(BatchStop s, const char* samples_word = "samples");
 
 /// One point of a run's progress, recorded after every batch.
 struct BatchProgress {
@@ -80,6 +84,8 @@ struct BatchRunOptions {
     const std::atomic<bool>* cancel = nullptr;
     int min_batches_for_error = 16;
     BudgetQuantity quantity;  ///< required for a rel_error budget; recorded in the history
+    /// What the budget quantity is, for the error when it stays 0 (e.g. "Rd and Tt").
+    std::string quantity_name = "the budget quantity";
     std::function<void(const BatchProgress&)> on_batch;
     bool snapshots = false;
 };
@@ -132,6 +138,13 @@ BatchRunResult run_batches(const BatchRunOptions& options, const BatchFunction& 
 /// and how to start afresh (remove the file, or --fresh). Shared by every engine's checkpoints.
 InputError checkpoint_refusal(const std::string& path, const std::string& before,
                               const std::string& now);
+
+/// The per-batch history and the snapshots as bytes, and back: shared by the driver's checkpoints
+/// and result files and by engines that serialize results of their own (MCML's).
+void put_batch_progress(BinaryWriter& w, const std::vector<BatchProgress>& history,
+                        const std::vector<BatchSnapshot>& snapshots);
+void get_batch_progress(BinaryReader& r, std::vector<BatchProgress>& history,
+                        std::vector<BatchSnapshot>& snapshots);
 
 /// A finished result as bytes (exact doubles), and back (InputError naming `name` if corrupt).
 std::string serialize_batch_result(const BatchRunResult& r);

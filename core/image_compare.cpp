@@ -73,6 +73,13 @@ double ImageComparison::p_min_corrected() const {
     return std::min(1.0, 3 * std::min({p[0], p[1], p[2]}));
 }
 
+double mean_pixel_variance(const ImageEstimate& e, int channel) {
+    double sum = 0;
+    const std::size_t n = e.var.size() / 3;
+    for (std::size_t i = 0; i < n; ++i) sum += e.var[i * 3 + static_cast<std::size_t>(channel)];
+    return n > 0 ? sum / static_cast<double>(n) : 0.0;
+}
+
 ImageComparison compare_images(const ImageEstimate& a, const ImageEstimate& b, int block) {
     if (a.width != b.width || a.height != b.height)
         throw std::invalid_argument("images differ in size: " + a.source + " is " +

@@ -69,6 +69,11 @@ struct ImageComparison {
     double rel_rms_diff = 0, rel_rms_noise = 0;
 };
 
+/// The mean over pixels of the variance of an estimate's pixel means in one channel: its mean
+/// squared error if unbiased. Times the seconds it took, the inverse is the efficiency
+/// 1 / (MSE x time) that compares renderers independently of how long each ran.
+double mean_pixel_variance(const ImageEstimate& e, int channel);
+
 /// Compare two estimates of the same size (std::invalid_argument otherwise) on square blocks of
 /// `block` pixels (partial blocks at the right and bottom edges included).
 ImageComparison compare_images(const ImageEstimate& a, const ImageEstimate& b, int block);

@@ -2,6 +2,7 @@
 // checkpoints) and the compatibility engine (the original's ran3 and call order).
 #pragma once
 
+#include "core/batch_runner.h"
 #include "mcml/run_spec.h"
 #include "mcml/tally.h"
 
@@ -16,58 +17,25 @@ namespace ssslab::mcml {
 
 class Ran3;
 
-/// When to stop. Any combination; the run stops at the first limit reached. With none given, the
-/// run's own photon count is used.
-struct Budget {
-    std::optional<std::int64_t> photons;
-    std::optional<double> seconds;    ///< wall time
-    std::optional<double> rel_error;  ///< relative standard error of the larger of Rd and Tt
-};
-
-enum class StopReason { kPhotons, kTime, kRelError, kInterrupted };
-const char* to_string(StopReason r);
-
-/// One point of a run's progress, recorded after every batch (for error-vs-time plots).
-struct ProgressPoint {
-    std::uint64_t photons;
-    double seconds;
-    double value;  ///< the budget quantity (Rd or Tt, per photon)
-    double se;     ///< its standard error
-};
-
-struct EngineOptions {
-    std::uint64_t seed = 1;
+/// The run control of the default engine: the driver's (core/batch_runner.h: seed, threads, a
+/// SampleBudget in photons, checkpoint interval, fresh, cancel, snapshots) and MCML's own. With no
+/// budget limit set, the run's own photon count is used; a relative-error budget is on the larger
+/// of Rd and Tt.
+struct EngineOptions : RunControl {
     /// Stream domain: runs sharing a seed must differ here (e.g. the RGB channel).
     std::uint64_t stream = 0;
-    int threads = 0;                 ///< 0: all hardware threads
     std::int64_t batch_photons = 0;  ///< 0: default_batch_photons()
     TallyMode mode = TallyMode::kFull;
-    Budget budget;
     /// Resume from and save to this file (empty: no checkpoints). A checkpoint is written every
     /// `checkpoint_seconds`, and when the run is interrupted; it is removed when the run ends.
     std::string checkpoint_path;
-    double checkpoint_seconds = 30.0;
-    /// Ignore (and in time overwrite) a checkpoint found at checkpoint_path: start afresh.
-    bool fresh = false;
     /// Called once, before any batch runs, when the run continues from a checkpoint: the photons
     /// and seconds it holds.
-    std::function<void(const ProgressPoint&)> on_resume;
-    /// Set asynchronously (e.g. by a signal handler) to stop after the batches in flight.
-    const std::atomic<bool>* cancel = nullptr;
+    std::function<void(const BatchProgress&)> on_resume;
     /// Batches needed before a relative-error target may stop the run.
     int min_batches_for_error = 16;
     /// Called in batch order after each batch (progress display).
-    std::function<void(const ProgressPoint&)> on_batch;
-    /// Record the per-photon means of the whole tally after 4, 8, 16, ... batches and at the
-    /// end (progressive estimates for error-vs-time studies).
-    bool snapshots = false;
-};
-
-/// The per-photon means of a run's tally after some batches.
-struct Snapshot {
-    std::uint64_t photons = 0, batches = 0;
-    double seconds = 0;
-    std::vector<double> mean;
+    std::function<void(const BatchProgress&)> on_batch;
 };
 
 /// Version of the default engine's numbers: it changes whenever a change alters what the engine
@@ -77,7 +45,7 @@ const char* engine_version();
 /// Batch size used when none is given: depends only on the photon budget (never on threads), so
 /// results are reproducible: N/1000 photons (at least 1000) for N >= 32000; N/32 below; 1000 when
 /// the budget is a time or an error.
-std::int64_t default_batch_photons(const Budget& budget, std::int64_t run_photons);
+std::int64_t default_batch_photons(const SampleBudget& budget, std::int64_t run_photons);
 
 /// Result of a run, in raw (unscaled) tally units.
 struct RunResult {
@@ -92,23 +60,23 @@ struct RunResult {
     std::int64_t batch_photons = 0;
     double seconds = 0.0;
     int threads = 1;
-    StopReason reason = StopReason::kPhotons;
+    BatchStop reason = BatchStop::kSamples;
     bool resumed = false;  ///< continued from a checkpoint
-    std::vector<ProgressPoint> history;
-    std::vector<Snapshot> snapshots;  ///< with EngineOptions::snapshots
+    std::vector<BatchProgress> history;
+    std::vector<BatchSnapshot> snapshots;  ///< with EngineOptions::snapshots
 
     double mean(size_t i) const { return values[i] / divisor; }
 };
 
-/// The default engine. Deterministic for any thread count: batch b uses the stream
-/// (seed, kMcml + stream, b) and batches are folded into the statistics in batch order.
+/// The default engine, on the shared batch driver (run_batches): deterministic for any thread
+/// count; batch b uses the stream (seed, kMcml + stream, b).
 RunResult run_default(const RunSpec& run, const EngineOptions& options);
 
 /// The compatibility engine: one thread, photons in the original order from `rng`; tallies
 /// summed exactly as MCML 1.2.2 sums them. Standard errors come from consecutive photon batches.
-RunResult run_compat(const RunSpec& run, Ran3& rng, const Budget& budget,
+RunResult run_compat(const RunSpec& run, Ran3& rng, const SampleBudget& budget,
                      const std::atomic<bool>* cancel = nullptr,
-                     const std::function<void(const ProgressPoint&)>& on_batch = {});
+                     const std::function<void(const BatchProgress&)>& on_batch = {});
 
 /// A finished run as bytes (exact doubles; the tally layout, history and snapshots included), for
 /// caches of results. The run spec is not included: the cache key stands for it.

@@ -33,9 +33,9 @@ GridOverride read_grid_override(ConfigTable& t) {
     return o;
 }
 
-Budget read_budget(ConfigTable& t) {
-    Budget b;
-    b.photons = t.optional_integer("photons", Range::closed(1, 9e18));
+SampleBudget read_budget(ConfigTable& t) {
+    SampleBudget b;
+    b.samples = t.optional_integer("photons", Range::closed(1, 9e18));
     b.seconds = t.optional_number("seconds", Range::positive());
     b.rel_error = t.optional_number("rel_error", Range::open(0, 1));
     return b;
@@ -74,23 +74,19 @@ ProfileRun simulate_profile(const Medium& m, const ProfileGrid& grid, const Prof
         const std::int64_t photons = kFreude14Photons;
         RunSpec run = run_for_channel(m, c, photons, g);
         EngineOptions eo;
-        eo.seed = o.seed;
+        static_cast<RunControl&>(eo) = o;
         eo.stream = static_cast<std::uint64_t>(c);
-        eo.threads = o.threads;
         eo.batch_photons = o.batch_photons;
         eo.mode = TallyMode::kProfile;
-        eo.budget = o.budget;
-        eo.cancel = o.cancel;
         if (!o.checkpoint_prefix.empty())
             eo.checkpoint_path = o.checkpoint_prefix + "." + kChannelNames[c] + ".ckpt";
-        if (o.on_batch) eo.on_batch = [&o, c](const ProgressPoint& p) { o.on_batch(c, p); };
+        if (o.on_batch) eo.on_batch = [&o, c](const BatchProgress& p) { o.on_batch(c, p); };
         if (o.on_resume)
-            eo.on_resume = [&o, c, path = eo.checkpoint_path](const ProgressPoint& p) {
+            eo.on_resume = [&o, c, path = eo.checkpoint_path](const BatchProgress& p) {
                 o.on_resume(c, p, path);
             };
-        eo.fresh = o.fresh;
         out.channels[c] = run_default(run, eo);
-        if (out.channels[c].reason == StopReason::kInterrupted) {
+        if (out.channels[c].reason == BatchStop::kInterrupted) {
             out.interrupted = true;
             return out;
         }

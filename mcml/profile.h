@@ -40,22 +40,18 @@ struct GridOverride {
 GridOverride read_grid_override(ConfigTable& t);
 
 /// A budget from a config table: photons, seconds, rel_error (each optional).
-Budget read_budget(ConfigTable& t);
+SampleBudget read_budget(ConfigTable& t);
 
-struct ProfileOptions {
-    std::uint64_t seed = 1;
-    int threads = 0;
-    Budget budget;  ///< per channel; with none, 1e7 photons per channel [Freude14 Table 6.1]
+/// The run control (RunControl: seed, threads, the budget per channel in photons, with none 1e7
+/// [Freude14 Table 6.1], checkpoint interval, fresh, cancel, snapshots) and the profile's own.
+struct ProfileOptions : RunControl {
     std::int64_t batch_photons = 0;
     /// Checkpoint files are <prefix>.<R|G|B>.ckpt (empty: none).
     std::string checkpoint_prefix;
-    /// Ignore existing checkpoints (start afresh) instead of resuming or refusing them.
-    bool fresh = false;
-    const std::atomic<bool>* cancel = nullptr;
-    std::function<void(int channel, const ProgressPoint&)> on_batch;
+    std::function<void(int channel, const BatchProgress&)> on_batch;
     /// Called before a channel continues from its checkpoint, with what the checkpoint holds and
     /// the checkpoint's path.
-    std::function<void(int channel, const ProgressPoint&, const std::string& checkpoint)> on_resume;
+    std::function<void(int channel, const BatchProgress&, const std::string& checkpoint)> on_resume;
 };
 
 inline constexpr std::int64_t kFreude14Photons = 10'000'000;

@@ -52,9 +52,8 @@ int iz_to_layer(int iz, const RunSpec& run) {
 
 }  // namespace
 
-void reduce(const RunSpec& run, std::vector<double>& t, const TallyLayout& L) {
+void reduce(const RunSpec& run, double* v, const TallyLayout& L) {
     const int nr = L.nr, na = L.na, nz = L.nz;
-    double* v = t.data();
     if (L.mode == TallyMode::kProfile) {
         double rd = 0.0, tt = 0.0, a = 0.0;
         for (int ir = 0; ir <= nr; ++ir) rd += v[L.rd_r + ir], tt += v[L.tt_r + ir];

@@ -50,7 +50,7 @@ struct RawTally {
 
 /// Fill the derived sections of `t` from its primary sections (MCML's Sum2DRd, Sum2DA, Sum2DTt,
 /// with the same loops in the same order). `run` supplies dz and the layer boundaries for A_l.
-void reduce(const RunSpec& run, std::vector<double>& t, const TallyLayout& layout);
+void reduce(const RunSpec& run, double* t, const TallyLayout& layout);
 
 /// The scaled physical quantities of a run (MCML's OutStruct after SumScaleResult()).
 struct McoResult {

@@ -6,7 +6,11 @@
 # compared by `ssslab compare` (image means and per-block chi-square).
 #
 #   scripts/cycles_sidebyside.sh [scene.toml] [--size N] [--spp-ours N] [--spp-cycles N]
-#                                [--runs K] [--block B] [--out DIR]
+#                                [--runs K] [--block B] [--threads T] [--out DIR]
+#
+# Besides the test of sameness it prints each side's efficiency 1/(MSE x time) per channel (MSE
+# the mean pixel variance; time ssslab's whole render and the sum of Cycles' render calls without
+# Blender's start-up), both renderers on the same T threads (default: all).
 #
 # Defaults: experiments/scenes/cycles/ketchup-matched.toml, 128 x 128, 16384 spp (ours), 16 runs
 # of 512 spp (Cycles), blocks of 16 pixels, results/cycles/<scene>/. Needs Debian's blender
@@ -15,7 +19,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 scene=experiments/scenes/cycles/ketchup-matched.toml
-size=128 spp_ours=16384 spp_cycles=512 runs=16 block=16 out=""
+size=128 spp_ours=16384 spp_cycles=512 runs=16 block=16 threads=0 out=""
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --size) size=$2; shift 2 ;;
@@ -23,6 +27,7 @@ while [[ $# -gt 0 ]]; do
     --spp-cycles) spp_cycles=$2; shift 2 ;;
     --runs) runs=$2; shift 2 ;;
     --block) block=$2; shift 2 ;;
+    --threads) threads=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     -*) echo "cycles_sidebyside.sh: unknown option $1" >&2; exit 2 ;;
     *) scene=$1; shift ;;
@@ -40,19 +45,22 @@ json=$(ls "$out"/export/*/scene.json)
 echo "ssslab: $size x $size, $spp_ours spp"
 start=$(date +%s%N)
 "$ssslab" render "$scene" --width "$size" --height "$size" --spp "$spp_ours" --seed 11 \
-  --out "$out/ssslab.exr" -q
+  --threads "$threads" --out "$out/ssslab.exr" -q
 ours_s=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.1f", (b - a) / 1e9 }')
 echo "Cycles: $runs runs of $spp_cycles spp"
-start=$(date +%s%N)
 files=()
+cycles_s=0
 for k in $(seq 1 "$runs"); do
   blender -b --factory-startup -P scripts/cycles_render.py -- "$json" "$out/cycles_$k.exr" \
-    --spp "$spp_cycles" --seed "$((1000 + k))" --width "$size" --height "$size" > "$out/cycles_$k.log" 2>&1 ||
+    --spp "$spp_cycles" --seed "$((1000 + k))" --width "$size" --height "$size" \
+    --threads "$threads" > "$out/cycles_$k.log" 2>&1 ||
     { tail -5 "$out/cycles_$k.log" >&2; exit 1; }
   files+=("$out/cycles_$k.exr")
+  s=$(sed -n 's/^cycles_render.py: render_seconds //p' "$out/cycles_$k.log")
+  cycles_s=$(awk -v a="$cycles_s" -v b="$s" 'BEGIN { printf "%.3f", a + b }')
 done
-cycles_s=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.1f", (b - a) / 1e9 }')
 {
   echo "scene $scene, $size x $size; ssslab $spp_ours spp in ${ours_s} s; Cycles $runs x $spp_cycles spp in ${cycles_s} s ($(blender --version | head -1))"
-  "$ssslab" compare --a "$out/ssslab.exr" --b "${files[@]}" --block "$block" --csv "$out/blocks.csv"
+  "$ssslab" compare --a "$out/ssslab.exr" --b "${files[@]}" --block "$block" --csv "$out/blocks.csv" \
+    --seconds-a "$ours_s" --seconds-b "$cycles_s"
 } | tee "$out/summary.txt"

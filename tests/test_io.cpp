@@ -111,7 +111,7 @@ TEST(Mco, WriterAndReaderAgree) {
     const mcml::TallyLayout L = mcml::TallyLayout::make(run, mcml::TallyMode::kFull);
     std::vector<double> raw(L.size, 0.0);
     for (size_t i = 0; i < L.primary_size; ++i) raw[i] = 1.0 + static_cast<double>(i % 7);
-    mcml::reduce(run, raw, L);
+    mcml::reduce(run, raw.data(), L);
     const mcml::McoResult v = mcml::scale_full(run, raw, L, 1000.0, mcml::kPi, 0.05);
     const std::string text = mcml::format_mco(run, v, 1000, 12.0);
     const mcml::McoFile back = mcml::parse_mco(text, "t.mco");

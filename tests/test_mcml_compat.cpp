@@ -21,7 +21,7 @@ std::string compat_output(const std::string& mci_name) {
     EXPECT_EQ(f.runs.size(), 1u);
     Ran3 rng(kIdum);
     const RunSpec& run = f.runs[0];
-    const RunResult r = run_compat(run, rng, Budget{});
+    const RunResult r = run_compat(run, rng, SampleBudget{});
     return format_mco(run, mco_values(run, r, /*compat=*/true), r.photons, r.seconds);
 }
 
@@ -64,10 +64,10 @@ TEST(McmlCompat, StateOfTheGeneratorCarriesAcrossRunsOfOneFile) {
     RunSpec small = f.runs[0];
     small.photons = 1000;
     Ran3 shared(kIdum);
-    (void)run_compat(small, shared, Budget{});
-    const RunResult second = run_compat(small, shared, Budget{});
+    (void)run_compat(small, shared, SampleBudget{});
+    const RunResult second = run_compat(small, shared, SampleBudget{});
     Ran3 fresh(kIdum);
-    const RunResult first = run_compat(small, fresh, Budget{});
+    const RunResult first = run_compat(small, fresh, SampleBudget{});
     EXPECT_NE(first.values, second.values);
 }
 

@@ -62,7 +62,7 @@ RunResult run(const RunSpec& spec, double photons, std::uint64_t seed = 1,
     o.seed = seed;
     o.threads = threads;
     o.mode = mode;
-    o.budget.photons = scaled(photons);
+    o.budget.samples = scaled(photons);
     return run_default(spec, o);
 }
 
@@ -254,15 +254,15 @@ TEST(McmlDeterminism, SameSeedIsBitIdenticalForAnyThreadCount) {
 TEST(McmlBudget, PhotonsTimeAndRelativeError) {
     const MciFile f = read_mci(data_path("mcml-1.2.2/a_vdh.mci"));
     EngineOptions o;
-    o.budget.photons = 12345;
+    o.budget.samples = 12345;
     RunResult r = run_default(f.runs[0], o);
     EXPECT_EQ(r.photons, 12345u);
-    EXPECT_EQ(r.reason, StopReason::kPhotons);
+    EXPECT_EQ(r.reason, BatchStop::kSamples);
 
     o = EngineOptions{};
     o.budget.rel_error = 0.01;
     r = run_default(f.runs[0], o);
-    EXPECT_EQ(r.reason, StopReason::kRelError);
+    EXPECT_EQ(r.reason, BatchStop::kRelError);
     const double rd = r.mean(r.layout.rd), tt = r.mean(r.layout.tt);
     const size_t i = rd >= tt ? r.layout.rd : r.layout.tt;
     EXPECT_LE(r.se[i], 0.01 * r.mean(i));
@@ -276,7 +276,7 @@ TEST(McmlBudget, PhotonsTimeAndRelativeError) {
     o = EngineOptions{};
     o.budget.seconds = 0.2;
     r = run_default(f.runs[0], o);
-    EXPECT_EQ(r.reason, StopReason::kTime);
+    EXPECT_EQ(r.reason, BatchStop::kTime);
     EXPECT_GE(r.seconds, 0.2);
     EXPECT_LT(r.seconds, 5.0);
 }
@@ -287,7 +287,7 @@ TEST(McmlCheckpoint, InterruptedRunResumesToTheSameResult) {
     const std::string ckpt = (dir / "run.ckpt").string();
     EngineOptions o;
     o.seed = 3;
-    o.budget.photons = 200000;
+    o.budget.samples = 200000;
     o.batch_photons = 2000;
     const RunResult whole = run_default(f.runs[0], o);
 
@@ -296,11 +296,11 @@ TEST(McmlCheckpoint, InterruptedRunResumesToTheSameResult) {
     oi.checkpoint_path = ckpt;
     oi.cancel = &cancel;
     int seen = 0;
-    oi.on_batch = [&](const ProgressPoint&) {
+    oi.on_batch = [&](const BatchProgress&) {
         if (++seen == 20) cancel = true;
     };
     const RunResult part = run_default(f.runs[0], oi);
-    EXPECT_EQ(part.reason, StopReason::kInterrupted);
+    EXPECT_EQ(part.reason, BatchStop::kInterrupted);
     EXPECT_LT(part.photons, 200000u);
     ASSERT_TRUE(std::filesystem::exists(ckpt));
 
@@ -308,7 +308,7 @@ TEST(McmlCheckpoint, InterruptedRunResumesToTheSameResult) {
     orr.checkpoint_path = ckpt;
     const RunResult resumed = run_default(f.runs[0], orr);
     EXPECT_TRUE(resumed.resumed);
-    EXPECT_EQ(resumed.reason, StopReason::kPhotons);
+    EXPECT_EQ(resumed.reason, BatchStop::kSamples);
     EXPECT_EQ(resumed.photons, 200000u);
     EXPECT_EQ(0, std::memcmp(whole.values.data(), resumed.values.data(),
                              whole.values.size() * sizeof(double)));
@@ -442,7 +442,7 @@ TEST(McmlExtremes, StiffCreamRedChannelRunsToCompletion) {
     const RunSpec spec = run_for_channel(cream, 0, 300, Grid{g.dr_cm, g.dr_cm, 1, g.nr, 1});
     EngineOptions o;
     o.mode = TallyMode::kProfile;
-    o.budget.photons = 300;
+    o.budget.samples = 300;
     const RunResult r = run_default(spec, o);
     expect_finite(r);
     const double events = static_cast<double>(r.events) / static_cast<double>(r.photons);

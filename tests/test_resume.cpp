@@ -292,10 +292,10 @@ TEST(ResumeSlabEngines, McmlRefusesAnEditedLayerNamingIt) {
     std::atomic<bool> cancel{false};
     o.cancel = &cancel;
     int seen = 0;
-    o.on_batch = [&](const mcml::ProgressPoint&) {
+    o.on_batch = [&](const BatchProgress&) {
         if (++seen == 5) cancel = true;
     };
-    ASSERT_EQ(mcml::run_default(run, o).reason, mcml::StopReason::kInterrupted);
+    ASSERT_EQ(mcml::run_default(run, o).reason, BatchStop::kInterrupted);
     o.cancel = nullptr;
     o.on_batch = nullptr;
     try {
@@ -305,8 +305,8 @@ TEST(ResumeSlabEngines, McmlRefusesAnEditedLayerNamingIt) {
         EXPECT_NE(std::string(e.what()).find("layer1.mus"), std::string::npos) << e.what();
     }
     std::uint64_t from = 0;
-    o.on_resume = [&](const mcml::ProgressPoint& p) { from = p.photons; };
-    EXPECT_EQ(mcml::run_default(run, o).reason, mcml::StopReason::kPhotons);
+    o.on_resume = [&](const BatchProgress& p) { from = p.samples; };
+    EXPECT_EQ(mcml::run_default(run, o).reason, BatchStop::kSamples);
     EXPECT_GE(from, 10000u);
 }
 

@@ -285,7 +285,7 @@ TEST(VolpathCrossValidation, AgreesWithMcmlOnTheSkin1RedProfile) {
     const Medium skin = *find_material("Skin1");
     const mcml::ProfileGrid g{0.02, 100};
     mcml::ProfileOptions mo;
-    mo.budget.photons = scaled(2e5);
+    mo.budget.samples = scaled(2e5);
     const mcml::ProfileRun ref = mcml::simulate_profile(skin, g, mo);
     const PencilRun vp = run(skin, 2e5, ChromaticMode::kPerChannel, {g.dr_cm, g.nr});
     const BinComparison cmp = compare(vp.profile, ref.profile, 0);

@@ -319,7 +319,7 @@ TEST(VolpathLayers, AgreesWithMcmlOnLayeredStacks) {
         SCOPED_TRACE(m.name);
         const mcml::ProfileGrid g{0.005, 80};
         mcml::ProfileOptions mo;
-        mo.budget.photons = scaled(1e5);
+        mo.budget.samples = scaled(1e5);
         mo.seed = 7;
         const mcml::ProfileRun ref = mcml::simulate_profile(m, g, mo);
         const PencilRun vp = run(m, 1e5, ChromaticMode::kPerChannel, {g.dr_cm, g.nr}, 8);

@@ -1,18 +1,24 @@
-// Golden-seed pins of the path tracer's engines (issue 14): with a fixed seed each engine's
-// result is a deterministic function of its random-number order, so a refactoring that keeps
-// that order (the one medium walk of volpath/walk.h replacing the four copies) must reproduce
-// it to rounding. These are regression pins, not evidence of correctness: the values were
-// written by the engine versions named beside them (volpath-pencil-2, volpath-sphere-3,
-// volpath-render-3) before the walk was moved, and are compared with a relative tolerance of
-// 1e-9 (a different random-number order moves them by ~1e-3; rounding by ~1e-15). Correctness
-// is what the closed-form and cross-engine tests show. An engine change that alters the
-// numbers bumps the engine's version and re-pins here, after showing (in the tests of that
-// engine) that the old and new results agree statistically; a failure prints the new values.
+// Golden-seed pins of the path tracer's engines and of MCML's default engine (issue 14): with a
+// fixed seed each engine's result is a deterministic function of its random-number order, so a
+// refactoring that keeps that order (the one medium walk of volpath/walk.h replacing the four
+// copies; MCML's batch loop moved onto core/batch_runner) must reproduce it to rounding. These are
+// regression pins, not evidence of correctness: the values were written by the engine versions
+// named beside them (volpath-pencil-2, volpath-sphere-3, volpath-render-3) before the walk was
+// moved, MCML's by mcml-default-3 with its own driver before it moved onto the shared one, and are
+// compared with a relative tolerance of 1e-9 (a different random-number order moves them by ~1e-3;
+// rounding by ~1e-15). Correctness is what the closed-form and cross-engine tests show. An engine
+// change that alters the numbers bumps the engine's version and re-pins here, after showing (in the
+// tests of that engine) that the old and new results agree statistically; a failure prints the new
+// values.
 #include "core/material.h"
 #include "core/scene.h"
+#include "mcml/engine.h"
+#include "mcml/mci.h"
 #include "volpath/pencil.h"
 #include "volpath/render.h"
 #include "volpath/sphere.h"
+
+#include "testing.h"
 
 #include <gtest/gtest.h>
 
@@ -228,3 +234,51 @@ TEST(WalkGolden, RenderEngineVolpathRender3) {
 
 }  // namespace
 }  // namespace ssslab::volpath
+
+namespace ssslab::mcml {
+namespace {
+
+// MCML's default engine on the van de Hulst slab of tests/data (tau = 2, albedo 0.9, g = 0.75),
+// full and profile tallies, 20000 photons in 32 batches on two threads: the means and the
+// batch standard errors, as MCML's own driver produced them before the batch loop moved onto
+// core/batch_runner (pinned from a build of that code; the shared driver reproduced them to the
+// bit).
+TEST(WalkGolden, McmlDefaultEngineMcmlDefault3) {
+    ASSERT_STREQ(engine_version(), "mcml-default-3");
+    const RunSpec run = read_mci(ssslab::testing::data_path("mcml-1.2.2/a_vdh.mci")).runs[0];
+    const std::vector<std::vector<double>> means = {
+        {0.097419569893089988, 6.5044462752637759, 0.65921693448381724, 328.17131192366924,
+         0.22872696807700713, 221.2895804925034, 0.86866593806076864, 853.57535288559495,
+         3.1459705894853167, 248.01668066018047},
+        {2.9999999999999991, 276.68499046961335}};
+    const std::vector<std::vector<double>> ses = {
+        {0.022860825260520561, 0.043003496061698829, 0.0071516505416669169, 0.024423378958213809,
+         0.036285922027681189},
+        {0.020048470311154341}};
+    for (int mode = 0; mode < 2; ++mode) {
+        EngineOptions o;
+        o.seed = 7;
+        o.stream = 3;
+        o.threads = 2;
+        o.mode = mode == 0 ? TallyMode::kFull : TallyMode::kProfile;
+        o.budget.samples = 20000;
+        const RunResult r = run_default(run, o);
+        EXPECT_EQ(r.photons, 20000u);
+        EXPECT_EQ(r.batches, 32u);
+        EXPECT_EQ(r.events, 61216u);
+        const std::vector<double> m = volpath::fold(r.values, 1024);
+        volpath::expect_pinned(mode == 0 ? "MCML full" : "MCML profile", m,
+                               means[static_cast<std::size_t>(mode)]);
+        std::vector<double> se;
+        for (std::size_t b = 0; b < r.se.size(); b += 1024) {
+            double sum = 0;
+            for (std::size_t i = b; i < std::min(r.se.size(), b + 1024); ++i) sum += r.se[i];
+            se.push_back(sum);
+        }
+        volpath::expect_pinned(mode == 0 ? "MCML full (se)" : "MCML profile (se)", se,
+                               ses[static_cast<std::size_t>(mode)]);
+    }
+}
+
+}  // namespace
+}  // namespace ssslab::mcml

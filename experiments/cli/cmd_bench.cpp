@@ -123,7 +123,7 @@ int run_bench(const BenchArgs& a) {
             o.seed = 1;
             o.threads = t;
             o.mode = c.mode;
-            o.budget.photons = c.photons;
+            o.budget.samples = c.photons;
             // Best of `repeat` runs: interference from other processes only ever slows a run.
             mcml::RunResult r = mcml::run_default(c.run, o);
             for (int k = 1; k < a.repeat; ++k) {
@@ -221,7 +221,7 @@ MaterialTimes time_material(const MaterialPreset& preset,
     mcml::ProfileOptions po;
     po.seed = 1;
     po.threads = threads;
-    po.budget.photons = photons;
+    po.budget.samples = photons;
     auto t0 = Clock::now();
     const mcml::ProfileRun run = mcml::simulate_profile(m, grid, po);
     t.mcml_seconds = seconds_since(t0);

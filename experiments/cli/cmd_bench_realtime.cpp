@@ -122,7 +122,7 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
             fo.all_layers = false;  // a game's frame: the radiance it presents
             const realtime::RasterizedFrame probe = realtime::rasterize_frame(s, fo);
             runner::RealtimeInputOptions io;
-            io.profile_budget.photons = photons;
+            io.profile_budget.samples = photons;
             io.run.threads = threads;
             const runner::RealtimeInputs in = runner::realtime_inputs(s, probe.media_in_view, io);
             std::map<int, realtime::FrameMaterial> materials;

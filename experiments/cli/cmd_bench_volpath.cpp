@@ -120,7 +120,7 @@ int run_volpath_bench(int threads, bool quick, int repeat) {
         rows.push_back(best([&] {
             mcml::ProfileOptions o;
             o.threads = threads;
-            o.budget.photons = cs.photons;
+            o.budget.samples = cs.photons;
             const mcml::ProfileRun r = mcml::simulate_profile(cs.medium, cs.grid, o);
             double s = 0;
             std::uint64_t paths = 0, events = 0;

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 
 namespace ssslab::cli {
@@ -29,6 +30,7 @@ struct CompareArgs {
     std::string layer_a = "radiance", layer_b = "radiance";
     int block = 16;
     std::string csv;
+    std::optional<double> seconds_a, seconds_b;
 };
 
 // One side: a single file with <layer>.stderr, or independent runs. A file without the layer
@@ -74,6 +76,25 @@ int run_compare(const CompareArgs& a) {
     if (r.deterministic_differences > 0)
         std::printf("%d block-channels differ where neither image has noise\n",
                     r.deterministic_differences);
+    std::array<double, 3> mse_a{}, mse_b{};
+    for (int c = 0; c < 3; ++c) {
+        mse_a[static_cast<size_t>(c)] = mean_pixel_variance(A, c);
+        mse_b[static_cast<size_t>(c)] = mean_pixel_variance(B, c);
+    }
+    if (a.seconds_a && a.seconds_b) {
+        // Efficiency 1 / (MSE x time): the MSE of each side is its mean pixel variance (both are
+        // unbiased where the block test passes), the time what it took to render that side.
+        std::printf("efficiency 1/(MSE x time), A in %.4g s, B in %.4g s:\n", *a.seconds_a,
+                    *a.seconds_b);
+        std::printf("%-8s %13s %13s %13s %13s %9s\n", "channel", "MSE A", "MSE B", "eff. A",
+                    "eff. B", "A / B");
+        for (size_t c = 0; c < 3; ++c) {
+            const double ea = 1.0 / (mse_a[c] * *a.seconds_a);
+            const double eb = 1.0 / (mse_b[c] * *a.seconds_b);
+            std::printf("%-8s %13.4g %13.4g %13.4g %13.4g %9.3g\n", names[c], mse_a[c], mse_b[c],
+                        ea, eb, ea / eb);
+        }
+    }
     if (!a.csv.empty()) {
         std::ostringstream os;
         os << "x0,y0,channel,mean_a,mean_b,se,z\n";
@@ -102,7 +123,11 @@ int run_compare(const CompareArgs& a) {
             res.record(std::string("chi2_") + names[c], r.chi2[c]);
             res.record(std::string("dof_") + names[c], static_cast<std::int64_t>(r.dof[c]));
             res.record(std::string("p_") + names[c], r.p[c]);
+            res.record(std::string("mse_a_") + names[c], mse_a[c]);
+            res.record(std::string("mse_b_") + names[c], mse_b[c]);
         }
+        if (a.seconds_a) in.record("seconds_a", *a.seconds_a);
+        if (a.seconds_b) in.record("seconds_b", *a.seconds_b);
         write_with_provenance(
             a.csv, os.str(),
             "ssslab compare: the inputs, settings, result and provenance of " + a.csv, doc);
@@ -131,6 +156,12 @@ void register_compare(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--block", a->block, "Block size in pixels (default 16)")
         ->check(integer_in(1, 4096));
     sub->add_option("--csv", a->csv, "Write every block's means, SE and z here");
+    sub->add_option("--seconds-a", a->seconds_a,
+                    "Seconds it took to render A (with --seconds-b: the efficiency "
+                    "1/(MSE x time) of both, MSE the mean pixel variance)")
+        ->check(positive_number());
+    sub->add_option("--seconds-b", a->seconds_b, "Seconds it took to render B (all runs)")
+        ->check(positive_number());
     sub->callback([a, &action] { action = [a] { return run_compare(*a); }; });
 }
 

@@ -85,7 +85,7 @@ std::string run_record(const McmlArgs& a, const mcml::RunSpec& run, size_t index
     if (a.common.seconds) e.record("budget_seconds", *a.common.seconds);
     if (a.common.rel_error) e.record("budget_rel_error", *a.common.rel_error);
     ConfigTable o = root.table_or_empty("result");
-    o.record("stop_reason", std::string(mcml::to_string(res.reason)));
+    o.record("stop_reason", std::string(to_string(res.reason, "photons")));
     o.record("photons", static_cast<std::int64_t>(res.photons));
     o.record("batches", static_cast<std::int64_t>(res.batches));
     o.record("wall_seconds", res.seconds);
@@ -148,14 +148,14 @@ int run_mcml(McmlArgs& a) {
     for (size_t i = 0; i < mci.runs.size(); ++i) {
         const mcml::RunSpec& run = mci.runs[i];
         const fs::path out_path = out_dir / run.out_name;
-        const mcml::Budget budget = budget_from(a.common);
-        const double total = budget.photons ? static_cast<double>(*budget.photons)
+        const SampleBudget budget = budget_from(a.common);
+        const double total = budget.samples ? static_cast<double>(*budget.samples)
                              : (budget.seconds || budget.rel_error)
                                  ? 0.0
                                  : static_cast<double>(run.photons);
         Progress progress(run.out_name, total, "photons");
-        auto on_batch = [&](const mcml::ProgressPoint& p) {
-            progress.update(static_cast<double>(p.photons), error_figure("rel.err", p.value, p.se));
+        auto on_batch = [&](const BatchProgress& p) {
+            progress.update(static_cast<double>(p.samples), error_figure("rel.err", p.value, p.se));
         };
         mcml::RunResult res;
         if (compat) {
@@ -171,15 +171,15 @@ int run_mcml(McmlArgs& a) {
             o.on_batch = on_batch;
             if (!a.no_checkpoint) o.checkpoint_path = out_path.string() + ".ckpt";
             o.fresh = a.common.fresh;
-            o.on_resume = [&](const mcml::ProgressPoint& p) {
-                progress.resume_from(static_cast<double>(p.photons));
-                say_resuming("mcml", run.out_name, static_cast<double>(p.photons), total, "photons",
+            o.on_resume = [&](const BatchProgress& p) {
+                progress.resume_from(static_cast<double>(p.samples));
+                say_resuming("mcml", run.out_name, static_cast<double>(p.samples), total, "photons",
                              o.checkpoint_path, a.common.quiet);
             };
             res = mcml::run_default(run, o);
         }
         progress.finish();
-        if (res.reason == mcml::StopReason::kInterrupted) {
+        if (res.reason == BatchStop::kInterrupted) {
             std::fprintf(stderr, "ssslab mcml: interrupted in %s after %llu photons; %s\n",
                          run.out_name.c_str(), static_cast<unsigned long long>(res.photons),
                          compat || a.no_checkpoint
@@ -199,7 +199,8 @@ int run_mcml(McmlArgs& a) {
             std::printf("%s: %lld photons in %.3g s (%d thread%s, %s), stopped by %s\n",
                         out_path.string().c_str(), static_cast<long long>(photons), res.seconds,
                         res.threads, res.threads == 1 ? "" : "s",
-                        compat ? "compat mcml-1.2.2" : "default mode", mcml::to_string(res.reason));
+                        compat ? "compat mcml-1.2.2" : "default mode",
+                        to_string(res.reason, "photons"));
             std::printf("  Rsp %.6g  Rd %s  A %s  Tt %s\n", v.rsp, pm(v.rd, se.rd).c_str(),
                         pm(v.a, se.a).c_str(), pm(v.tt, se.tt).c_str());
         }

@@ -69,12 +69,12 @@ ProfileJob read_profile_job(const std::string& config_path, const std::string& m
     ConfigTable budget = root.table_or_empty("budget");
     job.budget = mcml::read_budget(budget);
     job.batch = budget.integer("batch_photons", 0, Range::nonnegative());
-    if (c.photons) job.budget.photons = c.photons, budget.record("photons", *c.photons);
+    if (c.photons) job.budget.samples = c.photons, budget.record("photons", *c.photons);
     if (c.seconds) job.budget.seconds = c.seconds, budget.record("seconds", *c.seconds);
     if (c.rel_error) job.budget.rel_error = c.rel_error, budget.record("rel_error", *c.rel_error);
     if (c.batch) job.batch = c.batch, budget.record("batch_photons", c.batch);
-    if (!job.budget.photons && !job.budget.seconds && !job.budget.rel_error) {
-        job.budget.photons = mcml::kFreude14Photons;
+    if (!job.budget.any()) {
+        job.budget.samples = mcml::kFreude14Photons;
         budget.record("photons", mcml::kFreude14Photons);
     }
 
@@ -97,14 +97,6 @@ ProfileJob read_profile_job(const std::string& config_path, const std::string& m
 
 namespace {
 
-SampleBudget sample_budget(const mcml::Budget& b) {
-    SampleBudget s;
-    s.samples = b.photons;
-    s.seconds = b.seconds;
-    s.rel_error = b.rel_error;
-    return s;
-}
-
 // The path tracer's branch of run_profile_job: <out> holds all diffuse reflectance,
 // <out>.single.csv its single-scattering part.
 int run_volpath_job(ProfileJob& job, const fs::path& out, const CommonOptions& c,
@@ -112,7 +104,7 @@ int run_volpath_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
     volpath::PencilOptions po;
     po.seed = job.seed;
     po.threads = c.threads;
-    po.budget = sample_budget(job.budget);
+    po.budget = job.budget;
     po.batch_paths = job.batch;
     const bool hero = job.mode == "hero" || job.mode == "hero-weighted";
     po.mode = hero ? volpath::ChromaticMode::kHero : volpath::ChromaticMode::kPerChannel;
@@ -121,7 +113,7 @@ int run_volpath_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
     po.cancel = cancel;
     po.checkpoint_prefix = out.string();
     po.fresh = c.fresh;
-    const double total = job.budget.photons ? static_cast<double>(*job.budget.photons) : 0.0;
+    const double total = job.budget.samples ? static_cast<double>(*job.budget.samples) : 0.0;
     RunsProgress progress(
         "profile",
         [&](int run) {
@@ -202,15 +194,15 @@ int run_profile_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
     po.cancel = cancel;
     po.checkpoint_prefix = out.string();
     po.fresh = c.fresh;
-    const double total = job.budget.photons ? static_cast<double>(*job.budget.photons) : 0.0;
+    const double total = job.budget.samples ? static_cast<double>(*job.budget.samples) : 0.0;
     RunsProgress progress(
         "profile", [&](int ch) { return job.medium.name + " " + kChannelNames[ch]; }, total,
         "photons", c.quiet);
-    po.on_batch = [&](int ch, const mcml::ProgressPoint& p) {
-        progress.batch(ch, static_cast<double>(p.photons), p.value, p.se);
+    po.on_batch = [&](int ch, const BatchProgress& p) {
+        progress.batch(ch, static_cast<double>(p.samples), p.value, p.se);
     };
-    po.on_resume = [&](int ch, const mcml::ProgressPoint& p, const std::string& checkpoint) {
-        progress.resume(ch, static_cast<double>(p.photons), checkpoint);
+    po.on_resume = [&](int ch, const BatchProgress& p, const std::string& checkpoint) {
+        progress.resume(ch, static_cast<double>(p.samples), checkpoint);
     };
     mcml::ProfileRun run = mcml::simulate_profile(job.medium, job.grid, po);
     progress.finish();
@@ -226,7 +218,7 @@ int run_profile_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
         const mcml::RunResult& r = run.channels[ch];
         const auto& L = r.layout;
         ConfigTable t = root.table_or_empty(std::string("result_") + kChannelNames[ch]);
-        t.record("stop_reason", std::string(mcml::to_string(r.reason)));
+        t.record("stop_reason", std::string(to_string(r.reason, "photons")));
         t.record("photons", static_cast<std::int64_t>(r.photons));
         t.record("batches", static_cast<std::int64_t>(r.batches));
         t.record("batch_photons", r.batch_photons);
@@ -260,7 +252,7 @@ int run_profile_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
             std::printf("  %s: Rd %s (beyond grid %.2g), %llu photons in %.3g s, stopped by %s\n",
                         kChannelNames[ch], pm(r.mean(r.layout.rd), r.se[r.layout.rd]).c_str(),
                         run.profile.beyond[ch], static_cast<unsigned long long>(r.photons),
-                        r.seconds, mcml::to_string(r.reason));
+                        r.seconds, to_string(r.reason, "photons"));
         }
     }
     return 0;

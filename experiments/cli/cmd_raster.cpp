@@ -147,7 +147,7 @@ int run_raster(const RasterArgs& a) {
     arena.execute([&] { frame = realtime::rasterize_frame(scene, o); });
     runner::RealtimeInputOptions io;
     io.seed = a.common.seed.value_or(1);
-    if (a.common.photons) io.profile_budget.photons = *a.common.photons;
+    if (a.common.photons) io.profile_budget.samples = *a.common.photons;
     if (!a.no_translucency) io.slab_thickness_mm = runner::slab_thicknesses(0.05, 25.6, 10);
     io.run.threads = a.common.threads;
     io.run.results_root = a.cache;

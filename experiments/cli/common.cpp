@@ -238,9 +238,9 @@ void add_fresh_option(CLI::App& app, bool& fresh) {
                  "other input, saying what differs");
 }
 
-mcml::Budget budget_from(const CommonOptions& o) {
-    mcml::Budget b;
-    b.photons = o.photons;
+SampleBudget budget_from(const CommonOptions& o) {
+    SampleBudget b;
+    b.samples = o.photons;
     b.seconds = o.seconds;
     b.rel_error = o.rel_error;
     return b;

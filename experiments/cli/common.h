@@ -86,7 +86,7 @@ void set_command_line(int argc, char** argv);
 std::string pm(double value, double se);
 
 /// Budget from the options (unset fields stay unset).
-mcml::Budget budget_from(const CommonOptions& o);
+SampleBudget budget_from(const CommonOptions& o);
 
 /// Says on stderr (a terminal or a log alike) that a run continues from a checkpoint:
 /// "ssslab <command>: <what>: resuming from 174 of 300 spp (checkpoint <path>)"; total <= 0:

@@ -18,7 +18,7 @@ struct ProfileJob {
     Medium medium;
     std::uint64_t seed = 1;
     mcml::ProfileGrid grid;
-    mcml::Budget budget;
+    SampleBudget budget;
     std::int64_t batch = 0;
     LengthUnit unit = LengthUnit::kMm;
     /// "mcml" (default) or "volpath"; with volpath, `mode` is "analog", "weighted" or "hero"

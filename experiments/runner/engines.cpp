@@ -307,7 +307,7 @@ std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
                 for (const auto& p : mc->result.history) {
                     if (++b < 2 || !(p.value > 0)) continue;
                     const double rel = p.se / p.value;
-                    os << "mcml," << kChannelNames[c] << ',' << b << ',' << p.photons << ','
+                    os << "mcml," << kChannelNames[c] << ',' << b << ',' << p.samples << ','
                        << fmt(p.seconds) << ',' << fmt(p.value) << ',' << fmt(p.se) << ','
                        << fmt(rel) << ',' << fmt(1 / (rel * rel * p.seconds)) << '\n';
                 }

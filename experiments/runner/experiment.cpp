@@ -61,8 +61,8 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
 
     ConfigTable mc = root.table_or_empty("mcml");
     e.mcml.budget = mcml::read_budget(mc);
-    if (!e.mcml.budget.photons && !e.mcml.budget.seconds && !e.mcml.budget.rel_error) {
-        e.mcml.budget.photons = mcml::kFreude14Photons;
+    if (!e.mcml.budget.any()) {
+        e.mcml.budget.samples = mcml::kFreude14Photons;
         mc.record("photons", static_cast<std::int64_t>(mcml::kFreude14Photons));
     }
     e.mcml.quick_factor = mc.number("quick_factor", 0.02, Range::left_open(0, 1));
@@ -72,10 +72,7 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
 
     if (auto vp = root.table("volpath")) {
         e.volpath.enabled = true;
-        const mcml::Budget b = mcml::read_budget(*vp);
-        e.volpath.budget.samples = b.photons;
-        e.volpath.budget.seconds = b.seconds;
-        e.volpath.budget.rel_error = b.rel_error;
+        e.volpath.budget = mcml::read_budget(*vp);
         if (!e.volpath.budget.any()) {
             e.volpath.budget.samples = 1'000'000;
             vp->record("photons", static_cast<std::int64_t>(1'000'000));
@@ -152,7 +149,7 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
                     "\"" + e.convergence.materials[i] + "\" is not a material of this experiment");
         e.convergence.reference_factor =
             t->number("reference_factor", 4.0, Range::closed(1.0, 1000.0));
-        if (!e.mcml.budget.photons)
+        if (!e.mcml.budget.samples)
             t->fail("materials",
                     "a convergence study needs a photon budget in [mcml] (the reference run has "
                     "reference_factor times as many photons)");

@@ -54,7 +54,7 @@ struct MaterialEntry {
 };
 
 struct McmlSetup {
-    mcml::Budget budget;         ///< per RGB channel, before --quick
+    SampleBudget budget;         ///< per RGB channel, before --quick
     double quick_factor = 0.02;  ///< --quick multiplies photon and time budgets by this
     std::int64_t batch_photons = 0;
     mcml::GridOverride grid;  ///< over Freude14 Table 6.1

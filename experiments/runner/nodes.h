@@ -44,7 +44,7 @@ struct ChannelNode {
     std::string engine = "mcml";  ///< "mcml" or "volpath"
     Medium medium;
     mcml::ProfileGrid grid;
-    mcml::Budget budget;
+    SampleBudget budget;
     std::int64_t batch_photons = 0;
     std::uint64_t seed = 0;  ///< derived from the experiment seed, the medium, channel and role
     std::string key, key_text;

@@ -7,8 +7,8 @@
 namespace ssslab::runner {
 
 RealtimeInputOptions::RealtimeInputOptions() {
-    profile_budget.photons = 1'000'000;
-    slab_budget.photons = 100'000;
+    profile_budget.samples = 1'000'000;
+    slab_budget.samples = 100'000;
     run.quiet = true;
 }
 

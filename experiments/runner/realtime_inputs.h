@@ -31,11 +31,11 @@ struct SlabTable {
 
 struct RealtimeInputOptions {
     std::uint64_t seed = 1;
-    mcml::Budget profile_budget;  ///< per channel (default: 1e6 photons, as freude14/kernels)
+    SampleBudget profile_budget;  ///< per channel (default: 1e6 photons, as freude14/kernels)
     /// Slab thicknesses for translucency [mm] (empty: no slab runs) and their budget per
     /// channel (default: 1e5 photons).
     std::vector<double> slab_thickness_mm;
-    mcml::Budget slab_budget;
+    SampleBudget slab_budget;
     RunOptions run;  ///< threads, cache root, quiet, cancel, checkpoints (quick is ignored)
     RealtimeInputOptions();
 };

@@ -298,8 +298,8 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         // Ground truth: the media's profiles (and slabs for translucency), the path tracer.
         RealtimeInputOptions io;
         io.seed = ctx.seed;
-        io.profile_budget.photons = photons;
-        io.slab_budget.photons = std::max<std::int64_t>(1000, photons / 10);
+        io.profile_budget.samples = photons;
+        io.slab_budget.samples = std::max<std::int64_t>(1000, photons / 10);
         io.slab_thickness_mm = slab_thicknesses(0.05, 25.6, 10);
         io.run.threads = ctx.threads;
         io.run.results_root = results_root;

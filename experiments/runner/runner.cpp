@@ -38,19 +38,19 @@ const char* kind_of(const ChannelNode& n) {
     return n.engine == "volpath" ? kVolpathKind : kKind;
 }
 
-std::string budget_text(const mcml::Budget& b) {
+std::string budget_text(const SampleBudget& b) {
     std::ostringstream os;
-    if (b.photons) os << "photons = " << *b.photons;
+    if (b.samples) os << "photons = " << *b.samples;
     if (b.seconds) os << (os.tellp() > 0 ? ", " : "") << "seconds = " << *b.seconds;
     if (b.rel_error) os << (os.tellp() > 0 ? ", " : "") << "rel_error = " << *b.rel_error;
     return os.str();
 }
 
-mcml::Budget scaled_budget(const mcml::Budget& b, double factor) {
-    mcml::Budget s = b;
-    if (b.photons)
-        s.photons = std::max<std::int64_t>(
-            100, static_cast<std::int64_t>(std::llround(static_cast<double>(*b.photons) * factor)));
+SampleBudget scaled_budget(const SampleBudget& b, double factor) {
+    SampleBudget s = b;
+    if (b.samples)
+        s.samples = std::max<std::int64_t>(
+            100, static_cast<std::int64_t>(std::llround(static_cast<double>(*b.samples) * factor)));
     if (b.seconds) s.seconds = *b.seconds * factor;
     if (b.rel_error) s.rel_error = *b.rel_error / std::sqrt(factor);
     return s;
@@ -106,7 +106,7 @@ ContentKey node_key(const ChannelNode& n) {
         .add("thickness_cm", m.thickness_cm)
         .add("dr_cm", n.grid.dr_cm)
         .add("nr", n.grid.nr)
-        .add("budget_photons", n.budget.photons ? *n.budget.photons : std::int64_t{-1})
+        .add("budget_photons", n.budget.samples ? *n.budget.samples : std::int64_t{-1})
         .add("budget_seconds", n.budget.seconds ? *n.budget.seconds : -1.0)
         .add("budget_rel_error", n.budget.rel_error ? *n.budget.rel_error : -1.0);
     add_lower_layers(k, m, c);
@@ -146,7 +146,8 @@ std::string manifest_toml(const ChannelNode& n) {
     r.record("batches", static_cast<std::int64_t>(volpath ? v.batches : m.batches));
     r.record("batch_photons", volpath ? n.batch_photons : m.batch_photons);
     r.record("wall_seconds", volpath ? v.seconds : m.seconds);
-    r.record("stop_reason", std::string(volpath ? to_string(v.reason) : mcml::to_string(m.reason)));
+    r.record("stop_reason",
+             std::string(volpath ? to_string(v.reason) : to_string(m.reason, "photons")));
     r.record("resumed_from_checkpoint",
              std::string((volpath ? v.resumed : m.resumed) ? "yes" : "no"));
     r.record("Rd", volpath ? v.mean[L.rd()] : m.mean(m.layout.rd));
@@ -294,7 +295,7 @@ void convergence_tables(const ExperimentRun& r, const std::string& material, std
             ++b;
             if (b < 2) continue;  // a standard error needs two batches
             const double rel_se = p.se / p.value;
-            h << kChannelNames[c] << ',' << b << ',' << p.photons << ',' << fmt(p.seconds) << ','
+            h << kChannelNames[c] << ',' << b << ',' << p.samples << ',' << fmt(p.seconds) << ','
               << fmt(p.value) << ',' << fmt(p.se) << ',' << fmt(rd_ref) << ',' << fmt(rd_ref_se)
               << ',' << fmt(std::fabs(p.value - rd_ref)) << ','
               << fmt(std::fabs(p.value - rd_ref) / rd_ref) << ',' << fmt(rel_se) << ','
@@ -310,7 +311,7 @@ void convergence_tables(const ExperimentRun& r, const std::string& material, std
         }
         const double floor = den > 0 ? std::sqrt(num / den) : 0.0;
         for (const auto& sn : m.snapshots)
-            s << kChannelNames[c] << ',' << sn.batches << ',' << sn.photons << ','
+            s << kChannelNames[c] << ',' << sn.batches << ',' << sn.samples << ','
               << fmt(sn.seconds) << ','
               << fmt(rel_l2(sn.mean, f.values, f.layout.rd_r, f.layout.nr)) << ',' << fmt(floor)
               << '\n';
@@ -326,11 +327,11 @@ ExperimentRun plan(const Experiment& e, const RunOptions& o) {
     r.exp = e;
     r.quick = o.quick;
     r.out_dir = o.results_root / e.name;
-    const mcml::Budget main_budget =
+    const SampleBudget main_budget =
         o.quick ? scaled_budget(e.mcml.budget, e.mcml.quick_factor) : e.mcml.budget;
     ArtifactCache cache(o.results_root / "cache");
     auto add = [&](const MaterialEntry& m, int c, const std::string& role,
-                   const mcml::Budget& budget) {
+                   const SampleBudget& budget) {
         ChannelNode n;
         n.material = m.label;
         n.channel = c;
@@ -354,10 +355,7 @@ ExperimentRun plan(const Experiment& e, const RunOptions& o) {
     for (const auto& m : e.materials)
         for (int c = 0; c < 3; ++c) add(m, c, "main", main_budget);
     if (e.volpath.enabled) {
-        mcml::Budget vb;
-        vb.photons = e.volpath.budget.samples;
-        vb.seconds = e.volpath.budget.seconds;
-        vb.rel_error = e.volpath.budget.rel_error;
+        SampleBudget vb = e.volpath.budget;
         if (o.quick) vb = scaled_budget(vb, e.volpath.quick_factor);
         for (const auto& m : e.materials)
             for (int c = 0; c < 3; ++c) add(m, c, "volpath", vb);
@@ -435,9 +433,7 @@ bool compute_nodes(ExperimentRun& r, const RunOptions& o) {
         volpath::PencilOptions po;
         po.seed = n.seed;
         po.threads = o.threads;
-        po.budget.samples = n.budget.photons;
-        po.budget.seconds = n.budget.seconds;
-        po.budget.rel_error = n.budget.rel_error;
+        po.budget = n.budget;
         po.batch_paths = n.batch_photons;
         po.absorption = n.volpath_mode == "weighted" ? volpath::Absorption::kWeighted
                                                      : volpath::Absorption::kAnalog;
@@ -491,11 +487,11 @@ bool compute_nodes(ExperimentRun& r, const RunOptions& o) {
         eo.snapshots = true;
         eo.checkpoint_path = cache.checkpoint_prefix(kKind, n.key).string();
         eo.checkpoint_seconds = o.checkpoint_seconds;
-        eo.on_resume = [&](const mcml::ProgressPoint& p) {
-            say_resuming(n, static_cast<double>(p.photons), n.budget.photons, "photons");
+        eo.on_resume = [&](const BatchProgress& p) {
+            say_resuming(n, static_cast<double>(p.samples), n.budget.samples, "photons");
         };
         n.result = mcml::run_default(spec, eo);
-        if (n.result.reason == mcml::StopReason::kInterrupted) {
+        if (n.result.reason == BatchStop::kInterrupted) {
             interrupted = true;
             return;
         }

@@ -242,10 +242,7 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
     sc.to_camera = {direction(job.camera_deg)[0], 0.0, direction(job.camera_deg)[2]};
 
     ConfigTable budget = root.table_or_empty("budget");
-    const mcml::Budget b = mcml::read_budget(budget);
-    job.budget.samples = b.photons;
-    job.budget.seconds = b.seconds;
-    job.budget.rel_error = b.rel_error;
+    job.budget = mcml::read_budget(budget);
     job.batch = budget.integer("batch_photons", 0, Range::nonnegative());
     if (a.photons) job.budget.samples = a.photons, budget.record("photons", *a.photons);
     if (a.seconds) job.budget.seconds = a.seconds, budget.record("seconds", *a.seconds);
