@@ -129,6 +129,11 @@ const char* to_string(BatchStop s, const char* samples_word) {
     return "?";
 }
 
+std::optional<std::string> batch_checkpoint_fingerprint(const std::string& path) {
+    if (auto ck = load_checkpoint(path)) return std::move(ck->fingerprint);
+    return std::nullopt;
+}
+
 InputError checkpoint_refusal(const std::string& path, const std::string& before,
                               const std::string& now) {
     std::string what = key_difference(before, now);

@@ -134,6 +134,11 @@ struct BatchRunResult {
 /// budget alone cannot be met (the quantity stays 0 for 10000 batches).
 BatchRunResult run_batches(const BatchRunOptions& options, const BatchFunction& simulate);
 
+/// The fingerprint of the driver's checkpoint at `path`, nullopt if there is none (InputError if
+/// the file is not a checkpoint): for an engine that adapts to the run it resumes (e.g. its
+/// batch size).
+std::optional<std::string> batch_checkpoint_fingerprint(const std::string& path);
+
 /// The error for a checkpoint at `path` whose fingerprint `before` is not `now`: what differs,
 /// and how to start afresh (remove the file, or --fresh). Shared by every engine's checkpoints.
 InputError checkpoint_refusal(const std::string& path, const std::string& before,

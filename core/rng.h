@@ -46,9 +46,23 @@ class RngStream {
     /// double, so neither 0 (log(0) in free-path sampling) nor 1 (0/0 in HG sampling with
     /// g = -1) can come out. (Adding 1/2 to a 53-bit k would round to 1 for k = 2^53 - 1.)
     double uniform() {
+        if (prefix_left_ > 0) [[unlikely]] {
+            --prefix_left_;
+            return *prefix_++;
+        }
         // The value fits a signed 64-bit integer: one cvtsi2sd instead of the slow unsigned
         // 64-bit conversion.
         return static_cast<double>(static_cast<std::int64_t>((next_u64() >> 11) | 1)) * 0x1p-53;
+    }
+
+    /// A quasi-random prefix: the next `n` calls of uniform() return values[0], ..., values[n-1]
+    /// (each in the open interval (0, 1), e.g. core/sobol.h's scrambled points for the first
+    /// dimensions of one path), then the stream continues where it was; the stream's own
+    /// numbers are not consumed meanwhile. The caller keeps `values` alive; n = 0 ends a prefix
+    /// early.
+    void set_prefix(const double* values, unsigned n) {
+        prefix_ = values;
+        prefix_left_ = n;
     }
 
     /// Number of 64-bit words drawn so far (for tests and call-order checks).
@@ -71,6 +85,8 @@ class RngStream {
     std::uint64_t groups_ = 0;
     std::array<std::uint64_t, kWords> buf_{};
     unsigned pos_ = kWords;
+    const double* prefix_ = nullptr;
+    unsigned prefix_left_ = 0;
 };
 
 /// Fixed stream domains (16 bits), so that two uses of the same seed never share a stream.

@@ -34,7 +34,7 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 command -v blender > /dev/null || { echo "cycles_sidebyside.sh: needs Blender (apt-get install blender)" >&2; exit 2; }
-ssslab=build/release/ssslab
+ssslab=${SSSLAB:-build/release/ssslab}
 [[ -x $ssslab ]] || bash scripts/build.sh
 name=$(basename "$scene" .toml)
 out=${out:-results/cycles/$name}

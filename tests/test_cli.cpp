@@ -64,7 +64,10 @@ TEST(Cli, EachCommandListsOnlyItsOwnOptionsDescribedForIt) {
         EXPECT_NE(h.find(opt), std::string::npos) << opt << " in\n" << h;
     // render counts samples per pixel (--spp); photons and batches are other commands' budgets.
     EXPECT_EQ(h.find("--photons"), std::string::npos) << h;
-    EXPECT_EQ(h.find("--batch"), std::string::npos) << h;
+    EXPECT_EQ(h.find("--batch "), std::string::npos) << h;
+    // Its batch size is in samples per pixel too.
+    EXPECT_NE(option_help(h, "--batch-spp").find("Samples per pixel in a batch"), std::string::npos)
+        << h;
     EXPECT_EQ(h.find("diffuse reflectance"), std::string::npos) << h;
     // Its relative error is a pixel's (the median lit pixel), the image mean's on request.
     EXPECT_NE(option_help(h, "--rel-error").find("median pixel"), std::string::npos) << h;

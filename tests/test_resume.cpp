@@ -434,8 +434,11 @@ TEST(ResumeRenderCommand, RefusesAnEditedSceneResumesAnUnchangedOneAndWritesItsP
         d->write("o.obj", octahedron_obj(0));
         d->write("s.toml", scene_text("2", "Marble"));
     }
-    const auto cut = run_and_interrupt(
-        {"render", "s.toml", "--spp", "3000000", "--threads", "2", "--out", "m.exr"}, dir.path());
+    // Batches of 6 spp; the resumed command gives no batch size (its budget alone would make
+    // it 3): it keeps the checkpoint's.
+    const auto cut = run_and_interrupt({"render", "s.toml", "--spp", "3000000", "--batch-spp", "6",
+                                        "--threads", "2", "--out", "m.exr"},
+                                       dir.path());
     ASSERT_EQ(cut.exit_code, 130) << cut.err;
     const std::size_t at = cut.err.find("interrupted after ");
     ASSERT_NE(at, std::string::npos) << cut.err;
@@ -462,7 +465,9 @@ TEST(ResumeRenderCommand, RefusesAnEditedSceneResumesAnUnchangedOneAndWritesItsP
     EXPECT_NE(resumed.err.find("resuming from " + std::to_string(done) + " of " + spp + " spp"),
               std::string::npos)
         << resumed.err;
-    const auto full = testing::run_ssslab(args, whole.path());
+    std::vector<std::string> whole_args = args;
+    whole_args.insert(whole_args.end(), {"--batch-spp", "6"});
+    const auto full = testing::run_ssslab(whole_args, whole.path());
     ASSERT_EQ(full.exit_code, 0) << full.err;
     const LayeredImage a = read_exr((dir / "m.exr").string());
     const LayeredImage b = read_exr((whole / "m.exr").string());

@@ -3,13 +3,15 @@
 // refactoring that keeps that order (the one medium walk of volpath/walk.h replacing the four
 // copies; MCML's batch loop moved onto core/batch_runner) must reproduce it to rounding. These are
 // regression pins, not evidence of correctness: the values were written by the engine versions
-// named beside them (volpath-pencil-2, volpath-sphere-3, volpath-render-3) before the walk was
-// moved, MCML's by mcml-default-3 with its own driver before it moved onto the shared one, and are
-// compared with a relative tolerance of 1e-9 (a different random-number order moves them by ~1e-3;
-// rounding by ~1e-15). Correctness is what the closed-form and cross-engine tests show. An engine
-// change that alters the numbers bumps the engine's version and re-pins here, after showing (in the
-// tests of that engine) that the old and new results agree statistically; a failure prints the new
-// values.
+// named beside them (volpath-pencil-2, volpath-sphere-3, volpath-render-3, whose estimator
+// volpath-render-4 keeps as options) before the walk was moved, MCML's by mcml-default-3 with its
+// own driver before it moved onto the shared one, volpath-render-4's by itself when it was made
+// (its agreement with the old estimator: Render.VolpathRender4EstimatorsAgreeWithTheLegacyOne), and
+// are compared with a relative tolerance of 1e-9 (a different random-number order moves them by
+// ~1e-3; rounding by ~1e-15). Correctness is what the closed-form and cross-engine tests show. An
+// engine change that alters the numbers bumps the engine's version and re-pins here, after showing
+// (in the tests of that engine) that the old and new results agree statistically; a failure prints
+// the new values.
 #include "core/material.h"
 #include "core/scene.h"
 #include "mcml/engine.h"
@@ -179,7 +181,10 @@ TEST(WalkGolden, SphereEngineVolpathSphere3) {
                    0.95767601236557531, 21.797494205516589});
 }
 
-std::vector<double> render_pin(const std::string& material, const std::string& lights) {
+// legacy: the estimator of volpath-render-3 (one light per NEE, the stream alone, batches of 3
+// spp), which volpath-render-4 keeps as options; otherwise the defaults.
+std::vector<double> render_pin(const std::string& material, const std::string& lights,
+                               bool legacy) {
     const std::string text = R"(
 [scene]
 name = "golden"
@@ -209,10 +214,20 @@ material = "floor"
     RenderOptions o;
     o.seed = 11;
     o.budget.samples = 12;
+    if (legacy) {
+        o.nee_all_lights = false;
+        o.sampler = RenderSampler::kIndependent;
+        o.batch_spp = 3;
+    }
     const RenderResult r = render(s, o);
     return fold(r.run.mean, r.run.mean.size() / 4);
 }
 
+// volpath-render-4 with the legacy options (one light per NEE, the stream alone, batches of 3
+// spp) is volpath-render-3 but for one fix: a sphere light now blocks the shadow rays of the other
+// lights. The smooth boundary (no NEE at its first vertex) is volpath-render-3's pin; the rough
+// and index-matched ones were re-pinned with the fix (it moved their blocks by up to 9e-6 and
+// 8e-4 relative).
 TEST(WalkGolden, RenderEngineVolpathRender3) {
     const std::string lights =
         "[[lights]]\ntype = \"sphere\"\nposition = [4, 4, 3]\nradius = 1\nradiance = 5\n"
@@ -221,15 +236,37 @@ TEST(WalkGolden, RenderEngineVolpathRender3) {
         "[[materials]]\nname = \"m\"\nsigma_a_per_mm = [0.05, 0.1, 0.2]\n"
         "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = [0.0, 0.5, 0.9]\n";
     expect_pinned("render rough boundary",
-                  render_pin(coefficients + "eta = 1.3\nroughness = 0.3\n", lights),
+                  render_pin(coefficients + "eta = 1.3\nroughness = 0.3\n", lights, true),
                   {27.107234863279125, 7128.8832630966008, 243.37806122489005, 69870.614155344694,
-                   470.42598961986795, 108572.11771846135, 391.48006320408138, 89667.301486023527});
-    expect_pinned("render smooth boundary", render_pin(coefficients + "eta = 1.4\n", lights),
+                   470.42598961986795, 108572.11771846135, 391.4764820263926, 89666.875803368923});
+    expect_pinned("render smooth boundary", render_pin(coefficients + "eta = 1.4\n", lights, true),
                   {28.125754117195907, 7533.9745794099908, 253.51638479194668, 70522.587770574581,
                    470.78130986750426, 108715.38178526392, 395.08681219167062, 89960.215650018057});
-    expect_pinned("render index-matched", render_pin(coefficients + "eta = 1.0\n", lights),
-                  {29.166848045886589, 7923.5597315735249, 246.1239012962069, 68996.108877780847,
-                   474.03758364311011, 109262.72884155295, 393.32353390800421, 90046.778629073888});
+    expect_pinned("render index-matched", render_pin(coefficients + "eta = 1.0\n", lights, true),
+                  {29.166848045886589, 7923.5597315735249, 245.93686525817628, 68952.484082457726,
+                   474.01936307189078, 109261.200065072, 393.32288467583055, 90046.734797785});
+}
+
+TEST(WalkGolden, RenderEngineVolpathRender4) {
+    ASSERT_STREQ(render_engine_version(), "volpath-render-4");
+    const std::string lights =
+        "[[lights]]\ntype = \"sphere\"\nposition = [4, 4, 3]\nradius = 1\nradiance = 5\n"
+        "[[lights]]\ntype = \"environment\"\nradiance = 0.2\n";
+    const std::string coefficients =
+        "[[materials]]\nname = \"m\"\nsigma_a_per_mm = [0.05, 0.1, 0.2]\n"
+        "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = [0.0, 0.5, 0.9]\n";
+    expect_pinned("render rough boundary (v4)",
+                  render_pin(coefficients + "eta = 1.3\nroughness = 0.3\n", lights, false),
+                  {27.855950336647098, 7406.6490545976976, 231.97887627451863, 64399.288648467897,
+                   470.68848745189138, 107936.57726582665, 393.50699973253847, 90213.696984040114});
+    expect_pinned("render smooth boundary (v4)",
+                  render_pin(coefficients + "eta = 1.4\n", lights, false),
+                  {28.096889915235696, 7497.3676639305713, 229.50998472510514, 63887.260657715509,
+                   475.6970766567951, 108675.44582498923, 393.13344735496986, 90030.489742415259});
+    expect_pinned("render index-matched (v4)",
+                  render_pin(coefficients + "eta = 1.0\n", lights, false),
+                  {28.408467319011226, 7618.883561319185, 234.60399920953105, 65286.672987870283,
+                   478.91099537733146, 109458.99530109798, 394.40887916438766, 90353.727664208753});
 }
 
 }  // namespace

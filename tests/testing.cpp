@@ -343,6 +343,15 @@ double test_scale() {
     return 1.0;
 }
 
+double student_t_quantile(double p, double dof) {
+    const double z = normal_quantile(p), z2 = z * z, n = dof;
+    const double g1 = (z2 + 1) * z / 4;
+    const double g2 = ((5 * z2 + 16) * z2 + 3) * z / 96;
+    const double g3 = (((3 * z2 + 19) * z2 + 17) * z2 - 15) * z / 384;
+    const double g4 = ((((79 * z2 + 776) * z2 + 1482) * z2 - 1920) * z2 - 945) * z / 92160;
+    return z + g1 / n + g2 / (n * n) + g3 / (n * n * n) + g4 / (n * n * n * n);
+}
+
 double normal_quantile(double p) {
     // Bisection on the CDF 0.5 erfc(-x / sqrt 2): slow but exact to double precision.
     double lo = -40, hi = 40;

@@ -122,6 +122,10 @@ double test_scale();
 
 /// Standard normal quantile (inverse CDF), to ~1e-12.
 double normal_quantile(double p);
+/// Quantile of Student's t distribution with `dof` degrees of freedom (Cornish-Fisher expansion
+/// about the normal quantile, four terms [Abramowitz & Stegun 26.7.5]; relative error below
+/// 1e-3 for dof >= 20 and p up to 1 - 1e-7).
+double student_t_quantile(double p, double dof);
 /// Upper critical value of the chi-square distribution with `dof` degrees of freedom at
 /// significance `alpha` (Wilson-Hilferty, relative error below 1e-3 for dof >= 10).
 double chi2_critical(double dof, double alpha);

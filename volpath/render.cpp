@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/rng.h"
+#include "core/sobol.h"
 #include "volpath/density_grid.h"
 #include "volpath/embree_scene.h"
 #include "volpath/lights.h"
@@ -20,8 +21,9 @@ namespace ssslab::volpath {
 
 namespace {
 
-constexpr const char* kEngineVersion = "volpath-render-3";  // 3: NEE off the first rough
-                                                            // boundary is "specular"
+// 3: NEE off the first rough boundary is "specular"; 4: NEE samples every light, Sobol points,
+// sphere lights block the shadow rays of other lights.
+constexpr const char* kEngineVersion = "volpath-render-4";
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
 using RGB = std::array<double, 3>;
@@ -52,6 +54,9 @@ struct Renderer {
     bool has_passable = false;  // any index-matched homogeneous medium (shadow rays cross them)
     Vec3 cam_pos, cam_f, cam_r, cam_u;
     double tan_half = 0, aspect = 1;
+    // The probability that NEE samples a given light: 1 when every light is sampled at every
+    // vertex (RenderOptions::nee_all_lights), else 1 / lights (one chosen uniformly).
+    double sel = 1;
 
     Renderer(const Scene& s, const RenderOptions& o) : scene(s), opt(o) {
         width = o.width > 0 ? o.width : s.camera.width;
@@ -63,6 +68,7 @@ struct Renderer {
         for (const SceneLight& sl : s.lights) {
             lights.push_back(make_light(sl));
         }
+        sel = o.nee_all_lights || lights.empty() ? 1.0 : 1.0 / static_cast<double>(lights.size());
         for (const SceneShape& sh : s.shapes) {
             const SceneMaterial& m = s.materials[static_cast<size_t>(sh.material)];
             if (m.kind != SceneMaterial::Kind::kMedium) {
@@ -143,26 +149,46 @@ struct Renderer {
         return true;
     }
 
-    // Next-event estimation from p: one light chosen uniformly; `f_of(wi)` gives the BSDF (or
-    // phase function) value times |cos| per channel and `pdf_of(wi)` the sampling density of
-    // the other strategy; `offset` is the normal of the side the shadow ray leaves from (null
-    // at a point inside a medium, `medium` then names it).
+    // Next-event estimation from p: every light, or one chosen uniformly (nee_all_lights);
+    // `f_of(wi)` gives the BSDF (or phase function) value times |cos| per channel and
+    // `pdf_of(wi)` the sampling density of the other strategy; `offset` is the normal of the side
+    // the shadow ray leaves from (null at a point inside a medium, `medium` then names it).
     template <class F, class P>
     void nee(const Vec3& p, const Vec3* offset, RngStream& rng, const double* beta, F f_of,
              P pdf_of, RGB& out, std::uint64_t& rays, int medium = -1) const {
         if (lights.empty()) return;
-        const double sel = 1.0 / static_cast<double>(lights.size());
+        if (opt.nee_all_lights) {
+            for (const Light& l : lights)
+                nee_light(l, p, offset, rng, beta, f_of, pdf_of, out, rays, medium);
+            return;
+        }
         const std::size_t j =
             std::min(lights.size() - 1,
                      static_cast<std::size_t>(rng.uniform() * static_cast<double>(lights.size())));
+        nee_light(lights[j], p, offset, rng, beta, f_of, pdf_of, out, rays, medium);
+    }
+
+    // One light's shadow ray of nee(), its MIS weight against the other strategy.
+    template <class F, class P>
+    void nee_light(const Light& light, const Vec3& p, const Vec3* offset, RngStream& rng,
+                   const double* beta, F& f_of, P& pdf_of, RGB& out, std::uint64_t& rays,
+                   int medium) const {
         const double u1 = rng.uniform(), u2 = rng.uniform();
-        const LightSample ls = sample_light(lights[j], p, u1, u2);
+        const LightSample ls = sample_light(light, p, u1, u2);
         if (!ls.ok) return;
         if (offset && !(dot(ls.wi, *offset) > 0)) return;
         const RGB fc = f_of(ls.wi);
         if (!(fc[0] > 0 || fc[1] > 0 || fc[2] > 0)) return;
         const Vec3 o = offset ? p + *offset * eps : p;
         const double tmax = std::isfinite(ls.dist) ? ls.dist * (1 - 1e-7) - eps : kInf;
+        // Sphere lights are opaque emitters outside the BVH: one in the way blocks the light
+        // sampled (as it ends a path that meets it). Before volpath-render-4 the environment and
+        // the sun were sampled through them, too bright by their MIS share of the sphere's
+        // solid angle.
+        for (const Light& other : lights)
+            if (other.type == LightType::kSphere && &other != &light &&
+                ray_sphere_hit(o, ls.wi, other.pos, other.radius) < tmax)
+                return;
         RGB T{1, 1, 1};
         if (has_passable) {
             if (!shadow(o, ls.wi, tmax, medium, T, rays)) return;
@@ -187,7 +213,6 @@ struct Renderer {
     // light): environment and disc lights, weighted against light sampling if NEE was done.
     void add_escape(const Vec3& from, const Vec3& d, bool prev_nee, double prev_pdf,
                     const double* beta, RGB& out) const {
-        const double sel = lights.empty() ? 0 : 1.0 / static_cast<double>(lights.size());
         for (const Light& l : lights) {
             if (l.type == LightType::kEnvironment ||
                 (l.type == LightType::kDirectional && l.cos_max < 1 &&
@@ -449,7 +474,6 @@ struct Renderer {
                     if (t < tl) tl = t, hit_light = &l;
                 }
             if (hit_light && tl < hit.t) {
-                const double sel = 1.0 / static_cast<double>(lights.size());
                 const double w =
                     prev_nee ? power(prev_pdf, sel * light_pdf(*hit_light, nee_pos, d)) : 1.0;
                 RGB c{};
@@ -524,7 +548,62 @@ RelativeError radiance_rel_error(const LayeredImage& image) {
         L.size(), [&](std::size_t i) { return L[i]; }, [&](std::size_t i) { return E[i]; });
 }
 
-std::string render_fingerprint(const Scene& scene, const RenderOptions& o) {
+MeasuredError measured_error(const LayeredImage& run, const LayeredImage& reference) {
+    if (reference.width() != run.width() || reference.height() != run.height())
+        throw std::invalid_argument("the reference image is " + std::to_string(reference.width()) +
+                                    " x " + std::to_string(reference.height()) + ", the render " +
+                                    std::to_string(run.width()) + " x " +
+                                    std::to_string(run.height()));
+    MeasuredError m;
+    m.own = radiance_rel_error(run);
+    m.reference = radiance_rel_error(reference);
+    const auto L = run.layer("radiance").pixels();
+    const auto E = run.layer("radiance.stderr").pixels();
+    const auto R = reference.layer("radiance").pixels();
+    const auto F = reference.layer("radiance.stderr").pixels();
+    double d2 = 0, r2 = 0, f2 = 0;
+    std::vector<double> z2;
+    z2.reserve(L.size());
+    for (std::size_t i = 0; i < L.size(); ++i) {
+        const double d = static_cast<double>(L[i]) - R[i];
+        d2 += d * d;
+        r2 += static_cast<double>(R[i]) * R[i];
+        f2 += static_cast<double>(F[i]) * F[i];
+        const double v = static_cast<double>(E[i]) * E[i] + static_cast<double>(F[i]) * F[i];
+        if (R[i] > 0 && v > 0) z2.push_back(d * d / v);
+    }
+    if (!(r2 > 0)) throw std::invalid_argument("the reference image is black");
+    m.rel_rmse = std::sqrt(d2 / r2);
+    m.rel_rmse_corrected = std::sqrt(std::max(0.0, (d2 - f2) / r2));
+    m.counted = z2.size();
+    if (!z2.empty()) {
+        const auto mid = z2.begin() + static_cast<std::ptrdiff_t>(z2.size() / 2);
+        std::nth_element(z2.begin(), mid, z2.end());
+        constexpr double kChi2OneDofMedian = 0.45493642311957;
+        m.z2_median_ratio = *mid / kChi2OneDofMedian;
+        m.median_pixel = m.own.median * std::sqrt(m.z2_median_ratio);
+    }
+    return m;
+}
+
+int render_batch_spp(const RenderOptions& o) {
+    if (o.batch_spp != 0) {
+        if (o.batch_spp < 0 || o.batch_spp % 3 != 0)
+            throw std::invalid_argument("batch_spp must be a positive multiple of 3, got " +
+                                        std::to_string(o.batch_spp));
+        return o.batch_spp;
+    }
+    const bool count_only = !o.budget.seconds && !o.budget.rel_error;
+    if (!count_only) return 3;  // a time or error budget: as many batches as can be
+    const std::int64_t spp = o.budget.samples ? *o.budget.samples : 64;
+    int b = 3;
+    while (b < 3 * 1024 && static_cast<std::int64_t>(2 * b) * 32 <= spp) b *= 2;
+    return b;
+}
+
+namespace {
+
+std::string fingerprint_with_batch(const Scene& scene, const RenderOptions& o, int batch_spp) {
     ContentKey k("render-checkpoint");
     k.add("engine", kEngineVersion)
         .add("seed", o.seed)
@@ -533,11 +612,19 @@ std::string render_fingerprint(const Scene& scene, const RenderOptions& o) {
         .add("roulette_depth", o.roulette_depth)
         .add("long_path_events", o.long_path_events)
         .add("index_matched_nee", o.index_matched_nee)
-        .add("samples_per_batch", 3);
+        .add("samples_per_batch", batch_spp)
+        .add("nee", o.nee_all_lights ? "all lights" : "one light")
+        .add("sampler", o.sampler == RenderSampler::kSobol ? "sobol" : "independent");
     // Only when set, so that the keys of existing checkpoints stay what they were.
     if (o.max_depth != 0) k.add("max_depth", o.max_depth);
     add_to_key(k, scene);
     return k.text();
+}
+
+}  // namespace
+
+std::string render_fingerprint(const Scene& scene, const RenderOptions& o) {
+    return fingerprint_with_batch(scene, o, render_batch_spp(o));
 }
 
 RenderResult render(const Scene& scene, const RenderOptions& o) {
@@ -550,19 +637,32 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
         static_cast<std::size_t>(R.width) * static_cast<std::size_t>(R.height);
     BatchRunOptions bo;
     bo.tally_size = pixels * RenderLayout::kPerPixel;
-    // A batch is three samples per pixel, one with each channel as the hero: the hero choice
-    // is stratified within the batch, so the batches are i.i.d. and their spread is the error
-    // of this stratified estimator. (With one sample per batch and the hero cycling from batch
-    // to batch, the batch statistics would count the differences between heroes as noise and
+    // A batch is 3 x n samples per pixel, n with each channel as the hero: the hero choice is
+    // stratified within the batch, so the batches are i.i.d. and their spread is the error of
+    // this stratified estimator. (With one sample per batch and the hero cycling from batch to
+    // batch, the batch statistics would count the differences between heroes as noise and
     // overstate the standard error by up to ~40 % in chromatic media.) Sample budgets are
-    // rounded up to a multiple of three.
-    bo.batch_samples = 3;
+    // rounded up to a multiple of three; the last batch may be smaller.
+    int batch_spp = render_batch_spp(o);
+    std::string fingerprint = fingerprint_with_batch(scene, o, batch_spp);
+    if (!o.checkpoint_path.empty() && !o.fresh && o.batch_spp == 0) {
+        // A resumed render keeps the batch size it started with, whatever the budget now says.
+        if (const auto before = batch_checkpoint_fingerprint(o.checkpoint_path);
+            before && *before != fingerprint)
+            for (int b = 3; b <= 3 * 1024; b *= 2)
+                if (fingerprint_with_batch(scene, o, b) == *before) {
+                    batch_spp = b;
+                    fingerprint = *before;
+                }
+    }
+    bo.batch_samples = batch_spp;
+    out.batch_spp = batch_spp;
     bo.budget = o.budget;
     if (!bo.budget.any()) bo.budget.samples = 64;
     if (bo.budget.samples) bo.budget.samples = (*bo.budget.samples + 2) / 3 * 3;
     o.apply(bo);
     if (!o.checkpoint_path.empty()) {
-        bo.fingerprint = render_fingerprint(scene, o);
+        bo.fingerprint = fingerprint;
         out.content_key = hash_hex(bo.fingerprint);
     }
     bo.checkpoint_path = o.checkpoint_path;
@@ -579,10 +679,12 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
         se = measure == RenderErrorMeasure::kImageMean ? r.mean : r.median;
     };
     const std::uint64_t seed = o.seed;
-    out.run = run_batches(
-        bo, [&R, seed, pixels](std::uint64_t index, std::int64_t samples, double* tally) {
-            RngStream rng(seed, kRenderDomain, index);
-            std::uint64_t rays = 0;
+    const bool sobol = o.sampler == RenderSampler::kSobol;
+    out.run = run_batches(bo, [&R, seed, pixels, sobol](std::uint64_t index, std::int64_t samples,
+                                                        double* tally) {
+        RngStream rng(seed, kRenderDomain, index);
+        std::uint64_t rays = 0;
+        if (!sobol) {
             for (std::size_t i = 0; i < pixels; ++i) {
                 const int x = static_cast<int>(i % static_cast<std::size_t>(R.width));
                 const int y = static_cast<int>(i / static_cast<std::size_t>(R.width));
@@ -592,7 +694,37 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
                 }
             }
             return rays;
-        });
+        }
+        // Per pixel and hero, samples/3 points of kSobolPairs independently scrambled pairs of
+        // Sobol dimensions, the scrambles seeded from this batch's stream.
+        const std::uint64_t key = rng.next_u64();
+        const auto key_lo = static_cast<std::uint32_t>(key),
+                   key_hi = static_cast<std::uint32_t>(key >> 32);
+        const auto per_hero = static_cast<std::uint32_t>(samples / 3);
+        std::array<double, 2 * kSobolPairs> prefix{};
+        std::array<std::uint32_t, kSobolPairs> pair_seed{};
+        for (std::size_t i = 0; i < pixels; ++i) {
+            const int x = static_cast<int>(i % static_cast<std::size_t>(R.width));
+            const int y = static_cast<int>(i / static_cast<std::size_t>(R.width));
+            for (int h = 0; h < 3; ++h) {
+                const int hero = static_cast<int>((i + static_cast<std::size_t>(h)) % 3);
+                const std::uint32_t ph = sobol_detail::hash32(
+                    sobol_detail::hash32(static_cast<std::uint32_t>(i) ^ key_lo) +
+                    static_cast<std::uint32_t>(h) * 0x9e3779b9u + key_hi);
+                for (int j = 0; j < kSobolPairs; ++j)
+                    pair_seed[static_cast<std::size_t>(j)] =
+                        sobol_detail::hash32(ph ^ (static_cast<std::uint32_t>(j) * 0x85ebca6bu));
+                for (std::uint32_t q = 0; q < per_hero; ++q) {
+                    for (std::size_t j = 0; j < kSobolPairs; ++j)
+                        scrambled_sobol_2d(q, pair_seed[j], prefix[2 * j], prefix[2 * j + 1]);
+                    rng.set_prefix(prefix.data(), 2 * kSobolPairs);
+                    rays += R.trace(x, y, hero, rng, tally + i * RenderLayout::kPerPixel);
+                    rng.set_prefix(nullptr, 0);
+                }
+            }
+        }
+        return rays;
+    });
     out.seconds = out.run.seconds;
     out.spp = out.run.samples;
     out.rays = out.run.work;

@@ -56,6 +56,18 @@ const char* to_string(RenderErrorMeasure m);
 /// batch), seconds, or a relative error (error_measure). Snapshots keep the image after 4, 8,
 /// 16, ... samples per pixel (RenderResult::run.snapshots), for error against time; each holds
 /// the whole tally (13 doubles per pixel).
+/// Where a camera path's first random numbers come from.
+enum class RenderSampler {
+    kIndependent,  ///< the batch's stream alone (volpath-render-3 and before)
+    /// The first 2 x kSobolPairs numbers of a path are Owen-scrambled 2D Sobol points
+    /// (core/sobol.h), one independently scrambled pair of dimensions after another, seeded per
+    /// batch, pixel and hero from the batch's stream: the samples of one pixel and hero in a
+    /// batch form a scrambled (0, m, 2)-net in every pair (every 1D projection stratified), so
+    /// the batches stay i.i.d. (their standard errors valid) and their means vary less.
+    kSobol,
+};
+inline constexpr int kSobolPairs = 8;
+
 struct RenderOptions : RunControl {
     RenderErrorMeasure error_measure = RenderErrorMeasure::kMedianPixel;
     /// Camera path vertices before Russian roulette may end a path (then survival
@@ -76,6 +88,18 @@ struct RenderOptions : RunControl {
     /// dense media; volpath/mesh_medium.h MeshGeometry). The image is the same to the bit
     /// either way (a test shows it); off only to show that, and to time the difference.
     bool skip_queries_in_balls = true;
+    /// Next-event estimation samples every light at every vertex (one shadow ray each), instead
+    /// of one light chosen uniformly: the choice was the largest noise of directly lit surfaces
+    /// under a sun and an environment (either the sun's whole share or none of it). Off: as
+    /// before (volpath-render-3; tests compare the two).
+    bool nee_all_lights = true;
+    RenderSampler sampler = RenderSampler::kSobol;
+    /// Samples per pixel in a batch, a multiple of 3 (each channel the hero equally often).
+    /// 0: 3 x 2^m, the largest with at least 32 batches in a sample budget (3 when there is a
+    /// time or an error budget); a render resumed from a checkpoint keeps the size it started
+    /// with, so it equals an uninterrupted render of that batch size. Larger
+    /// batches let the Sobol points of a batch stratify more finely.
+    int batch_spp = 0;
     std::string checkpoint_path;  ///< empty: none
     std::function<void(const BatchProgress&)> on_batch;
     /// Called before the render continues from its checkpoint, with what the checkpoint holds.
@@ -100,6 +124,7 @@ struct RenderResult {
     double seconds = 0;
     std::uint64_t spp = 0;
     std::uint64_t rays = 0;  ///< ray queries (intersections and shadow rays)
+    int batch_spp = 0;       ///< samples per pixel of a batch (of the checkpoint, if resumed)
     bool interrupted = false;
     /// hash_hex of render_fingerprint: what the checkpoint was keyed by (set when checkpointing).
     std::string content_key;
@@ -119,11 +144,36 @@ RelativeError radiance_rel_error(const std::vector<double>& mean, const std::vec
 /// back from an EXR).
 RelativeError radiance_rel_error(const LayeredImage& image);
 
+/// A render's error measured against an independent reference of the same image (another seed,
+/// usually more samples; both with "radiance" and "radiance.stderr"), beside the run's own
+/// estimates, which miss what the run has not sampled (heavy tails). Over the pixel-channels
+/// that see anything in the reference.
+struct MeasuredError {
+    RelativeError own;        ///< radiance_rel_error of the run
+    RelativeError reference;  ///< radiance_rel_error of the reference
+    /// sqrt(sum (L - L_ref)^2 / sum L_ref^2), and with the reference's own noise taken out,
+    /// sqrt(max(0, rel_rmse^2 - sum SE_ref^2 / sum L_ref^2)): the measured image relative RMS
+    /// error, to compare with own.rms.
+    double rel_rmse = 0, rel_rmse_corrected = 0;
+    /// The median over pixel-channels of z^2 = (L - L_ref)^2 / (SE^2 + SE_ref^2) divided by the
+    /// median of a chi-square variable with one degree of freedom (0.454936): 1 when the
+    /// standard errors say how far pixels are off, above 1 when they say too little.
+    double z2_median_ratio = 0;
+    /// The measured median pixel relative error: own.median x sqrt(z2_median_ratio).
+    double median_pixel = 0;
+    std::size_t counted = 0;  ///< pixel-channels compared
+};
+/// std::invalid_argument if the sizes differ or the reference is black.
+MeasuredError measured_error(const LayeredImage& run, const LayeredImage& reference);
+
 /// What a render's checkpoint is keyed by: the renderer's version, the settings that change the
 /// image (seed, size, roulette, long paths, NEE, max_depth when not 0), and the scene's content
 /// (core/scene.h add_to_key: resolved values, meshes, grid files), as a ContentKey's text. Not the
 /// budget: a resumed run may be given more samples.
 std::string render_fingerprint(const Scene& scene, const RenderOptions& options);
+
+/// The samples per pixel of a batch for these options (RenderOptions::batch_spp's rule).
+int render_batch_spp(const RenderOptions& options);
 
 /// One point of error against time: the radiance after `spp` samples per pixel (a snapshot or
 /// the final image) against a reference image.

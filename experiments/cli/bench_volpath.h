@@ -38,9 +38,11 @@ std::vector<std::filesystem::path> list_scenes(const std::string& scenes_dir,
 int run_volpath_bench(int threads, bool quick, int repeat);
 
 /// Time the scene renderer on the scenes of `scenes_dir` (those whose name contains `only`) at
-/// size x size with spp samples per pixel: rays/s and extrapolated time to 1 % per pixel.
+/// size x size with spp samples per pixel: rays/s and extrapolated times to 1 % of the median
+/// pixel and of the image, from the run's own errors and (reference_factor > 0) from its error
+/// against a reference of reference_factor x spp rendered in the same run.
 int run_render_bench(int threads, bool quick, const std::string& scenes_dir, int size, int spp,
-                     const std::string& only);
+                     const std::string& only, int reference_factor);
 
 }  // namespace ssslab::cli
 

@@ -86,6 +86,7 @@ struct BenchArgs {
     std::string scenes = "experiments/scenes";
     std::string size;  ///< "N" or "WxH"; empty: the mode's default
     int spp = 16;
+    int reference_factor = 4;        ///< --render: references of this many times the samples
     std::int64_t photons = 100'000;  ///< per channel, for the ground-truth profiles
     std::string csv;
 };
@@ -482,6 +483,12 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--spp", a->spp, "With --render: samples per pixel (default 16)")
         ->check(integer_in(1, 1'000'000))
         ->needs(render);
+    sub->add_option("--reference-factor", a->reference_factor,
+                    "With --render: measure each scene's error against a reference of this many "
+                    "times the samples, rendered in the same run with another seed (default 4; 0: "
+                    "none, the run's own standard errors only)")
+        ->check(integer_in(0, 1000))
+        ->needs(render);
     sub->add_option("--case", a->only, "Only the cases (or scenes) whose name contains this text")
         ->excludes(kernels)
         ->excludes(volpath);
@@ -521,7 +528,8 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
             if (a->render) {
                 int side = 256, same = 256;
                 if (!a->size.empty()) parse_size(a->size, side, same);
-                return run_render_bench(all, a->quick, a->scenes, side, a->spp, a->only);
+                return run_render_bench(all, a->quick, a->scenes, side, a->spp, a->only,
+                                        a->reference_factor);
             }
             if (a->volpath)
                 return run_volpath_bench(

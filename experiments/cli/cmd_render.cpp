@@ -34,6 +34,8 @@ struct RenderArgs {
     double exposure = 0;
     std::string reference;
     std::string error_of = "median-pixel";
+    int batch_spp = 0;
+    std::string sampler = "sobol";
     CommonOptions common;
 };
 
@@ -51,6 +53,9 @@ std::string render_toml(const RenderArgs& a, const Scene& scene, const volpath::
     ConfigTable st = root.table_or_empty("render");
     st.record("engine", std::string(volpath::render_engine_version()));
     st.record("seed", static_cast<std::int64_t>(o.seed));
+    st.record("sampler",
+              std::string(o.sampler == volpath::RenderSampler::kSobol ? "sobol" : "independent"));
+    st.record("batch_spp", static_cast<std::int64_t>(r.batch_spp));
     st.record("width", static_cast<std::int64_t>(r.width));
     st.record("height", static_cast<std::int64_t>(r.height));
     if (o.budget.samples) st.record("budget_spp", *o.budget.samples);
@@ -106,6 +111,9 @@ int run_render(const RenderArgs& a) {
     if (a.common.seconds) o.budget.seconds = *a.common.seconds;
     if (a.common.rel_error) o.budget.rel_error = *a.common.rel_error;
     if (!o.budget.any()) o.budget.samples = 64;
+    o.batch_spp = a.batch_spp;
+    o.sampler = a.sampler == "independent" ? volpath::RenderSampler::kIndependent
+                                           : volpath::RenderSampler::kSobol;
     o.error_measure = a.error_of == "image-mean" ? volpath::RenderErrorMeasure::kImageMean
                                                  : volpath::RenderErrorMeasure::kMedianPixel;
     o.width = a.width;
@@ -247,6 +255,26 @@ void register_render(CLI::App& app, std::function<int()>& action) {
                     "pixel channels of the radiance's relative standard error) or image-mean (the "
                     "relative standard error of the image mean, far smaller than any pixel's)")
         ->check(one_of({"median-pixel", "image-mean"}));
+    sub->add_option("--batch-spp", a->batch_spp,
+                    "Samples per pixel in a batch, a multiple of 3 (default: 3 x 2^m, the largest "
+                    "with at least 32 batches in an --spp budget, else 3; a resumed render keeps "
+                    "the batch size it started with)")
+        ->check(CLI::Validator(
+            [](std::string& v) {
+                int n = 0;
+                try {
+                    n = std::stoi(v);
+                } catch (...) {
+                }
+                return n > 0 && n % 3 == 0 && n <= 3 * 65536
+                           ? std::string()
+                           : "must be a positive multiple of 3, got " + v;
+            },
+            "MULTIPLE OF 3"));
+    sub->add_option("--sampler", a->sampler,
+                    "The first random numbers of a path: sobol (default; Owen-scrambled Sobol "
+                    "points, scrambled anew in every batch) or independent (the stream alone)")
+        ->check(one_of({"sobol", "independent"}));
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
 

@@ -1,0 +1,84 @@
+// Randomized quasi-Monte Carlo: the first two Sobol dimensions, Owen-scrambled and shuffled by
+// hashing [Burley 2020, "Practical Hash-based Owen Scrambling", JCGT 9(4)], as pbrt-v4's
+// ZSobolSampler and Cycles do, for the first dimensions of a path (the pixel position, the first
+// light and scattering decisions).
+//
+// Why it stays unbiased and its batch statistics honest: for a uniformly random seed, the
+// nested uniform scramble maps any fixed 32-bit value to a uniformly distributed one (the hash
+// is (x + seed) followed by bijections in which bit j depends only on bits below it, applied to
+// the bit-reversed value), so every coordinate of every point is U(0, 1); and points of
+// different seeds are independent. An engine that seeds each batch's points from the batch's
+// own stream therefore keeps its batches i.i.d., and the batch means' standard errors valid;
+// what the scrambled net buys is a smaller variance of each batch mean.
+//
+// Within one seed the first 2^m shuffled indices of a pair of dimensions are an aligned block of
+// 2^m consecutive Sobol points (the index shuffle changes only the low m bits of k < 2^m), a
+// (0, m, 2)-net: every elementary interval of area 2^-m holds one point.
+#pragma once
+
+#include <cstdint>
+
+namespace ssslab {
+
+namespace sobol_detail {
+
+inline std::uint32_t reverse_bits(std::uint32_t x) {
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
+    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+// Burley's variant of the Laine-Karras hash: on the bit-reversed value, bit j of the result
+// depends only on bits <= j of the input and on the seed, and for a fixed seed it is a
+// bijection.
+inline std::uint32_t laine_karras(std::uint32_t x, std::uint32_t seed) {
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+
+inline std::uint32_t hash32(std::uint32_t x) {  // lowbias32 (Chris Wellons)
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+}  // namespace sobol_detail
+
+/// An approximate nested uniform (Owen) scramble of a 32-bit fixed-point value.
+inline std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed) {
+    using namespace sobol_detail;
+    return reverse_bits(laine_karras(reverse_bits(x), seed));
+}
+
+/// The first two dimensions of the Sobol sequence at `index` as 32-bit fixed-point values: the
+/// van der Corput sequence and the dimension of primitive polynomial x + 1.
+inline void sobol_2d(std::uint32_t index, std::uint32_t& x, std::uint32_t& y) {
+    x = sobol_detail::reverse_bits(index);
+    y = 0;
+    std::uint32_t v = 1u << 31;
+    for (; index != 0; index >>= 1, v ^= v >> 1)
+        if (index & 1u) y ^= v;
+}
+
+/// Point `index` of the shuffled, Owen-scrambled 2D Sobol sequence of `seed`, each coordinate
+/// (k + 1/2) / 2^32 for a 32-bit k: in the open interval (0, 1).
+inline void scrambled_sobol_2d(std::uint32_t index, std::uint32_t seed, double& u, double& v) {
+    using sobol_detail::hash32;
+    std::uint32_t x = 0, y = 0;
+    sobol_2d(owen_scramble(index, seed), x, y);
+    x = owen_scramble(x, hash32(seed ^ 0x9e3779b9u));
+    y = owen_scramble(y, hash32(seed ^ 0x7f4a7c15u));
+    u = (static_cast<double>(x) + 0.5) * 0x1p-32;
+    v = (static_cast<double>(y) + 0.5) * 0x1p-32;
+}
+
+}  // namespace ssslab
