@@ -1,5 +1,7 @@
 #include "approx/convolve.h"
 
+#include "core/hash.h"
+
 #include <fftw3.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -242,18 +244,10 @@ void convolve_cols_add(const std::vector<double>& in, std::vector<double>& out, 
 }  // namespace
 
 double jitter_hash(int x, int y, int pass, int tap, unsigned seed) {
-    auto mix = [](uint32_t v) {
-        v ^= v >> 16;
-        v *= 0x7feb352dU;
-        v ^= v >> 15;
-        v *= 0x846ca68bU;
-        v ^= v >> 16;
-        return v;
-    };
-    uint32_t v = mix(static_cast<uint32_t>(x) * 0x9e3779b1U + 0x632be5abU +
-                     static_cast<uint32_t>(seed) * 0x27d4eb2fU);
-    v = mix(v ^ (static_cast<uint32_t>(y) * 0x85ebca77U));
-    v = mix(v ^ (static_cast<uint32_t>(pass) * 0xc2b2ae3dU + static_cast<uint32_t>(tap)));
+    uint32_t v = hash32(static_cast<uint32_t>(x) * 0x9e3779b1U + 0x632be5abU +
+                        static_cast<uint32_t>(seed) * 0x27d4eb2fU);
+    v = hash32(v ^ (static_cast<uint32_t>(y) * 0x85ebca77U));
+    v = hash32(v ^ (static_cast<uint32_t>(pass) * 0xc2b2ae3dU + static_cast<uint32_t>(tap)));
     return (v >> 8) * (2.0 / 16777216.0) - 1.0;
 }
 

@@ -1,5 +1,7 @@
 #include "approx/image.h"
 
+#include "core/hash.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -45,16 +47,6 @@ bool parse_signal(const std::string& name, Signal& out) {
 namespace {
 
 constexpr int kSuper = 4;  // 4 x 4 sub-pixel samples
-
-// A 32-bit integer hash (lowbias32, C. Wellons): well mixed, cheap, deterministic everywhere.
-uint32_t hash32(uint32_t x) {
-    x ^= x >> 16;
-    x *= 0x7feb352dU;
-    x ^= x >> 15;
-    x *= 0x846ca68bU;
-    x ^= x >> 16;
-    return x;
-}
 
 // Value in [0, 1] attached to lattice point (ix, iy) of noise layer `layer`.
 double lattice(int ix, int iy, uint32_t layer) {

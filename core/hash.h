@@ -14,6 +14,17 @@
 
 namespace ssslab {
 
+/// A 32-bit integer hash (lowbias32, C. Wellons): well mixed, cheap, the same everywhere. Seeds of
+/// procedural noise, jitter and scrambles; not a content hash (ContentKey below is).
+inline std::uint32_t hash32(std::uint32_t x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
 /// Builds the canonical description of an artifact and hashes it.
 class ContentKey {
   public:

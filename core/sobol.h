@@ -16,6 +16,8 @@
 // (0, m, 2)-net: every elementary interval of area 2^-m holds one point.
 #pragma once
 
+#include "core/hash.h"
+
 #include <cstdint>
 
 namespace ssslab {
@@ -42,15 +44,6 @@ inline std::uint32_t laine_karras(std::uint32_t x, std::uint32_t seed) {
     return x;
 }
 
-inline std::uint32_t hash32(std::uint32_t x) {  // lowbias32 (Chris Wellons)
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
-
 }  // namespace sobol_detail
 
 /// An approximate nested uniform (Owen) scramble of a 32-bit fixed-point value.
@@ -72,7 +65,6 @@ inline void sobol_2d(std::uint32_t index, std::uint32_t& x, std::uint32_t& y) {
 /// Point `index` of the shuffled, Owen-scrambled 2D Sobol sequence of `seed`, each coordinate
 /// (k + 1/2) / 2^32 for a 32-bit k: in the open interval (0, 1).
 inline void scrambled_sobol_2d(std::uint32_t index, std::uint32_t seed, double& u, double& v) {
-    using sobol_detail::hash32;
     std::uint32_t x = 0, y = 0;
     sobol_2d(owen_scramble(index, seed), x, y);
     x = owen_scramble(x, hash32(seed ^ 0x9e3779b9u));

@@ -533,18 +533,41 @@ TEST(Render, StudentTQuantileOfTheTestHelpers) {
     EXPECT_NEAR(testing::student_t_quantile(0.975, 1e9), 1.959964, 1e-6);
 }
 
-// A scene of every light path the renderer has: a sphere light and an environment, a rough
-// chromatic medium, a diffuse floor.
-Scene estimator_scene(int size) {
+// A sphere of radius 1.5 (material "m", given with `lights`) above a diffuse floor, seen by a
+// size x size camera.
+Scene floor_scene(int size, const std::string& lights_and_m) {
     return parse_scene(R"(
 [scene]
-name = "estimators"
+name = "floor"
 [camera]
 position = [0, 2, 10]
 target = [0, 0, 0]
 fov_y_deg = 30
 width = )" + std::to_string(size) +
-                           "\nheight = " + std::to_string(size) + R"(
+                           "\nheight = " + std::to_string(size) + "\n" + lights_and_m + R"(
+[[materials]]
+name = "floor"
+type = "diffuse"
+albedo = [0.6, 0.5, 0.4]
+[[shapes]]
+type = "sphere"
+radius = 1.5
+subdivisions = 3
+material = "m"
+[[shapes]]
+type = "plane"
+size_x = 20
+size_z = 20
+translate = [0, -1.6, 0]
+material = "floor"
+)",
+                       "floor.toml", ".");
+}
+
+// Every light path the renderer has: a sphere light, a sun and an environment, a rough
+// chromatic medium, a diffuse floor.
+Scene estimator_scene(int size) {
+    return floor_scene(size, R"(
 [[lights]]
 type = "sphere"
 position = [4, 4, 3]
@@ -565,23 +588,7 @@ sigma_s_per_mm = [1.0, 3.0, 8.0]
 g = [0.0, 0.5, 0.9]
 eta = 1.3
 roughness = 0.3
-[[materials]]
-name = "floor"
-type = "diffuse"
-albedo = [0.6, 0.5, 0.4]
-[[shapes]]
-type = "sphere"
-radius = 1.5
-subdivisions = 3
-material = "m"
-[[shapes]]
-type = "plane"
-size_x = 20
-size_z = 20
-translate = [0, -1.6, 0]
-material = "floor"
-)",
-                       "estimators.toml", ".");
+)");
 }
 
 TEST(Render, VolpathRender4EstimatorsAgreeWithTheLegacyOne) {
@@ -628,15 +635,7 @@ TEST(Render, SobolPointsAndAllLightsLowerTheVarianceOfDirectLighting) {
     // the scrambled Sobol points stratify the pixel position and the light and surface
     // directions within a batch. At 384 spp in batches of 48 spp the mean pixel variance of
     // each step is measured (the factors are printed) and must fall by more than 2x.
-    const Scene s = parse_scene(R"(
-[scene]
-name = "direct"
-[camera]
-position = [0, 2, 10]
-target = [0, 0, 0]
-fov_y_deg = 30
-width = 16
-height = 16
+    const Scene s = floor_scene(16, R"(
 [[lights]]
 type = "directional"
 direction = [-0.3, 1, 0.2]
@@ -646,26 +645,10 @@ angular_radius_deg = 1
 type = "environment"
 radiance = 0.2
 [[materials]]
-name = "white"
+name = "m"
 type = "diffuse"
 albedo = [0.8, 0.8, 0.8]
-[[materials]]
-name = "floor"
-type = "diffuse"
-albedo = [0.6, 0.5, 0.4]
-[[shapes]]
-type = "sphere"
-radius = 1.5
-subdivisions = 3
-material = "white"
-[[shapes]]
-type = "plane"
-size_x = 20
-size_z = 20
-translate = [0, -1.6, 0]
-material = "floor"
-)",
-                                "direct.toml", ".");
+)");
     auto mean_variance = [&](bool all_lights, RenderSampler sampler) {
         RenderOptions o = options(384);
         o.nee_all_lights = all_lights;

@@ -223,48 +223,45 @@ material = "floor"
     return fold(r.run.mean, r.run.mean.size() / 4);
 }
 
+// The pinned render scenes: a sphere light and an environment, a chromatic medium.
+const std::string kLights =
+    "[[lights]]\ntype = \"sphere\"\nposition = [4, 4, 3]\nradius = 1\nradiance = 5\n"
+    "[[lights]]\ntype = \"environment\"\nradiance = 0.2\n";
+const std::string kCoefficients =
+    "[[materials]]\nname = \"m\"\nsigma_a_per_mm = [0.05, 0.1, 0.2]\n"
+    "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = [0.0, 0.5, 0.9]\n";
+
 // volpath-render-4 with the legacy options (one light per NEE, the stream alone, batches of 3
 // spp) is volpath-render-3 but for one fix: a sphere light now blocks the shadow rays of the other
 // lights. The smooth boundary (no NEE at its first vertex) is volpath-render-3's pin; the rough
 // and index-matched ones were re-pinned with the fix (it moved their blocks by up to 9e-6 and
 // 8e-4 relative).
 TEST(WalkGolden, RenderEngineVolpathRender3) {
-    const std::string lights =
-        "[[lights]]\ntype = \"sphere\"\nposition = [4, 4, 3]\nradius = 1\nradiance = 5\n"
-        "[[lights]]\ntype = \"environment\"\nradiance = 0.2\n";
-    const std::string coefficients =
-        "[[materials]]\nname = \"m\"\nsigma_a_per_mm = [0.05, 0.1, 0.2]\n"
-        "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = [0.0, 0.5, 0.9]\n";
     expect_pinned("render rough boundary",
-                  render_pin(coefficients + "eta = 1.3\nroughness = 0.3\n", lights, true),
+                  render_pin(kCoefficients + "eta = 1.3\nroughness = 0.3\n", kLights, true),
                   {27.107234863279125, 7128.8832630966008, 243.37806122489005, 69870.614155344694,
                    470.42598961986795, 108572.11771846135, 391.4764820263926, 89666.875803368923});
-    expect_pinned("render smooth boundary", render_pin(coefficients + "eta = 1.4\n", lights, true),
+    expect_pinned("render smooth boundary",
+                  render_pin(kCoefficients + "eta = 1.4\n", kLights, true),
                   {28.125754117195907, 7533.9745794099908, 253.51638479194668, 70522.587770574581,
                    470.78130986750426, 108715.38178526392, 395.08681219167062, 89960.215650018057});
-    expect_pinned("render index-matched", render_pin(coefficients + "eta = 1.0\n", lights, true),
+    expect_pinned("render index-matched", render_pin(kCoefficients + "eta = 1.0\n", kLights, true),
                   {29.166848045886589, 7923.5597315735249, 245.93686525817628, 68952.484082457726,
                    474.01936307189078, 109261.200065072, 393.32288467583055, 90046.734797785});
 }
 
 TEST(WalkGolden, RenderEngineVolpathRender4) {
     ASSERT_STREQ(render_engine_version(), "volpath-render-4");
-    const std::string lights =
-        "[[lights]]\ntype = \"sphere\"\nposition = [4, 4, 3]\nradius = 1\nradiance = 5\n"
-        "[[lights]]\ntype = \"environment\"\nradiance = 0.2\n";
-    const std::string coefficients =
-        "[[materials]]\nname = \"m\"\nsigma_a_per_mm = [0.05, 0.1, 0.2]\n"
-        "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = [0.0, 0.5, 0.9]\n";
     expect_pinned("render rough boundary (v4)",
-                  render_pin(coefficients + "eta = 1.3\nroughness = 0.3\n", lights, false),
+                  render_pin(kCoefficients + "eta = 1.3\nroughness = 0.3\n", kLights, false),
                   {27.855950336647098, 7406.6490545976976, 231.97887627451863, 64399.288648467897,
                    470.68848745189138, 107936.57726582665, 393.50699973253847, 90213.696984040114});
     expect_pinned("render smooth boundary (v4)",
-                  render_pin(coefficients + "eta = 1.4\n", lights, false),
+                  render_pin(kCoefficients + "eta = 1.4\n", kLights, false),
                   {28.096889915235696, 7497.3676639305713, 229.50998472510514, 63887.260657715509,
                    475.6970766567951, 108675.44582498923, 393.13344735496986, 90030.489742415259});
     expect_pinned("render index-matched (v4)",
-                  render_pin(coefficients + "eta = 1.0\n", lights, false),
+                  render_pin(kCoefficients + "eta = 1.0\n", kLights, false),
                   {28.408467319011226, 7618.883561319185, 234.60399920953105, 65286.672987870283,
                    478.91099537733146, 109458.99530109798, 394.40887916438766, 90353.727664208753});
 }

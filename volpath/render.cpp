@@ -26,6 +26,7 @@ namespace {
 constexpr const char* kEngineVersion = "volpath-render-4";
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
+constexpr int kMaxBatchSpp = 3 * 1024;  // the largest automatic batch (RenderOptions::batch_spp)
 using RGB = std::array<double, 3>;
 
 struct MediumData {
@@ -597,7 +598,7 @@ int render_batch_spp(const RenderOptions& o) {
     if (!count_only) return 3;  // a time or error budget: as many batches as can be
     const std::int64_t spp = o.budget.samples ? *o.budget.samples : 64;
     int b = 3;
-    while (b < 3 * 1024 && static_cast<std::int64_t>(2 * b) * 32 <= spp) b *= 2;
+    while (b < kMaxBatchSpp && static_cast<std::int64_t>(2 * b) * 32 <= spp) b *= 2;
     return b;
 }
 
@@ -644,16 +645,20 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
     // overstate the standard error by up to ~40 % in chromatic media.) Sample budgets are
     // rounded up to a multiple of three; the last batch may be smaller.
     int batch_spp = render_batch_spp(o);
-    std::string fingerprint = fingerprint_with_batch(scene, o, batch_spp);
-    if (!o.checkpoint_path.empty() && !o.fresh && o.batch_spp == 0) {
+    if (!o.checkpoint_path.empty()) {
+        bo.fingerprint = fingerprint_with_batch(scene, o, batch_spp);
         // A resumed render keeps the batch size it started with, whatever the budget now says.
-        if (const auto before = batch_checkpoint_fingerprint(o.checkpoint_path);
-            before && *before != fingerprint)
-            for (int b = 3; b <= 3 * 1024; b *= 2)
+        if (const auto before = !o.fresh && o.batch_spp == 0
+                                    ? batch_checkpoint_fingerprint(o.checkpoint_path)
+                                    : std::nullopt;
+            before && *before != bo.fingerprint)
+            for (int b = 3; b <= kMaxBatchSpp; b *= 2)
                 if (fingerprint_with_batch(scene, o, b) == *before) {
                     batch_spp = b;
-                    fingerprint = *before;
+                    bo.fingerprint = *before;
+                    break;
                 }
+        out.content_key = hash_hex(bo.fingerprint);
     }
     bo.batch_samples = batch_spp;
     out.batch_spp = batch_spp;
@@ -661,10 +666,6 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
     if (!bo.budget.any()) bo.budget.samples = 64;
     if (bo.budget.samples) bo.budget.samples = (*bo.budget.samples + 2) / 3 * 3;
     o.apply(bo);
-    if (!o.checkpoint_path.empty()) {
-        bo.fingerprint = fingerprint;
-        out.content_key = hash_hex(bo.fingerprint);
-    }
     bo.checkpoint_path = o.checkpoint_path;
     bo.on_batch = o.on_batch;
     bo.on_resume = o.on_resume;
@@ -680,51 +681,51 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
     };
     const std::uint64_t seed = o.seed;
     const bool sobol = o.sampler == RenderSampler::kSobol;
-    out.run = run_batches(bo, [&R, seed, pixels, sobol](std::uint64_t index, std::int64_t samples,
-                                                        double* tally) {
-        RngStream rng(seed, kRenderDomain, index);
-        std::uint64_t rays = 0;
-        if (!sobol) {
+    out.run = run_batches(
+        bo, [&R, seed, pixels, sobol](std::uint64_t index, std::int64_t samples, double* tally) {
+            RngStream rng(seed, kRenderDomain, index);
+            std::uint64_t rays = 0;
+            if (!sobol) {
+                for (std::size_t i = 0; i < pixels; ++i) {
+                    const int x = static_cast<int>(i % static_cast<std::size_t>(R.width));
+                    const int y = static_cast<int>(i / static_cast<std::size_t>(R.width));
+                    for (std::int64_t k = 0; k < samples; ++k) {
+                        const int hero = static_cast<int>((i + static_cast<std::size_t>(k)) % 3);
+                        rays += R.trace(x, y, hero, rng, tally + i * RenderLayout::kPerPixel);
+                    }
+                }
+                return rays;
+            }
+            // Per pixel and hero, samples/3 points of kSobolPairs independently scrambled pairs of
+            // Sobol dimensions, the scrambles seeded from this batch's stream.
+            const std::uint64_t key = rng.next_u64();
+            const auto key_lo = static_cast<std::uint32_t>(key),
+                       key_hi = static_cast<std::uint32_t>(key >> 32);
+            const auto per_hero = static_cast<std::uint32_t>(samples / 3);
+            std::array<double, 2 * kSobolPairs> prefix{};
+            std::array<std::uint32_t, kSobolPairs> pair_seed{};
             for (std::size_t i = 0; i < pixels; ++i) {
                 const int x = static_cast<int>(i % static_cast<std::size_t>(R.width));
                 const int y = static_cast<int>(i / static_cast<std::size_t>(R.width));
-                for (std::int64_t k = 0; k < samples; ++k) {
-                    const int hero = static_cast<int>((i + static_cast<std::size_t>(k)) % 3);
-                    rays += R.trace(x, y, hero, rng, tally + i * RenderLayout::kPerPixel);
+                for (int h = 0; h < 3; ++h) {
+                    const int hero = static_cast<int>((i + static_cast<std::size_t>(h)) % 3);
+                    const std::uint32_t ph =
+                        hash32(hash32(static_cast<std::uint32_t>(i) ^ key_lo) +
+                               static_cast<std::uint32_t>(h) * 0x9e3779b9u + key_hi);
+                    for (int j = 0; j < kSobolPairs; ++j)
+                        pair_seed[static_cast<std::size_t>(j)] =
+                            hash32(ph ^ (static_cast<std::uint32_t>(j) * 0x85ebca6bu));
+                    for (std::uint32_t q = 0; q < per_hero; ++q) {
+                        for (std::size_t j = 0; j < kSobolPairs; ++j)
+                            scrambled_sobol_2d(q, pair_seed[j], prefix[2 * j], prefix[2 * j + 1]);
+                        rng.set_prefix(prefix.data(), 2 * kSobolPairs);
+                        rays += R.trace(x, y, hero, rng, tally + i * RenderLayout::kPerPixel);
+                        rng.set_prefix(nullptr, 0);
+                    }
                 }
             }
             return rays;
-        }
-        // Per pixel and hero, samples/3 points of kSobolPairs independently scrambled pairs of
-        // Sobol dimensions, the scrambles seeded from this batch's stream.
-        const std::uint64_t key = rng.next_u64();
-        const auto key_lo = static_cast<std::uint32_t>(key),
-                   key_hi = static_cast<std::uint32_t>(key >> 32);
-        const auto per_hero = static_cast<std::uint32_t>(samples / 3);
-        std::array<double, 2 * kSobolPairs> prefix{};
-        std::array<std::uint32_t, kSobolPairs> pair_seed{};
-        for (std::size_t i = 0; i < pixels; ++i) {
-            const int x = static_cast<int>(i % static_cast<std::size_t>(R.width));
-            const int y = static_cast<int>(i / static_cast<std::size_t>(R.width));
-            for (int h = 0; h < 3; ++h) {
-                const int hero = static_cast<int>((i + static_cast<std::size_t>(h)) % 3);
-                const std::uint32_t ph = sobol_detail::hash32(
-                    sobol_detail::hash32(static_cast<std::uint32_t>(i) ^ key_lo) +
-                    static_cast<std::uint32_t>(h) * 0x9e3779b9u + key_hi);
-                for (int j = 0; j < kSobolPairs; ++j)
-                    pair_seed[static_cast<std::size_t>(j)] =
-                        sobol_detail::hash32(ph ^ (static_cast<std::uint32_t>(j) * 0x85ebca6bu));
-                for (std::uint32_t q = 0; q < per_hero; ++q) {
-                    for (std::size_t j = 0; j < kSobolPairs; ++j)
-                        scrambled_sobol_2d(q, pair_seed[j], prefix[2 * j], prefix[2 * j + 1]);
-                    rng.set_prefix(prefix.data(), 2 * kSobolPairs);
-                    rays += R.trace(x, y, hero, rng, tally + i * RenderLayout::kPerPixel);
-                    rng.set_prefix(nullptr, 0);
-                }
-            }
-        }
-        return rays;
-    });
+        });
     out.seconds = out.run.seconds;
     out.spp = out.run.samples;
     out.rays = out.run.work;

@@ -52,10 +52,6 @@ enum class RenderErrorMeasure {
 };
 const char* to_string(RenderErrorMeasure m);
 
-/// Run control: RunControl (core/batch_runner.h); the budget is samples per pixel (three per
-/// batch), seconds, or a relative error (error_measure). Snapshots keep the image after 4, 8,
-/// 16, ... samples per pixel (RenderResult::run.snapshots), for error against time; each holds
-/// the whole tally (13 doubles per pixel).
 /// Where a camera path's first random numbers come from.
 enum class RenderSampler {
     kIndependent,  ///< the batch's stream alone (volpath-render-3 and before)
@@ -68,6 +64,10 @@ enum class RenderSampler {
 };
 inline constexpr int kSobolPairs = 8;
 
+/// Run control: RunControl (core/batch_runner.h); the budget is samples per pixel (batch_spp per
+/// batch), seconds, or a relative error (error_measure). Snapshots keep the image after 4, 8,
+/// 16, ... batches (RenderResult::run.snapshots), for error against time; each holds the whole
+/// tally (13 doubles per pixel).
 struct RenderOptions : RunControl {
     RenderErrorMeasure error_measure = RenderErrorMeasure::kMedianPixel;
     /// Camera path vertices before Russian roulette may end a path (then survival
