@@ -50,8 +50,9 @@ std::string version_report() {
         if (k != "date_utc" && k != "ssslab_version" && k != "git_revision")
             s += "  " + k + ": " + v + "\n";
     s += std::string("  optional parts: OpenVDB ") + (SSSLAB_HAVE_OPENVDB ? "yes" : "no") +
-         ", OpenGL " + (SSSLAB_HAVE_GL ? "yes" : "no") + ", MPI " +
-         (SSSLAB_HAVE_MPI ? "yes" : "no") + "\n";
+         ", OpenGL " +
+         (SSSLAB_HAVE_GL ? std::string("yes (") + SSSLAB_GL_PLATFORMS + ")" : std::string("no")) +
+         ", MPI " + (SSSLAB_HAVE_MPI ? "yes" : "no") + "\n";
     return s;
 }
 

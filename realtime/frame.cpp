@@ -294,7 +294,10 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const
     if (!run) {
         scattered.assign(sg.irradiance.begin(), sg.irradiance.end());  // no pass to run
     } else if (o.method == SssMethod::kSeparable) {
-        sss_pass(sg, taps, p, scattered);
+        if (o.separable_pass)
+            o.separable_pass(sg, taps, p, scattered);
+        else
+            sss_pass(sg, taps, p, scattered);
     } else {
         SssReferenceResult r = sss_reference(sg, exact, p, o.reference);
         scattered = std::move(r.irradiance);

@@ -40,6 +40,7 @@
 #include "realtime/sss_reference.h"
 
 #include <array>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -95,6 +96,12 @@ struct FrameOptions {
     /// false: pass 4 writes the radiance layer only (what a game presents: `ssslab bench
     /// --realtime` times its frames so); true: every layer of the file comment.
     bool all_layers = true;
+    /// The separable pass's backend (SssMethod::kSeparable): realtime::sss_pass when empty; the
+    /// GL twin (realtime/gl/sss_pass_gl.h) plugs in here, with the same plain-data inputs. The
+    /// frame's "sss" time is then this call's wall time (uploads and read-back included).
+    std::function<void(const SssGBuffer&, const std::vector<SssMaterialKernel>&, const SssParams&,
+                       std::vector<float>&)>
+        separable_pass;
 };
 
 /// Checks what the real-time renderer supports beyond Scene's own validation: homogeneous media

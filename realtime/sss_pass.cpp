@@ -47,10 +47,8 @@ SssMaterialKernel make_material_kernel(const std::array<const approx::SeparableK
     return k;
 }
 
-namespace {
-
-void check_arrays(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
-                  const SssParams& p) {
+void check_sss_inputs(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
+                      const SssParams& p) {
     if (g.width < 1 || g.height < 1) throw std::invalid_argument("sss_pass: empty G-buffer");
     const size_t n = g.pixels();
     if (g.irradiance.size() != 3 * n || g.view_z.size() != n || g.material.size() != n)
@@ -74,6 +72,16 @@ void check_arrays(const SssGBuffer& g, const std::vector<SssMaterialKernel>& mat
                     throw std::invalid_argument("sss_pass: weights and offsets differ in length");
         }
 }
+
+void refuse_sss_pixel(const SssGBuffer& g, size_t materials, size_t i) {
+    const int32_t m = g.material[i];
+    if (m < -1 || m >= static_cast<int32_t>(materials))
+        throw std::invalid_argument("sss_pass: material index " + std::to_string(m) +
+                                    " without a kernel");
+    throw std::invalid_argument("sss_pass: a medium pixel has no positive finite depth");
+}
+
+namespace {
 
 // A texel of a pass's input: R, G, B and the view z in the fourth lane, so that one 16-byte
 // load fetches everything a tap needs (GCC vector extension: SSE2 on any x86-64).
@@ -482,8 +490,7 @@ Extent scan_pixels(const SssGBuffer& g, const std::vector<SssMaterialKernel>& ma
                     const int32_t m = mrow[x];
                     if (m == -1) continue;
                     const float z = zrow[x];
-                    if (m < -1 || m >= static_cast<int32_t>(materials.size()) ||
-                        !(z > 0 && std::isfinite(z))) {
+                    if (!sss_pixel_ok(m, z, materials.size())) {
                         acc.first_bad = std::min(acc.first_bad, row + x);
                         break;
                     }
@@ -505,13 +512,7 @@ Extent scan_pixels(const SssGBuffer& g, const std::vector<SssMaterialKernel>& ma
             a.join(b);
             return a;
         });
-    if (e.first_bad < g.pixels()) {
-        const int32_t m = g.material[e.first_bad];
-        if (m < -1 || m >= static_cast<int32_t>(materials.size()))
-            throw std::invalid_argument("sss_pass: material index " + std::to_string(m) +
-                                        " without a kernel");
-        throw std::invalid_argument("sss_pass: a medium pixel has no positive finite depth");
-    }
+    if (e.first_bad < g.pixels()) refuse_sss_pixel(g, materials.size(), e.first_bad);
     if (e.x0 > e.x1) return e;
     // Texel indices, clamped to the image (a margin of a texel each side).
     auto index = [](double s, int len) {
@@ -735,7 +736,7 @@ std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKe
 
 void sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
               const SssParams& p, std::vector<float>& out) {
-    check_arrays(g, materials, p);
+    check_sss_inputs(g, materials, p);
     const int w = g.width, h = g.height;
     const bool jitter = p.jitter > 0;
 

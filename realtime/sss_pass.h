@@ -65,6 +65,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace ssslab::realtime {
@@ -126,6 +127,19 @@ struct SssParams {
     /// perpendicular axes (see the file comment). false: the axes are x and y.
     bool rotate = false;
 };
+
+/// The checks of sss_pass's inputs (every backend's): throws std::invalid_argument on
+/// inconsistent sizes, taps without weights or bad parameters.
+void check_sss_inputs(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
+                      const SssParams& p);
+
+/// Whether the pass takes a pixel of material m at view depth z (materials: how many kernels).
+inline bool sss_pixel_ok(int32_t m, float z, size_t materials) {
+    return m == -1 || (m >= 0 && m < static_cast<int32_t>(materials) && z > 0 &&
+                       z <= std::numeric_limits<float>::max());
+}
+/// Throws the pass's std::invalid_argument for pixel i, one that sss_pixel_ok refuses.
+[[noreturn]] void refuse_sss_pixel(const SssGBuffer& g, size_t materials, size_t i);
 
 /// The pass: output irradiance after subsurface scattering, RGB interleaved as the input.
 /// Throws std::invalid_argument on inconsistent sizes, a material index without a kernel, a

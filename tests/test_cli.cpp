@@ -1,5 +1,6 @@
 // The `ssslab` command line end to end: help, outputs and their provenance, determinism across
 // thread counts, and an interrupted run that resumes to the result of an uninterrupted one.
+#include "core/build_info.h"
 #include "core/profile.h"
 #include "testing.h"
 
@@ -164,6 +165,34 @@ TEST(Cli, ProfileWritesCsvWithResolvedConfigurationBesideIt) {
         EXPECT_NE(rec.find(key), std::string::npos) << key << " in\n" << rec;
 }
 
+// The GL twin's rows (realtime/gl): the SSS pass's draws and its whole call, per scene, and its
+// result against the CPU pass's on the frame's own inputs.
+TEST(Cli, BenchRealtimeWithTheGlTwin) {
+    if (!SSSLAB_HAVE_GL) GTEST_SKIP() << "built without the GL twin";
+    testing::TempDir dir;
+    const std::string scenes = testing::source_path("experiments/scenes");
+    const auto r = run_ssslab({"bench", "--realtime", "--quick", "--threads", "2", "--scenes",
+                               scenes, "--case", "ketchup", "--backend", "gl", "--csv", "b.csv"},
+                              dir.path());
+    if (r.exit_code != 0 && r.err.find("no OpenGL context") != std::string::npos)
+        GTEST_SKIP() << r.err;
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    // Both frames (the scene and its one-light variant): the GL pass equals the CPU pass to
+    // 1e-5 relative on the frame's inputs.
+    size_t at = 0, compared = 0;
+    const std::string key = "worst relative difference ";
+    while ((at = r.out.find(key, at)) != std::string::npos) {
+        at += key.size();
+        EXPECT_LT(std::stod(r.out.substr(at)), 1e-5) << r.out;
+        ++compared;
+    }
+    EXPECT_EQ(compared, 2u) << r.out;
+    const std::string csv = testing::read_text(dir / "b.csv");
+    for (const char* row : {"ketchup,480,270,gl,0,sss,", "ketchup,480,270,gl,0,sss+transfer,",
+                            "ketchup/1-light,480,270,gl,0,sss,"})
+        EXPECT_NE(csv.find(row), std::string::npos) << row << "\n" << csv;
+}
+
 TEST(Cli, BenchRealtimeWritesPassTimesPerSceneAndThreadCount) {
     testing::TempDir dir;
     const std::string scenes = testing::source_path("experiments/scenes");
@@ -181,24 +210,25 @@ TEST(Cli, BenchRealtimeWritesPassTimesPerSceneAndThreadCount) {
     std::istringstream csv(testing::read_text(dir / "b.csv"));
     std::string line;
     std::getline(csv, line);
-    EXPECT_EQ(line, "scene,width,height,threads,pass,ms,floor_ms");
+    EXPECT_EQ(line, "scene,width,height,backend,threads,pass,ms,floor_ms");
     std::set<std::string> seen;
     while (std::getline(csv, line)) {
         std::vector<std::string> f;
         std::istringstream in(line);
         for (std::string x; std::getline(in, x, ',');) f.push_back(x);
         if (line.back() == ',') f.push_back("");
-        ASSERT_EQ(f.size(), 7u) << line;
+        ASSERT_EQ(f.size(), 8u) << line;
         EXPECT_EQ(f[1], "480");
         EXPECT_EQ(f[2], "270");
-        EXPECT_GT(std::stod(f[5]), 0.0) << line;
-        if (f[4] == "sss") {
-            ASSERT_FALSE(f[6].empty()) << line;
-            EXPECT_GT(std::stod(f[6]), 0.0) << line;
+        EXPECT_EQ(f[3], "software");
+        EXPECT_GT(std::stod(f[6]), 0.0) << line;
+        if (f[5] == "sss") {
+            ASSERT_FALSE(f[7].empty()) << line;
+            EXPECT_GT(std::stod(f[7]), 0.0) << line;
         } else {
-            EXPECT_TRUE(f[6].empty()) << line;
+            EXPECT_TRUE(f[7].empty()) << line;
         }
-        seen.insert(f[0] + "/" + f[3] + "/" + f[4]);
+        seen.insert(f[0] + "/" + f[4] + "/" + f[5]);
     }
     for (const char* scene : {"apple", "ketchup", "marble", "skin", "wholemilk"})
         for (const char* threads : {"1", "2"})
@@ -210,7 +240,10 @@ TEST(Cli, BenchRealtimeWritesPassTimesPerSceneAndThreadCount) {
     for (const std::vector<std::string>& bad :
          {std::vector<std::string>{"bench", "--realtime", "--size", "0x10"},
           {"bench", "--realtime", "--size", "64x"},
-          {"bench", "--size", "64"}}) {
+          {"bench", "--size", "64"},
+          {"bench", "--realtime", "--backend", "vulkan"},
+          {"bench", "--realtime", "--backend", "gl", "--platform", "glx"},
+          {"bench", "--render", "--backend", "gl"}}) {
         const auto b = run_ssslab(bad, dir.path());
         EXPECT_EQ(b.exit_code, 2) << bad.back() << ": " << b.err;
     }

@@ -51,7 +51,11 @@ namespace ssslab::cli {
 /// Time the real-time renderer's passes (rasterizer, SSS pass) on the scenes of `scenes_dir`
 /// (those whose name contains `only`) at width x height, 1 thread and `threads`, fastest of
 /// `repeat`, against a streaming floor; the table on stdout, and a CSV (+ .toml) when `csv`.
+/// backend "gl": also the passes the GL twin has, on `platform` (auto, osmesa, egl), timed in the
+/// same run and checked against the CPU's results.
 int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, int width,
-                       int height, int repeat, const std::string& only, const std::string& csv);
+                       int height, int repeat, const std::string& only, const std::string& csv,
+                       const std::string& backend = "software",
+                       const std::string& platform = "auto");
 
 }  // namespace ssslab::cli

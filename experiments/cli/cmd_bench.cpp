@@ -12,6 +12,7 @@
 #include "approx/kernel2d.h"
 #include "approx/model_spec.h"
 #include "core/atomic_file.h"
+#include "core/build_info.h"
 #include "core/config.h"
 #include "core/material.h"
 #include "core/provenance.h"
@@ -89,6 +90,7 @@ struct BenchArgs {
     int reference_factor = 4;        ///< --render: references of this many times the samples
     std::int64_t photons = 100'000;  ///< per channel, for the ground-truth profiles
     std::string csv;
+    std::string backend = "software", platform = "auto";
 };
 
 int run_bench(const BenchArgs& a) {
@@ -465,6 +467,15 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
         "scenes, 1 thread and all, the SSS pass against a streaming memory floor; with "
         "--scenes, --size, --case, --repeat, --csv");
     realtime->excludes(kernels)->excludes(volpath)->excludes(render);
+    sub->add_option("--backend", a->backend,
+                    "With --realtime: software (default) or gl (also the GL twin's passes, timed "
+                    "in the same run and checked against the CPU's)")
+        ->check(CLI::IsMember({"software", "gl"}))
+        ->needs(realtime);
+    sub->add_option("--platform", a->platform,
+                    "With --backend gl: the headless GL platform, auto (default), osmesa or egl")
+        ->check(CLI::IsMember({"auto", "osmesa", "egl"}))
+        ->needs(realtime);
     CLI::Option* scenes = sub->add_option(
         "--scenes", a->scenes,
         "With --render or --realtime: the scene folder (default experiments/scenes)");
@@ -510,6 +521,11 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
         if (!a->render && !a->realtime && (scenes->count() > 0 || size->count() > 0))
             throw CLI::ValidationError(scenes->count() > 0 ? "--scenes" : "--size",
                                        "needs --render or --realtime");
+        if (a->backend == "gl" && !SSSLAB_HAVE_GL)
+            throw CLI::ValidationError("--backend",
+                                       "this build has no GL twin (SSSLAB_WITH_GL; "
+                                       "apt-get install libosmesa6-dev libegl-dev "
+                                       "python3-glad)");
         if (!a->kernels && !a->realtime && csv->count() > 0)
             throw CLI::ValidationError("--csv", "needs --kernels or --realtime");
         int w = 0, h = 0;
@@ -523,7 +539,7 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
                 if (!a->size.empty()) parse_size(a->size, width, height);
                 return run_realtime_bench(all, a->quick, a->scenes, width, height,
                                           explicit_repeat ? a->repeat : (a->quick ? 1 : 3), a->only,
-                                          a->csv);
+                                          a->csv, a->backend, a->platform);
             }
             if (a->render) {
                 int side = 256, same = 256;

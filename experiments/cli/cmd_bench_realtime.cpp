@@ -6,9 +6,13 @@
 // no jitter), the composite, and the whole frame (realtime/frame.h, all of them in sequence).
 // The SSS pass is set beside a streaming floor measured in the same run: the bytes the pass
 // reads and writes (per 1D pass irradiance, view z and material in, 3 floats out; rank 1, so 2
-// passes) moved by a plain parallel loop with the same thread count.
+// passes) moved by a plain parallel loop with the same thread count. With --backend gl, the
+// passes the GL twin has (realtime/gl: the SSS pass so far) run in the same process on the
+// frame's own inputs: their draws timed by GL_TIME_ELAPSED, the whole call (uploads, read-back)
+// by the wall clock, and their result compared with the CPU pass's.
 #include "approx/model_spec.h"
 #include "core/atomic_file.h"
+#include "core/build_info.h"
 #include "core/config.h"
 #include "core/material.h"
 #include "core/provenance.h"
@@ -17,14 +21,20 @@
 #include "experiments/cli/common.h"
 #include "experiments/runner/realtime_inputs.h"
 #include "realtime/frame.h"
+#include "realtime/sss_pass.h"
+#if SSSLAB_HAVE_GL
+#include "realtime/gl/sss_pass_gl.h"
+#endif
 
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -55,7 +65,19 @@ struct Row {
     std::string pass;
     double ms;
     double floor_ms;  ///< < 0: none
+    std::string backend = "software";
 };
+
+// The worst difference of a against b relative to b, over the values above 1e-6 of b's largest
+// (below: relative to that floor).
+double worst_relative(const std::vector<float>& a, const std::vector<float>& b) {
+    double top = 0, worst = 0;
+    for (float v : b) top = std::max(top, static_cast<double>(std::fabs(v)));
+    for (size_t i = 0; i < b.size(); ++i)
+        worst = std::max(worst, std::fabs(static_cast<double>(a[i]) - b[i]) /
+                                    std::max(1e-6 * top, std::fabs(static_cast<double>(b[i]))));
+    return worst;
+}
 
 /// The frame of the speed goal ("one shadow-mapped light"): the scene with only its first light
 /// that is not the environment, made a delta light with one shadow map -- a sun its axis, a
@@ -87,8 +109,22 @@ std::string num(double v) {
 }  // namespace
 
 int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, int width,
-                       int height, int repeat, const std::string& only, const std::string& csv) {
+                       int height, int repeat, const std::string& only, const std::string& csv,
+                       const std::string& backend, const std::string& platform) {
     const std::vector<std::filesystem::path> files = list_scenes(scenes_dir, only);
+#if SSSLAB_HAVE_GL
+    std::unique_ptr<realtime::gl::GlContext> gl_context;
+    std::unique_ptr<realtime::gl::GlSssPass> gl_pass;
+    if (backend == "gl") {
+        gl_context = realtime::gl::GlContext::create(realtime::gl::parse_gl_platform(platform));
+        gl_pass = std::make_unique<realtime::gl::GlSssPass>(*gl_context);
+        std::printf("GL twin: %s, %s, OpenGL %s (the passes it has: sss)\n",
+                    gl_context->platform().c_str(), gl_context->renderer().c_str(),
+                    gl_context->version().c_str());
+    }
+#else
+    (void)platform;  // cmd_bench.cpp refuses --backend gl in a build without the GL twin
+#endif
     // MCML and the kernel build are set-up, not timed; the timed work runs in explicit arenas.
     const std::int64_t photons = quick ? 2'000 : 20'000;
     std::printf(
@@ -176,8 +212,52 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
                     rows.push_back({label, t, "sss", sss, floor * 1e3});
                     rows.push_back({label, t, "composite", composite, -1});
                     rows.push_back({label, t, "frame", frame * 1e3, -1});
+#if SSSLAB_HAVE_GL
+                    if (gl_pass && t == counts.back()) {
+                        // The SSS pass's inputs as the frame builds them, then the GL twin on
+                        // them: its draws (GL_TIME_ELAPSED, inputs resident, fastest of
+                        // repeat), its whole call (upload and read-back too) and its result
+                        // against the CPU pass's.
+                        realtime::SssGBuffer sg;
+                        std::vector<realtime::SssMaterialKernel> taps;
+                        realtime::SssParams sp;
+                        std::vector<float> cpu;
+                        realtime::FrameOptions cap = fo;
+                        cap.separable_pass = [&](const realtime::SssGBuffer& g_,
+                                                 const std::vector<realtime::SssMaterialKernel>& t_,
+                                                 const realtime::SssParams& p_,
+                                                 std::vector<float>& out) {
+                            sg = g_;
+                            taps = t_;
+                            sp = p_;
+                            realtime::sss_pass(g_, t_, p_, out);
+                            cpu = out;
+                        };
+                        realtime::render_frame(s, f, lit, materials, cap);
+                        if (!taps.empty()) {
+                            const std::vector<double> draws =
+                                gl_pass->time_runs(sg, taps, sp, repeat);
+                            double whole = 1e300;
+                            std::vector<float> out;
+                            for (int k = 0; k < repeat; ++k) {
+                                realtime::gl::GlSssTimes tm;
+                                gl_pass->run(sg, taps, sp, out, &tm);
+                                whole = std::min(whole, tm.wall_ms);
+                            }
+                            rows.push_back({label, 0, "sss",
+                                            *std::min_element(draws.begin(), draws.end()),
+                                            floor * 1e3, "gl"});
+                            rows.push_back({label, 0, "sss+transfer", whole, -1, "gl"});
+                            std::printf(
+                                "%-18s GL sss pass against the CPU pass on the frame's inputs: "
+                                "worst relative difference %.2g\n",
+                                label.c_str(), worst_relative(out, cpu));
+                        }
+                    }
+#endif
                 });
-                for (size_t k = rows.size() - 6; k < rows.size(); ++k) {
+                const size_t first = rows.size() - (rows.back().backend == "gl" ? 8 : 6);
+                for (size_t k = first; k < rows.size(); ++k) {
                     const Row& r = rows[k];
                     char size[32], fl[32] = "", ratio[32] = "";
                     std::snprintf(size, sizeof size, "%dx%d", width, height);
@@ -185,8 +265,10 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
                         std::snprintf(fl, sizeof fl, "%.3f", r.floor_ms);
                         std::snprintf(ratio, sizeof ratio, "%.2f", r.ms / r.floor_ms);
                     }
-                    std::printf("%-18s %11s %7d %-12s %10.3f %10s %7s\n", r.scene.c_str(), size,
-                                r.threads, r.pass.c_str(), r.ms, fl, ratio);
+                    const std::string th =
+                        r.backend == "gl" ? std::string("gl") : std::to_string(r.threads);
+                    std::printf("%-18s %11s %7s %-12s %10.3f %10s %7s\n", r.scene.c_str(), size,
+                                th.c_str(), r.pass.c_str(), r.ms, fl, ratio);
                 }
             }
             std::printf(
@@ -202,13 +284,20 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
         "(the radiance layer only); frame: all of them in sequence. floor_ms: a parallel loop "
         "streaming the bytes the SSS "
         "pass reads and writes (2 x (20 B in, 12 B out) per pixel); ratio = ms / floor_ms.\n");
+    if (backend == "gl")
+        std::printf(
+            "threads gl: the GL twin (its platform's own threads; llvmpipe: LP_NUM_THREADS, "
+            "default all cores); sss: its draws alone (GL_TIME_ELAPSED, inputs "
+            "resident); sss+transfer: the whole call, G-buffer and taps uploaded and the "
+            "result read back.\n");
 
     if (!csv.empty()) {
         std::ostringstream o;
-        o << "scene,width,height,threads,pass,ms,floor_ms\n";
+        o << "scene,width,height,backend,threads,pass,ms,floor_ms\n";
         for (const Row& r : rows)
-            o << r.scene << ',' << width << ',' << height << ',' << r.threads << ',' << r.pass
-              << ',' << num(r.ms) << ',' << (r.floor_ms >= 0 ? num(r.floor_ms) : "") << '\n';
+            o << r.scene << ',' << width << ',' << height << ',' << r.backend << ',' << r.threads
+              << ',' << r.pass << ',' << num(r.ms) << ','
+              << (r.floor_ms >= 0 ? num(r.floor_ms) : "") << '\n';
         write_with_provenance(csv, o.str(),
                               "ssslab bench --realtime: provenance of " + csv +
                                   " (timings depend on the machine: see host_threads)");

@@ -1,0 +1,241 @@
+// The GL twin of the real-time renderer (realtime/gl, issue 15): headless contexts through OSMesa
+// and EGL, and the separable SSS pass in GLSL held to the CPU pass (realtime/sss_pass.h) on
+// identical inputs, every edge mode with and without jitter and rotation, two materials (one of
+// SVD rank 2, signed terms), a depth step, pixels without medium, kernels narrower than a pixel
+// and wider than the image. Tests skip (with the reason) where no context can be made.
+#include "approx/models.h"
+#include "realtime/gl/context.h"
+#include "realtime/gl/sss_pass_gl.h"
+#include "realtime/sss_pass.h"
+#include "testing.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ssslab {
+namespace {
+
+using approx::Kernel2D;
+using approx::ModelResult;
+using realtime::SssEdgeMode;
+using realtime::SssGBuffer;
+using realtime::SssMaterialKernel;
+using realtime::SssParams;
+using realtime::gl::GlContext;
+using realtime::gl::GlPlatform;
+using testing::edge_mode_name;
+using testing::flat_gbuffer;
+using testing::kSssEdgeModes;
+using testing::random_image;
+using testing::skin_kernels;
+using testing::sss_camera;
+
+// One context per platform for the whole test program (made once: llvmpipe's start-up is not
+// free).
+GlContext* context(GlPlatform platform, std::string& why) {
+    static std::map<GlPlatform, std::pair<std::unique_ptr<GlContext>, std::string>> made;
+    auto it = made.find(platform);
+    if (it == made.end()) {
+        std::string reason;
+        auto c = realtime::gl::try_gl_context(platform, reason);
+        it = made.emplace(platform, std::make_pair(std::move(c), reason)).first;
+    }
+    why = it->second.second;
+    if (it->second.first) it->second.first->make_current();
+    return it->second.first.get();
+}
+
+// The tests of the pass run on every platform of the build that gives a context.
+class GlSssPassTest : public ::testing::TestWithParam<std::string> {
+  protected:
+    GlContext* ctx = nullptr;
+    void SetUp() override {
+        std::string why;
+        ctx = context(realtime::gl::parse_gl_platform(GetParam()), why);
+        if (!ctx) GTEST_SKIP() << "no OpenGL context on " << GetParam() << ": " << why;
+    }
+};
+INSTANTIATE_TEST_SUITE_P(Platforms, GlSssPassTest,
+                         ::testing::ValuesIn(realtime::gl::gl_platforms_built()),
+                         [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
+
+TEST(Gl, ContextsOfEveryPlatformBuilt) {
+    const std::vector<std::string> built = realtime::gl::gl_platforms_built();
+    ASSERT_FALSE(built.empty());
+    int made = 0;
+    for (const std::string& name : built) {
+        std::string why;
+        auto c = realtime::gl::try_gl_context(realtime::gl::parse_gl_platform(name), why);
+        if (!c) {
+            std::printf("%s: no context (%s)\n", name.c_str(), why.c_str());
+            continue;
+        }
+        ++made;
+        std::printf("%s: %s, %s, OpenGL %s\n", name.c_str(), c->platform().c_str(),
+                    c->renderer().c_str(), c->version().c_str());
+        EXPECT_NE(c->version().find("Core"), std::string::npos) << c->version();
+    }
+    if (made == 0) GTEST_SKIP() << "no platform gave a context";
+    EXPECT_THROW(realtime::gl::parse_gl_platform("glx"), std::invalid_argument);
+}
+
+// The largest difference between the GL and the CPU pass relative to the CPU value, over every
+// pixel and channel whose CPU value is above 1e-6 of the image's largest (below that: relative
+// to that floor).
+double worst_relative(const std::vector<float>& gl, const std::vector<float>& cpu) {
+    double top = 0;
+    for (float v : cpu) top = std::max(top, static_cast<double>(std::fabs(v)));
+    const double floor = 1e-6 * top;
+    double worst = 0;
+    for (size_t i = 0; i < cpu.size(); ++i) {
+        const double d = std::fabs(static_cast<double>(gl[i]) - cpu[i]);
+        worst = std::max(worst, d / std::max(floor, std::fabs(static_cast<double>(cpu[i]))));
+    }
+    return worst;
+}
+
+// Two materials (pre-integration, 17 taps; SVD rank 2 with signed terms, 11 taps), a random
+// irradiance over a depth ramp with a 20-unit step, a disc without medium.
+struct Case {
+    std::vector<SssMaterialKernel> mats;
+    SssGBuffer g;
+};
+Case two_materials(int w, int h) {
+    const std::vector<Kernel2D> k = skin_kernels();
+    std::array<ModelResult, 3> pre, svd;
+    for (int c = 0; c < 3; ++c) {
+        pre[c] = approx::preintegration(k[c]);
+        svd[c] = approx::svd_rank_n(k[c], 2, false);
+    }
+    Case d;
+    d.mats = {realtime::make_material_kernel({&pre[0].kernel, &pre[1].kernel, &pre[2].kernel}, 17),
+              realtime::make_material_kernel({&svd[0].kernel, &svd[1].kernel, &svd[2].kernel}, 11)};
+    d.g = flat_gbuffer(random_image(w, h, 1.0, 13), 1.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = static_cast<size_t>(y) * w + x;
+            d.g.view_z[i] = static_cast<float>(30 + 0.3 * x + (x > w * 0.6 ? 20 : 0));
+            const int dx = x - w / 2, dy = y - h / 2;
+            d.g.material[i] = dx * dx + dy * dy < (h / 5) * (h / 5) ? -1 : (y < h / 2 ? 0 : 1);
+        }
+    return d;
+}
+
+// The CPU pass on inputs perturbed at rounding level: every irradiance by up to 1.2e-7 relative
+// and the kernel scale by 2.4e-7 (the GL pass computes tap positions in float, the CPU pass in
+// double). How far that moves the CPU's own result is what float arithmetic can promise.
+std::vector<float> perturbed_cpu(const SssGBuffer& g, const std::vector<SssMaterialKernel>& mats,
+                                 SssParams p) {
+    SssGBuffer q = g;
+    uint32_t st = 1;
+    for (float& v : q.irradiance) {
+        st = st * 1664525u + 1013904223u;
+        v *= 1.0f + ((st >> 8) * (1.0f / 16777216.0f) - 0.5f) * 2.4e-7f;
+    }
+    p.unit_mm *= 1 + 2.4e-7;
+    return realtime::sss_pass(q, mats, p);
+}
+
+// The values of the pixels of material m.
+std::vector<float> of_material(const Case& c, const std::vector<float>& v, int m) {
+    std::vector<float> r;
+    for (size_t i = 0; i < c.g.pixels(); ++i)
+        if (c.g.material[i] == m)
+            for (int ch = 0; ch < 3; ++ch) r.push_back(v[3 * i + ch]);
+    return r;
+}
+
+TEST_P(GlSssPassTest, EqualsTheCpuPassOnIdenticalInputs) {
+    realtime::gl::GlSssPass pass(*ctx);
+    const Case c = two_materials(97, 61);
+    for (SssEdgeMode mode : kSssEdgeModes)
+        for (double jitter : {0.0, 0.33})
+            for (bool rotate : {false, true}) {
+                SssParams p = sss_camera(c.g.width, c.g.height, mode);
+                p.jitter = jitter;
+                p.seed = 7;
+                p.rotate = rotate;
+                const std::string what = std::string(edge_mode_name(mode)) + " jitter " +
+                                         std::to_string(jitter) + " rotate " +
+                                         std::to_string(rotate);
+                const std::vector<float> cpu = realtime::sss_pass(c.g, c.mats, p);
+                std::vector<float> gl;
+                pass.run(c.g, c.mats, p, gl);
+                ASSERT_EQ(gl.size(), cpu.size());
+                const std::vector<float> self = perturbed_cpu(c.g, c.mats, p);
+                // Material 0 (one term, positive weights) in every mode, and everything without
+                // rejection: 1e-5 relative, pixel by pixel.
+                const double m0 = worst_relative(of_material(c, gl, 0), of_material(c, cpu, 0));
+                const double m1 = worst_relative(of_material(c, gl, 1), of_material(c, cpu, 1));
+                const double m1_self =
+                    worst_relative(of_material(c, self, 1), of_material(c, cpu, 1));
+                std::printf(
+                    "%-30s GL vs CPU, worst relative difference: material 0 %.2g, "
+                    "material 1 (SVD rank 2) %.2g (CPU vs itself perturbed: %.2g)\n",
+                    what.c_str(), m0, m1, m1_self);
+                EXPECT_LT(m0, 1e-5) << what;
+                if (mode != SssEdgeMode::kReject) {
+                    EXPECT_LT(m1, 1e-5) << what;
+                } else {
+                    // Rejection rescales each term by (its weight sum) / (its kept weight sum);
+                    // the signed second SVD term's sums are near 0, so the result is
+                    // ill-conditioned: rounding-level changes move the CPU pass itself by
+                    // percents there. The GL pass must stay within that.
+                    EXPECT_LT(m1, std::max(1e-5, 4 * m1_self)) << what;
+                }
+                // Pixels without medium pass their input through, bit for bit.
+                for (size_t i = 0; i < c.g.pixels(); ++i) {
+                    if (c.g.material[i] >= 0) continue;
+                    for (int ch = 0; ch < 3; ++ch)
+                        ASSERT_EQ(gl[3 * i + ch], c.g.irradiance[3 * i + ch]);
+                }
+            }
+}
+
+TEST_P(GlSssPassTest, NarrowAndWideKernels) {
+    realtime::gl::GlSssPass pass(*ctx);
+    Case c = two_materials(64, 48);
+    // Far away (kernels narrower than a pixel: the identity times the mass) and close (wider
+    // than the image: clamp-to-edge everywhere).
+    for (float z : {5000.0f, 0.5f}) {
+        for (float& v : c.g.view_z) v = z;
+        for (SssEdgeMode mode : kSssEdgeModes) {
+            const SssParams p = sss_camera(c.g.width, c.g.height, mode);
+            const std::vector<float> cpu = realtime::sss_pass(c.g, c.mats, p);
+            std::vector<float> gl;
+            pass.run(c.g, c.mats, p, gl);
+            const double worst = worst_relative(gl, cpu);
+            std::printf("z %g %s: worst relative difference %.3g\n", z, edge_mode_name(mode),
+                        worst);
+            EXPECT_LT(worst, 1e-5) << "z " << z << " " << edge_mode_name(mode);
+        }
+    }
+}
+
+TEST_P(GlSssPassTest, RefusesWhatTheCpuPassRefuses) {
+    realtime::gl::GlSssPass pass(*ctx);
+    const Case c = two_materials(20, 16);
+    const SssParams p = sss_camera(20, 16, SssEdgeMode::kNone);
+    std::vector<float> out;
+    SssGBuffer bad = c.g;
+    bad.material[0] = 2;
+    EXPECT_THROW(pass.run(bad, c.mats, p, out), std::invalid_argument);
+    bad = c.g;
+    bad.material[21] = 0;
+    bad.view_z[21] = -1;
+    EXPECT_THROW(pass.run(bad, c.mats, p, out), std::invalid_argument);
+    SssParams q = p;
+    q.tan_half = 0;
+    EXPECT_THROW(pass.run(c.g, c.mats, q, out), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace ssslab
