@@ -1,11 +1,13 @@
 // [outputs.realtime] (experiments/runner/realtime_study.h): a small experiment end to end through
 // `ssslab run`: the tables a script reads, the metrics `ssslab check` compares, the report's flip
 // viewer driven in headless Chromium, and its config errors.
+#include "core/build_info.h"
 #include "experiments/runner/plots.h"
 #include "testing.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -223,6 +225,32 @@ TEST_F(RealtimeStudy, TheFlipViewerWorksInHeadlessChromium) {
     EXPECT_EQ(console.find("Failed to load resource"), std::string::npos) << console;
 }
 
+// The same experiment with the SSS pass on the GL twin (backend = "gl"): every score of the
+// table equals the software run's to 1e-5 relative (the twin's parity, tests/test_gl.cpp).
+TEST_F(RealtimeStudy, TheGlBackendGivesTheSameScores) {
+    if (!SSSLAB_HAVE_GL) GTEST_SKIP() << "built without the GL twin";
+    testing::TempDir dir;
+    dir.write("ball.toml", kScene);
+    std::string cfg = config(R"(["svd:rank=1", "preintegration"])");
+    cfg.replace(cfg.find("taps = 9"), 8, "taps = 9\nbackend = \"gl\"");
+    dir.write("rt.toml", cfg);
+    const auto r = run_ssslab({"run", "rt.toml", "-q"}, dir.path());
+    if (r.exit_code != 0 && r.err.find("no OpenGL context") != std::string::npos)
+        GTEST_SKIP() << r.err;
+    ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+    const auto sw = csv_rows(testing::read_text(out() / "realtime" / "table_6_4.csv"));
+    const auto gl =
+        csv_rows(testing::read_text(dir.path() / "results" / "rt" / "realtime" / "table_6_4.csv"));
+    ASSERT_EQ(gl.size(), sw.size());
+    for (const char* name : {"rms_vs_reference", "rms_vs_volpath", "raw_rms_vs_volpath"}) {
+        const size_t c = column(sw[0], name);
+        for (size_t i = 1; i < sw.size(); ++i) {
+            const double a = std::stod(sw[i][c]), b = std::stod(gl[i][c]);
+            EXPECT_LE(std::fabs(a - b), 1e-5 * std::fabs(a)) << name << " row " << i;
+        }
+    }
+}
+
 TEST(RealtimeStudyConfig, BadModelsAndMaterialsAreLocated) {
     testing::TempDir dir;
     std::string scene = kScene;
@@ -242,6 +270,12 @@ TEST(RealtimeStudyConfig, BadModelsAndMaterialsAreLocated) {
     r = run_ssslab({"run", "e.toml"}, dir.path());
     EXPECT_EQ(r.exit_code, 2);
     EXPECT_NE(r.err.find("kernel study"), std::string::npos) << r.err;
+    std::string cfg = config(R"(["svd:rank=1"])");
+    cfg.replace(cfg.find("taps = 9"), 8, "taps = 9\nbackend = \"vulkan\"");
+    dir.write("e.toml", cfg);
+    r = run_ssslab({"run", "e.toml"}, dir.path());
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("outputs.realtime.backend"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "results"));
 }
 

@@ -2,6 +2,7 @@
 
 #include "approx/model_spec.h"
 #include "core/atomic_file.h"
+#include "core/build_info.h"
 #include "core/error.h"
 #include "core/film_image.h"
 #include "core/image_compare.h"
@@ -13,6 +14,9 @@
 #include "experiments/runner/report.h"
 #include "experiments/runner/runner.h"
 #include "realtime/frame.h"
+#if SSSLAB_HAVE_GL
+#include "realtime/gl/sss_pass_gl.h"
+#endif
 #include "volpath/render.h"
 
 #include <tbb/task_arena.h>
@@ -22,6 +26,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <set>
 #include <sstream>
 
@@ -220,6 +225,12 @@ RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_
     if ((s.width == 0) != (s.height == 0))
         t.fail("width", "give both width and height, or neither");
     s.edge = t.choice("edge", "follow", {"follow", "reject", "none"});
+    s.backend = t.choice("backend", "software", {"software", "gl"});
+    s.platform = t.choice("platform", "auto", {"auto", "osmesa", "egl"});
+    if (s.backend == "gl" && !SSSLAB_HAVE_GL)
+        t.fail("backend",
+               "this build has no GL twin (SSSLAB_WITH_GL; apt-get install "
+               "libosmesa6-dev libegl-dev python3-glad)");
     s.spp = t.integer("spp", 252, Range::closed(3, 1e9));
     s.photons = t.integer("photons", 1'000'000, Range::closed(100, 1e12));
     s.light_samples = static_cast<int>(t.integer("light_samples", 16, Range::closed(1, 4096)));
@@ -261,6 +272,17 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
     };
     std::vector<SceneScores> all;
     std::ostringstream viewers;
+    // The GL twin's SSS pass, where the config names it: one context for the study, on this
+    // thread (render_frame calls the pass on the thread that runs the arena's work).
+#if SSSLAB_HAVE_GL
+    std::unique_ptr<realtime::gl::GlContext> gl_context;
+    std::unique_ptr<realtime::gl::GlSssPass> gl_pass;
+    if (spec.backend == "gl") {
+        gl_context =
+            realtime::gl::GlContext::create(realtime::gl::parse_gl_platform(spec.platform));
+        gl_pass = std::make_unique<realtime::gl::GlSssPass>(*gl_context);
+    }
+#endif
     const realtime::SssEdgeMode mode = spec.edge == "reject" ? realtime::SssEdgeMode::kReject
                                        : spec.edge == "none"
                                            ? realtime::SssEdgeMode::kNone
@@ -354,6 +376,13 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
             o.sss.jitter = jitter;
             o.sss.rotate = rotate;
             o.sss.seed = static_cast<std::uint32_t>(ctx.seed);
+#if SSSLAB_HAVE_GL
+            if (gl_pass)
+                o.separable_pass = [&](const realtime::SssGBuffer& g,
+                                       const std::vector<realtime::SssMaterialKernel>& taps,
+                                       const realtime::SssParams& p,
+                                       std::vector<float>& out) { gl_pass->run(g, taps, p, out); };
+#endif
             realtime::FrameResult r;
             arena.execute([&] { r = realtime::render_frame(scene, frame, lit, k, o); });
             return r;

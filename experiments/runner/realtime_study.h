@@ -15,6 +15,8 @@
 //   width = 512                   # every scene at this size (0: the scene camera's)
 //   height = 512
 //   edge = "follow"               # follow | reject | none (realtime/sss_pass.h)
+//   backend = "software"          # software | gl: the SSS pass on the GL twin (realtime/gl)
+//   platform = "auto"             # with gl: auto | osmesa | egl
 //   spp = 252                     # the path tracer's reference (a cached render, role
 //                                 # "realtime"; shared with any study of the same budget)
 //   photons = 1e6                 # MCML photons per channel of each material's profile
@@ -64,6 +66,9 @@ struct RealtimeStudySpec {
     bool rotate = false;
     int width = 512, height = 512;
     std::string edge = "follow";
+    /// The separable pass's backend: "software" (realtime/sss_pass.h) or "gl" (the GL twin,
+    /// realtime/gl) on `platform` ("auto", "osmesa", "egl").
+    std::string backend = "software", platform = "auto";
     std::int64_t spp = 252;
     std::int64_t photons = 1'000'000;
     int light_samples = 16, environment_samples = 64, shadow_map_size = 2048,
