@@ -4,7 +4,9 @@
 // SVD rank 2, signed terms), a depth step, pixels without medium, kernels narrower than a pixel
 // and wider than the image. Tests skip (with the reason) where no context can be made.
 #include "approx/models.h"
+#include "core/scene.h"
 #include "realtime/gl/context.h"
+#include "realtime/gl/raster_gl.h"
 #include "realtime/gl/sss_pass_gl.h"
 #include "realtime/sss_pass.h"
 #include "testing.h"
@@ -235,6 +237,57 @@ TEST_P(GlSssPassTest, RefusesWhatTheCpuPassRefuses) {
     SssParams q = p;
     q.tan_half = 0;
     EXPECT_THROW(pass.run(c.g, c.mats, q, out), std::invalid_argument);
+}
+
+// ---- The G-buffer's geometry (realtime/gl/raster_gl.h) against the software rasterizer ----
+
+// PSNR of a against b (peak: b's largest value), in dB.
+double psnr(const std::vector<double>& a, const std::vector<double>& b) {
+    double peak = 0, se = 0;
+    for (size_t i = 0; i < b.size(); ++i) {
+        peak = std::max(peak, std::fabs(b[i]));
+        se += (a[i] - b[i]) * (a[i] - b[i]);
+    }
+    const double mse = se / static_cast<double>(b.size());
+    return mse > 0 ? 10 * std::log10(peak * peak / mse) : 999.0;
+}
+
+TEST_P(GlSssPassTest, RasterOfTheBuiltInScenesMatchesTheSoftwareRasterizer) {
+    realtime::gl::GlRaster raster(*ctx);
+    for (const char* name : {"skin", "marble", "wholemilk", "apple", "ketchup"}) {
+        const Scene scene =
+            read_scene(testing::source_path("experiments/scenes/") + name + ".toml");
+        const int w = 320, h = 240;
+        realtime::RasterOptions o;
+        const realtime::RasterFrame sw = realtime::rasterize(scene, o, w, h);
+        realtime::RasterFrame gl;
+        realtime::gl::GlRasterTimes t;
+        raster.rasterize(scene, o, w, h, gl, &t);
+        ASSERT_EQ(gl.shape.size(), sw.shape.size());
+        size_t same_shape = 0, same_triangle = 0, covered = 0;
+        double worst_z = 0;
+        for (size_t i = 0; i < sw.shape.size(); ++i) {
+            covered += sw.shape[i] >= 0;
+            if (gl.shape[i] != sw.shape[i]) continue;
+            ++same_shape;
+            if (gl.triangle[i] != sw.triangle[i]) continue;
+            ++same_triangle;
+            if (sw.shape[i] >= 0)
+                worst_z = std::max(worst_z, std::fabs(gl.view_z[i] - sw.view_z[i]) / sw.view_z[i]);
+        }
+        const double n = static_cast<double>(sw.shape.size());
+        const double p = psnr(gl.depth, sw.depth);
+        std::printf(
+            "%-10s %zu of %zu samples covered; same shape %.5f, same triangle %.5f, "
+            "view z within %.2g; depth layer PSNR %.1f dB; GL draws %.2f ms (timer "
+            "query %.2f), call %.1f ms\n",
+            name, covered, sw.shape.size(), same_shape / n, same_triangle / n, worst_z, p,
+            t.draw_ms, t.gpu_ms, t.wall_ms);
+        EXPECT_GT(same_shape / n, 0.999) << name;
+        EXPECT_GT(same_triangle / n, 0.99) << name;
+        EXPECT_LT(worst_z, 1e-5) << name;
+        EXPECT_GT(p, 45.0) << name;
+    }
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <glad/gl.h>
 
 #include "approx/convolve.h"
+#include "realtime/gl/gl_util.h"
 #include "realtime/gl/shaders.h"
 
 #include <algorithm>
@@ -14,87 +15,12 @@
 
 namespace ssslab::realtime::gl {
 
-namespace {
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
-void check_gl(const char* what) {
-    const GLenum e = glGetError();
-    if (e != GL_NO_ERROR)
-        throw std::runtime_error(std::string("OpenGL error 0x") + std::to_string(e) + " in " +
-                                 what);
-}
-
-GLuint compile(GLenum type, const std::string& source, const std::string& name) {
-    const GLuint s = glCreateShader(type);
-    const char* src = source.c_str();
-    glShaderSource(s, 1, &src, nullptr);
-    glCompileShader(s);
-    GLint ok = 0;
-    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        GLint len = 0;
-        glGetShaderiv(s, GL_INFO_LOG_LENGTH, &len);
-        std::string log(static_cast<size_t>(std::max(len, 1)), '\0');
-        glGetShaderInfoLog(s, len, nullptr, log.data());
-        glDeleteShader(s);
-        throw std::runtime_error(name + " does not compile: " + log);
-    }
-    return s;
-}
-
-GLuint link(const std::string& vert, const std::string& frag, const std::string& name) {
-    const GLuint vs = compile(GL_VERTEX_SHADER, vert, name + " (vertex)");
-    GLuint fs = 0;
-    try {
-        fs = compile(GL_FRAGMENT_SHADER, frag, name);
-    } catch (...) {
-        glDeleteShader(vs);
-        throw;
-    }
-    const GLuint p = glCreateProgram();
-    glAttachShader(p, vs);
-    glAttachShader(p, fs);
-    glLinkProgram(p);
-    glDeleteShader(vs);
-    glDeleteShader(fs);
-    GLint ok = 0;
-    glGetProgramiv(p, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        GLint len = 0;
-        glGetProgramiv(p, GL_INFO_LOG_LENGTH, &len);
-        std::string log(static_cast<size_t>(std::max(len, 1)), '\0');
-        glGetProgramInfoLog(p, len, nullptr, log.data());
-        glDeleteProgram(p);
-        throw std::runtime_error(name + " does not link: " + log);
-    }
-    return p;
-}
-
-// A float texture of w x h texels of `channels` components (nearest, no mipmaps).
-GLuint make_texture(int w, int h, GLenum internal, GLenum format, GLenum type, const void* data) {
-    GLuint t = 0;
-    glGenTextures(1, &t);
-    glBindTexture(GL_TEXTURE_2D, t);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    glTexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(internal), w, h, 0, format, type, data);
-    return t;
-}
-
-}  // namespace
-
 struct GlSssPass::Impl {
     GlContext& ctx;
     GLuint vao = 0;
     // Programs per (mode, jitter, rotate, phase).
     std::map<std::tuple<int, bool, bool, int>, GLuint> programs;
-    GLuint query = 0;
+    std::unique_ptr<GlTimer> timer;
     bool precise = false;  // GLSL 4.00: tap positions in double (shaders/sss_pass.frag)
 
     // The uploaded inputs of one run and the targets.
@@ -108,7 +34,7 @@ struct GlSssPass::Impl {
     explicit Impl(GlContext& c) : ctx(c) {
         ctx.make_current();
         glGenVertexArrays(1, &vao);
-        glGenQueries(1, &query);
+        timer = std::make_unique<GlTimer>();
         GLint major = 0;
         glGetIntegerv(GL_MAJOR_VERSION, &major);
         precise = major >= 4;
@@ -117,7 +43,7 @@ struct GlSssPass::Impl {
     ~Impl() {
         ctx.make_current();
         for (auto& [k, p] : programs) glDeleteProgram(p);
-        glDeleteQueries(1, &query);
+        timer.reset();
         glDeleteVertexArrays(1, &vao);
     }
 
@@ -130,10 +56,11 @@ struct GlSssPass::Impl {
             "#define PRECISE " + (precise ? "1" : "0") + "\n#define MODE " + std::to_string(mode) +
             "\n#define JITTER " + (jitter ? "1" : "0") + "\n#define ROTATE " +
             (rotate ? "1" : "0") + "\n#define PHASE " + std::to_string(phase) + "\n";
-        const GLuint p = link(shaders::fullscreen_vert, defines + shaders::sss_pass_frag,
-                              "realtime/gl/shaders/sss_pass.frag (MODE " + std::to_string(mode) +
-                                  ", JITTER " + (jitter ? "1" : "0") + ", ROTATE " +
-                                  (rotate ? "1" : "0") + ", PHASE " + std::to_string(phase) + ")");
+        const GLuint p =
+            link_program(shaders::fullscreen_vert, defines + shaders::sss_pass_frag,
+                         "realtime/gl/shaders/sss_pass.frag (MODE " + std::to_string(mode) +
+                             ", JITTER " + (jitter ? "1" : "0") + ", ROTATE " +
+                             (rotate ? "1" : "0") + ", PHASE " + std::to_string(phase) + ")");
         programs.emplace(key, p);
         return p;
     }
@@ -307,47 +234,47 @@ void GlSssPass::run(const SssGBuffer& g, const std::vector<SssMaterialKernel>& m
                        p.jitter > 0, p.rotate, phase);
     glFinish();
     const double upload = ms_since(t0);
-    glBeginQuery(GL_TIME_ELAPSED, impl_->query);
+    impl_->timer->begin();
     GLuint result = 0;
     try {
         result = impl_->draw(r, p);
     } catch (...) {
-        glEndQuery(GL_TIME_ELAPSED);
+        impl_->timer->end();
         impl_->release(r);
         throw;
     }
-    glEndQuery(GL_TIME_ELAPSED);
-    GLuint64 ns = 0;
-    glGetQueryObjectui64v(impl_->query, GL_QUERY_RESULT, &ns);
+    impl_->timer->end();
     const auto t1 = std::chrono::steady_clock::now();
     impl_->read(r, result, out);
     const double readback = ms_since(t1);
     impl_->release(r);
     if (times) {
-        times->gpu_ms = static_cast<double>(ns) * 1e-6;
+        times->gpu_ms = impl_->timer->gpu_ms();
+        times->draw_ms = impl_->timer->wall_ms();
         times->upload_ms = upload;
         times->readback_ms = readback;
         times->wall_ms = ms_since(t0);
     }
 }
 
-std::vector<double> GlSssPass::time_runs(const SssGBuffer& g,
-                                         const std::vector<SssMaterialKernel>& materials,
-                                         const SssParams& p, int repeat) {
+std::vector<GlSssTimes> GlSssPass::time_runs(const SssGBuffer& g,
+                                             const std::vector<SssMaterialKernel>& materials,
+                                             const SssParams& p, int repeat) {
     check_sss_inputs(g, materials, p);
     check_pixels(g, materials.size());
     impl_->ctx.make_current();
     Impl::Resident r = impl_->upload(g, materials, p);
     impl_->draw(r, p);  // compiles the programs, outside the timer queries
     glFinish();
-    std::vector<double> ms;
+    std::vector<GlSssTimes> ms;
     for (int i = 0; i < repeat; ++i) {
-        glBeginQuery(GL_TIME_ELAPSED, impl_->query);
+        impl_->timer->begin();
         impl_->draw(r, p);
-        glEndQuery(GL_TIME_ELAPSED);
-        GLuint64 ns = 0;
-        glGetQueryObjectui64v(impl_->query, GL_QUERY_RESULT, &ns);
-        ms.push_back(static_cast<double>(ns) * 1e-6);
+        impl_->timer->end();
+        GlSssTimes t;
+        t.gpu_ms = impl_->timer->gpu_ms();
+        t.draw_ms = t.wall_ms = impl_->timer->wall_ms();
+        ms.push_back(t);
     }
     impl_->release(r);
     return ms;

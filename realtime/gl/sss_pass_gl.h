@@ -16,6 +16,7 @@ namespace ssslab::realtime::gl {
 /// Times of one run of the pass.
 struct GlSssTimes {
     double gpu_ms = 0;       ///< GL_TIME_ELAPSED of the pass's draws (inputs resident)
+    double draw_ms = 0;      ///< wall time of the draws, glFinish to glFinish (gl_util.h GlTimer)
     double upload_ms = 0;    ///< wall time to upload the G-buffer and the taps
     double readback_ms = 0;  ///< wall time to read the result back
     double wall_ms = 0;      ///< wall time of the whole call
@@ -35,10 +36,11 @@ class GlSssPass {
     /// shader that does not compile names the compiler's message).
     void run(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
              const SssParams& p, std::vector<float>& out, GlSssTimes* times = nullptr);
-    /// The same, `repeat` times on inputs uploaded once (for timing): the GPU time of each run.
-    std::vector<double> time_runs(const SssGBuffer& g,
-                                  const std::vector<SssMaterialKernel>& materials,
-                                  const SssParams& p, int repeat);
+    /// The same, `repeat` times on inputs uploaded once (for timing): each run's draw times
+    /// (gpu_ms, draw_ms).
+    std::vector<GlSssTimes> time_runs(const SssGBuffer& g,
+                                      const std::vector<SssMaterialKernel>& materials,
+                                      const SssParams& p, int repeat);
 
   private:
     struct Impl;

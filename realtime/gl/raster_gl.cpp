@@ -1,0 +1,223 @@
+#include "realtime/gl/raster_gl.h"
+
+#include "core/mesh.h"
+#include "realtime/gl/gl_util.h"
+#include "realtime/gl/shaders.h"
+
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+namespace ssslab::realtime::gl {
+
+struct GlRaster::Impl {
+    GlContext& ctx;
+    GLuint program = 0, vao = 0;
+    std::unique_ptr<GlTimer> timer;
+    GLuint fbo = 0, tex_z = 0, tex_shape = 0, tex_tri = 0, depth = 0;
+    int w = 0, h = 0;
+
+    explicit Impl(GlContext& c) : ctx(c) {
+        ctx.make_current();
+        GLint major = 0, minor = 0;
+        glGetIntegerv(GL_MAJOR_VERSION, &major);
+        glGetIntegerv(GL_MINOR_VERSION, &minor);
+        if (major * 10 + minor < 45)
+            throw std::runtime_error(
+                "the GL raster needs OpenGL 4.5 (glClipControl), this "
+                "context has " +
+                std::to_string(major) + "." + std::to_string(minor));
+        program = link_program(shaders::raster_vert, shaders::raster_frag,
+                               "realtime/gl/shaders/raster.{vert,frag}");
+        glGenVertexArrays(1, &vao);
+        timer = std::make_unique<GlTimer>();
+        check_gl("GlRaster set-up");
+    }
+    ~Impl() {
+        ctx.make_current();
+        release_targets();
+        timer.reset();
+        glDeleteVertexArrays(1, &vao);
+        glDeleteProgram(program);
+    }
+    void release_targets() {
+        const GLuint t[] = {tex_z, tex_shape, tex_tri};
+        glDeleteTextures(3, t);
+        glDeleteRenderbuffers(1, &depth);
+        glDeleteFramebuffers(1, &fbo);
+        fbo = tex_z = tex_shape = tex_tri = depth = 0;
+        w = h = 0;
+    }
+    // The render targets at width x height (kept while the size is unchanged).
+    void targets(int width, int height) {
+        if (width == w && height == h) return;
+        release_targets();
+        w = width;
+        h = height;
+        tex_z = make_texture(w, h, GL_R32F, GL_RED, GL_FLOAT, nullptr);
+        tex_shape = make_texture(w, h, GL_R32I, GL_RED_INTEGER, GL_INT, nullptr);
+        tex_tri = make_texture(w, h, GL_R32I, GL_RED_INTEGER, GL_INT, nullptr);
+        glGenRenderbuffers(1, &depth);
+        glBindRenderbuffer(GL_RENDERBUFFER, depth);
+        glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
+        glGenFramebuffers(1, &fbo);
+        glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex_z, 0);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, tex_shape, 0);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, tex_tri, 0);
+        glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth);
+        const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+        glDrawBuffers(3, bufs);
+        if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+            throw std::runtime_error("GlRaster: the G-buffer framebuffer is incomplete");
+        check_gl("GlRaster targets");
+    }
+};
+
+GlRaster::GlRaster(GlContext& context) : impl_(std::make_unique<Impl>(context)) {}
+GlRaster::~GlRaster() = default;
+
+void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, int height,
+                         RasterFrame& f, GlRasterTimes* times) {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (o.supersample != 1)
+        throw std::invalid_argument("GlRaster: supersampling is not supported yet");
+    if (o.orthographic || !o.depth_test || o.on_tile)
+        throw std::invalid_argument(
+            "GlRaster: orthographic views, no depth test and tile callbacks are not supported");
+    const RasterCamera camera = RasterCamera::from_scene(scene.camera, width, height);
+    const int w = camera.width, h = camera.height;
+    Impl& m = *impl_;
+    m.ctx.make_current();
+    m.targets(w, h);
+
+    // The meshes: clip coordinates in double through the software rasterizer's projection,
+    // uploaded as floats with z = near.
+    struct Draw {
+        GLuint vbo = 0, ibo = 0;
+        GLsizei count = 0;
+        bool cull = false;
+    };
+    std::vector<Draw> draws;
+    const float near = static_cast<float>(o.near);
+    for (const SceneShape& s : scene.shapes) {
+        const bool cull = o.cull_closed && (s.closed ? *s.closed : check_mesh(s.mesh).closed());
+        const RasterMesh rm = project(camera, s.mesh, cull);
+        std::vector<float> v(4 * rm.vertices.size());
+        for (size_t i = 0; i < rm.vertices.size(); ++i) {
+            v[4 * i] = static_cast<float>(rm.vertices[i].x);
+            v[4 * i + 1] = static_cast<float>(rm.vertices[i].y);
+            v[4 * i + 2] = near;
+            v[4 * i + 3] = static_cast<float>(rm.vertices[i].w);
+        }
+        Draw d;
+        d.cull = cull;
+        d.count = static_cast<GLsizei>(3 * s.mesh.triangles.size());
+        glGenBuffers(1, &d.vbo);
+        glBindBuffer(GL_ARRAY_BUFFER, d.vbo);
+        glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(),
+                     GL_STATIC_DRAW);
+        glGenBuffers(1, &d.ibo);
+        glBindVertexArray(m.vao);
+        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d.ibo);
+        glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                     static_cast<GLsizeiptr>(s.mesh.triangles.size() * 3 * sizeof(std::uint32_t)),
+                     s.mesh.triangles.data(), GL_STATIC_DRAW);
+        draws.push_back(d);
+    }
+    check_gl("GlRaster upload");
+
+    m.timer->begin();
+    glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
+    glViewport(0, 0, w, h);
+    glDisable(GL_BLEND);
+    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_GREATER);  // reversed depth: near / w
+    glDepthMask(GL_TRUE);
+    const float inf = std::numeric_limits<float>::infinity();
+    const float clear_z[4] = {inf, 0, 0, 0};
+    const GLint clear_none[4] = {-1, 0, 0, 0};
+    const float clear_depth = 0;
+    glClearBufferfv(GL_COLOR, 0, clear_z);
+    glClearBufferiv(GL_COLOR, 1, clear_none);
+    glClearBufferiv(GL_COLOR, 2, clear_none);
+    glClearBufferfv(GL_DEPTH, 0, &clear_depth);
+    glUseProgram(m.program);
+    const GLint shape_loc = glGetUniformLocation(m.program, "u_shape");
+    glFrontFace(GL_CCW);
+    glCullFace(GL_BACK);
+    glBindVertexArray(m.vao);
+    for (size_t i = 0; i < draws.size(); ++i) {
+        const Draw& d = draws[i];
+        if (d.cull)
+            glEnable(GL_CULL_FACE);
+        else
+            glDisable(GL_CULL_FACE);
+        glUniform1i(shape_loc, static_cast<GLint>(i));
+        glBindBuffer(GL_ARRAY_BUFFER, d.vbo);
+        glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 0, nullptr);
+        glEnableVertexAttribArray(0);
+        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d.ibo);
+        glDrawElements(GL_TRIANGLES, d.count, GL_UNSIGNED_INT, nullptr);
+    }
+    m.timer->end();
+    glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_CULL_FACE);
+    check_gl("GlRaster draw");
+
+    // Read back, rows flipped (GL's window origin is the lower left, the frame's rows go down).
+    const size_t n = static_cast<size_t>(w) * h;
+    std::vector<float> z(n);
+    std::vector<std::int32_t> shape(n), tri(n);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(0, 0, w, h, GL_RED, GL_FLOAT, z.data());
+    glReadBuffer(GL_COLOR_ATTACHMENT1);
+    glReadPixels(0, 0, w, h, GL_RED_INTEGER, GL_INT, shape.data());
+    glReadBuffer(GL_COLOR_ATTACHMENT2);
+    glReadPixels(0, 0, w, h, GL_RED_INTEGER, GL_INT, tri.data());
+    check_gl("GlRaster read-back");
+    for (const Draw& d : draws) {
+        glDeleteBuffers(1, &d.vbo);
+        glDeleteBuffers(1, &d.ibo);
+    }
+
+    f.width = w;
+    f.height = h;
+    f.supersample = 1;
+    f.view_z.resize(n);
+    f.ray_t.resize(n);
+    f.shape.resize(n);
+    f.triangle.resize(n);
+    f.barycentric.clear();
+    f.fragments.clear();
+    f.coverage.assign(o.pixel_layers ? n : 0, 0.0);
+    f.depth.assign(o.pixel_layers ? n : 0, 0.0);
+    const RasterCamera::SampleRays rays = camera.sample_rays(1);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t k = f.sample_index(x, y);
+            const size_t g = static_cast<size_t>(h - 1 - y) * w + x;
+            const bool covered = shape[g] >= 0;
+            f.shape[k] = shape[g];
+            f.triangle[k] = covered ? static_cast<std::uint32_t>(tri[g])
+                                    : std::numeric_limits<std::uint32_t>::max();
+            f.view_z[k] =
+                covered ? static_cast<double>(z[g]) : std::numeric_limits<double>::infinity();
+            f.ray_t[k] = covered ? f.view_z[k] * rays.length_per_depth(x, y) : 0.0;
+            if (o.pixel_layers) {
+                f.coverage[k] = covered ? 1.0 : 0.0;
+                f.depth[k] = f.ray_t[k];
+            }
+        }
+    if (times) {
+        times->gpu_ms = m.timer->gpu_ms();
+        times->draw_ms = m.timer->wall_ms();
+        times->wall_ms = ms_since(t0);
+    }
+}
+
+}  // namespace ssslab::realtime::gl
