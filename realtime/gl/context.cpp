@@ -10,6 +10,8 @@
 #include <EGL/eglext.h>
 #endif
 
+#include <dlfcn.h>
+
 #include <cstring>
 #include <stdexcept>
 
@@ -19,6 +21,76 @@ namespace {
 
 // The context glad's function pointers were last loaded for (they are process-wide).
 const void* g_loaded_for = nullptr;
+
+// The platform libraries are opened when a context is first asked for, not linked: linked, they
+// loaded libOSMesa and LLVM (50 MB, 0.1-0.2 s) into every run of ssslab, GL or not.
+void* open_first(std::initializer_list<const char*> names, std::string& error) {
+    for (const char* n : names)
+        if (void* h = dlopen(n, RTLD_NOW | RTLD_LOCAL)) return h;
+    error = std::string("cannot open ") + *names.begin() + " (" + dlerror() + ")";
+    return nullptr;
+}
+template <class F>
+void resolve(void* lib, const char* name, F& f, std::string& error) {
+    f = reinterpret_cast<F>(dlsym(lib, name));
+    if (!f && error.empty()) error = std::string("no ") + name + " in the platform library";
+}
+
+#ifdef SSSLAB_GL_OSMESA
+struct OsmesaApi {
+    decltype(&::OSMesaCreateContextAttribs) create = nullptr;
+    decltype(&::OSMesaMakeCurrent) make_current = nullptr;
+    decltype(&::OSMesaGetProcAddress) get_proc = nullptr;
+    decltype(&::OSMesaDestroyContext) destroy = nullptr;
+    std::string error;  ///< why the library is not usable (empty: it is)
+};
+const OsmesaApi& osmesa() {
+    static const OsmesaApi api = [] {
+        OsmesaApi a;
+        void* lib = open_first({"libOSMesa.so.8", "libOSMesa.so.6", "libOSMesa.so"}, a.error);
+        if (!lib) return a;
+        resolve(lib, "OSMesaCreateContextAttribs", a.create, a.error);
+        resolve(lib, "OSMesaMakeCurrent", a.make_current, a.error);
+        resolve(lib, "OSMesaGetProcAddress", a.get_proc, a.error);
+        resolve(lib, "OSMesaDestroyContext", a.destroy, a.error);
+        return a;
+    }();
+    return api;
+}
+#endif
+
+#ifdef SSSLAB_GL_EGL
+struct EglApi {
+    decltype(&::eglGetProcAddress) get_proc = nullptr;
+    decltype(&::eglQueryString) query_string = nullptr;
+    decltype(&::eglInitialize) initialize = nullptr;
+    decltype(&::eglBindAPI) bind_api = nullptr;
+    decltype(&::eglChooseConfig) choose_config = nullptr;
+    decltype(&::eglCreateContext) create_context = nullptr;
+    decltype(&::eglMakeCurrent) make_current = nullptr;
+    decltype(&::eglGetCurrentContext) current_context = nullptr;
+    decltype(&::eglDestroyContext) destroy_context = nullptr;
+    std::string error;
+};
+const EglApi& egl() {
+    static const EglApi api = [] {
+        EglApi a;
+        void* lib = open_first({"libEGL.so.1", "libEGL.so"}, a.error);
+        if (!lib) return a;
+        resolve(lib, "eglGetProcAddress", a.get_proc, a.error);
+        resolve(lib, "eglQueryString", a.query_string, a.error);
+        resolve(lib, "eglInitialize", a.initialize, a.error);
+        resolve(lib, "eglBindAPI", a.bind_api, a.error);
+        resolve(lib, "eglChooseConfig", a.choose_config, a.error);
+        resolve(lib, "eglCreateContext", a.create_context, a.error);
+        resolve(lib, "eglMakeCurrent", a.make_current, a.error);
+        resolve(lib, "eglGetCurrentContext", a.current_context, a.error);
+        resolve(lib, "eglDestroyContext", a.destroy_context, a.error);
+        return a;
+    }();
+    return api;
+}
+#endif
 
 }  // namespace
 
@@ -54,36 +126,36 @@ std::vector<std::string> gl_platforms_built() {
 
 struct GlContext::Impl {
 #ifdef SSSLAB_GL_OSMESA
-    OSMesaContext osmesa = nullptr;
+    OSMesaContext osmesa_ctx = nullptr;
     unsigned char pixel[4] = {0, 0, 0, 0};  // the 1 x 1 buffer OSMesa is made current on
 #endif
 #ifdef SSSLAB_GL_EGL
     EGLDisplay display = EGL_NO_DISPLAY;
-    EGLContext egl = EGL_NO_CONTEXT;
+    EGLContext egl_ctx = EGL_NO_CONTEXT;
 #endif
     bool is_osmesa = false;
 
     void make_current() const {
 #ifdef SSSLAB_GL_OSMESA
         if (is_osmesa) {
-            if (!OSMesaMakeCurrent(osmesa, const_cast<unsigned char*>(pixel), GL_UNSIGNED_BYTE, 1,
-                                   1))
+            if (!osmesa().make_current(osmesa_ctx, const_cast<unsigned char*>(pixel),
+                                       GL_UNSIGNED_BYTE, 1, 1))
                 throw std::runtime_error("OSMesaMakeCurrent failed");
             return;
         }
 #endif
 #ifdef SSSLAB_GL_EGL
-        if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, egl))
+        if (!egl().make_current(display, EGL_NO_SURFACE, EGL_NO_SURFACE, egl_ctx))
             throw std::runtime_error("eglMakeCurrent (surfaceless) failed");
 #endif
     }
     void load() const {
         int version = 0;
 #ifdef SSSLAB_GL_OSMESA
-        if (is_osmesa) version = gladLoadGL(reinterpret_cast<GLADloadfunc>(OSMesaGetProcAddress));
+        if (is_osmesa) version = gladLoadGL(reinterpret_cast<GLADloadfunc>(osmesa().get_proc));
 #endif
 #ifdef SSSLAB_GL_EGL
-        if (!is_osmesa) version = gladLoadGL(reinterpret_cast<GLADloadfunc>(eglGetProcAddress));
+        if (!is_osmesa) version = gladLoadGL(reinterpret_cast<GLADloadfunc>(egl().get_proc));
 #endif
         if (version == 0) throw std::runtime_error("the GL loader (glad) found no OpenGL");
         if (GLAD_VERSION_MAJOR(version) * 10 + GLAD_VERSION_MINOR(version) < 33)
@@ -93,13 +165,13 @@ struct GlContext::Impl {
     }
     ~Impl() {
 #ifdef SSSLAB_GL_OSMESA
-        if (osmesa) OSMesaDestroyContext(osmesa);
+        if (osmesa_ctx) osmesa().destroy(osmesa_ctx);
 #endif
 #ifdef SSSLAB_GL_EGL
-        if (egl != EGL_NO_CONTEXT) {
-            if (eglGetCurrentContext() == egl)
-                eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
-            eglDestroyContext(display, egl);
+        if (egl_ctx != EGL_NO_CONTEXT) {
+            if (egl().current_context() == egl_ctx)
+                egl().make_current(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+            egl().destroy_context(display, egl_ctx);
         }
         // The display is not terminated: EGL displays are per process and per device, and
         // terminating one would end every other context on it.
@@ -111,6 +183,10 @@ namespace {
 
 #ifdef SSSLAB_GL_OSMESA
 std::unique_ptr<GlContext::Impl> make_osmesa(std::string& why) {
+    if (!osmesa().error.empty()) {
+        why = osmesa().error;
+        return nullptr;
+    }
     const int attribs[] = {OSMESA_FORMAT,
                            OSMESA_RGBA,
                            OSMESA_DEPTH_BITS,
@@ -128,8 +204,8 @@ std::unique_ptr<GlContext::Impl> make_osmesa(std::string& why) {
                            0};
     auto impl = std::make_unique<GlContext::Impl>();
     impl->is_osmesa = true;
-    impl->osmesa = OSMesaCreateContextAttribs(attribs, nullptr);
-    if (!impl->osmesa) {
+    impl->osmesa_ctx = osmesa().create(attribs, nullptr);
+    if (!impl->osmesa_ctx) {
         why = "OSMesaCreateContextAttribs gave no OpenGL 3.3 core context";
         return nullptr;
     }
@@ -145,12 +221,12 @@ std::unique_ptr<GlContext::Impl> make_egl_on(EGLDisplay display, std::string& wh
         return nullptr;
     }
     EGLint major = 0, minor = 0;
-    if (!eglInitialize(display, &major, &minor)) {
+    if (!egl().initialize(display, &major, &minor)) {
         why = "eglInitialize failed";
         return nullptr;
     }
-    if (!eglBindAPI(EGL_OPENGL_API)) {
-        why = "eglBindAPI(EGL_OPENGL_API) failed";
+    if (!egl().bind_api(EGL_OPENGL_API)) {
+        why = "egl().bind_api(EGL_OPENGL_API) failed";
         return nullptr;
     }
     // No surface type asked for (the default, EGL_WINDOW_BIT, has no config without a window
@@ -159,7 +235,7 @@ std::unique_ptr<GlContext::Impl> make_egl_on(EGLDisplay display, std::string& wh
                                      EGL_NONE};
     EGLConfig config = nullptr;
     EGLint n = 0;
-    if (!eglChooseConfig(display, config_attribs, &config, 1, &n) || n < 1) {
+    if (!egl().choose_config(display, config_attribs, &config, 1, &n) || n < 1) {
         why = "no EGL config renders OpenGL";
         return nullptr;
     }
@@ -172,8 +248,8 @@ std::unique_ptr<GlContext::Impl> make_egl_on(EGLDisplay display, std::string& wh
                                   EGL_NONE};
     auto impl = std::make_unique<GlContext::Impl>();
     impl->display = display;
-    impl->egl = eglCreateContext(display, config, EGL_NO_CONTEXT, ctx_attribs);
-    if (impl->egl == EGL_NO_CONTEXT) {
+    impl->egl_ctx = egl().create_context(display, config, EGL_NO_CONTEXT, ctx_attribs);
+    if (impl->egl_ctx == EGL_NO_CONTEXT) {
         why = "eglCreateContext gave no OpenGL 3.3 core context";
         return nullptr;
     }
@@ -182,18 +258,22 @@ std::unique_ptr<GlContext::Impl> make_egl_on(EGLDisplay display, std::string& wh
 
 // EGL's device platform with a hardware device (skipping Mesa's software device), or null.
 std::unique_ptr<GlContext::Impl> make_egl_device(std::string& why) {
-    const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+    if (!egl().error.empty()) {
+        why = egl().error;
+        return nullptr;
+    }
+    const char* client = egl().query_string(EGL_NO_DISPLAY, EGL_EXTENSIONS);
     if (!client || !std::strstr(client, "EGL_EXT_device_enumeration") ||
         !std::strstr(client, "EGL_EXT_platform_device")) {
         why = "EGL has no device enumeration";
         return nullptr;
     }
     auto query_devices =
-        reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
-    auto device_string = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(
-        eglGetProcAddress("eglQueryDeviceStringEXT"));
+        reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(egl().get_proc("eglQueryDevicesEXT"));
+    auto device_string =
+        reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(egl().get_proc("eglQueryDeviceStringEXT"));
     auto platform_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
-        eglGetProcAddress("eglGetPlatformDisplayEXT"));
+        egl().get_proc("eglGetPlatformDisplayEXT"));
     if (!query_devices || !device_string || !platform_display) {
         why = "EGL's device functions are missing";
         return nullptr;
@@ -217,8 +297,12 @@ std::unique_ptr<GlContext::Impl> make_egl_device(std::string& why) {
 
 // Mesa's surfaceless platform (llvmpipe without a GPU), or null.
 std::unique_ptr<GlContext::Impl> make_egl_surfaceless(std::string& why) {
+    if (!egl().error.empty()) {
+        why = egl().error;
+        return nullptr;
+    }
     auto platform_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
-        eglGetProcAddress("eglGetPlatformDisplayEXT"));
+        egl().get_proc("eglGetPlatformDisplayEXT"));
     if (!platform_display) {
         why = "eglGetPlatformDisplayEXT is missing";
         return nullptr;
