@@ -322,46 +322,36 @@ std::unique_ptr<GlContext> GlContext::create(GlPlatform platform) {
 }
 
 std::unique_ptr<GlContext> try_gl_context(GlPlatform platform, std::string& why) {
-    std::unique_ptr<GlContext::Impl> impl;
-    std::string name;
-    std::string reasons;
-    auto note = [&](const char* what, const std::string& w) {
-        reasons += (reasons.empty() ? "" : "; ") + std::string(what) + ": " + w;
+    // The ways to a context, in the order kAuto tries them.
+    using Maker = std::unique_ptr<GlContext::Impl> (*)(std::string&);
+    struct Way {
+        const char* name;
+        GlPlatform platform;
+        Maker make;
     };
-    [[maybe_unused]] const bool want_egl =
-        platform == GlPlatform::kEgl || platform == GlPlatform::kAuto;
-    [[maybe_unused]] const bool want_osmesa =
-        platform == GlPlatform::kOsmesa || platform == GlPlatform::kAuto;
+    const std::vector<Way> ways = {
 #ifdef SSSLAB_GL_EGL
-    if (!impl && want_egl) {
-        std::string w;
-        impl = make_egl_device(w);
-        if (impl)
-            name = "egl-device";
-        else
-            note("egl-device", w);
-    }
+        {"egl-device", GlPlatform::kEgl, make_egl_device},
 #endif
 #ifdef SSSLAB_GL_OSMESA
-    if (!impl && want_osmesa) {
-        std::string w;
-        impl = make_osmesa(w);
-        if (impl)
-            name = "osmesa";
-        else
-            note("osmesa", w);
-    }
+        {"osmesa", GlPlatform::kOsmesa, make_osmesa},
 #endif
 #ifdef SSSLAB_GL_EGL
-    if (!impl && want_egl) {
-        std::string w;
-        impl = make_egl_surfaceless(w);
-        if (impl)
-            name = "egl-surfaceless";
-        else
-            note("egl-surfaceless", w);
-    }
+        {"egl-surfaceless", GlPlatform::kEgl, make_egl_surfaceless},
 #endif
+    };
+    std::unique_ptr<GlContext::Impl> impl;
+    std::string name, reasons;
+    for (const Way& way : ways) {
+        if (platform != GlPlatform::kAuto && platform != way.platform) continue;
+        std::string w;
+        impl = way.make(w);
+        if (impl) {
+            name = way.name;
+            break;
+        }
+        reasons += (reasons.empty() ? "" : "; ") + std::string(way.name) + ": " + w;
+    }
     if (!impl) {
         why = reasons.empty()
                   ? std::string("this build has no GL platform '") + to_string(platform) + "'"
