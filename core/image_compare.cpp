@@ -198,4 +198,16 @@ NoiseCorrectedRms noise_corrected_rms(const std::vector<double>& a, const std::v
     return r;
 }
 
+double max_relative_difference(const std::vector<float>& a, const std::vector<float>& b,
+                               double floor_fraction) {
+    if (a.size() != b.size()) throw std::invalid_argument("max_relative_difference: sizes differ");
+    double top = 0, worst = 0;
+    for (float v : b) top = std::max(top, static_cast<double>(std::fabs(v)));
+    const double floor = floor_fraction * top;
+    for (size_t i = 0; i < b.size(); ++i)
+        worst = std::max(worst, std::fabs(static_cast<double>(a[i]) - b[i]) /
+                                    std::max(floor, std::fabs(static_cast<double>(b[i]))));
+    return worst;
+}
+
 }  // namespace ssslab

@@ -105,4 +105,10 @@ NoiseCorrectedRms noise_corrected_rms(const std::vector<double>& a, const std::v
                                       const std::vector<double>& b, const std::vector<double>& vb,
                                       double dof = 0);
 
+/// The largest difference of a from b relative to b, over all values: |a - b| / |b|, with |b|
+/// taken at least floor_fraction times b's largest magnitude (so that near-zero values are
+/// judged against the image's scale). Equal sizes; two backends' parity (realtime/gl).
+double max_relative_difference(const std::vector<float>& a, const std::vector<float>& b,
+                               double floor_fraction = 1e-6);
+
 }  // namespace ssslab

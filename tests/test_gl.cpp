@@ -4,6 +4,7 @@
 // SVD rank 2, signed terms), a depth step, pixels without medium, kernels narrower than a pixel
 // and wider than the image. Tests skip (with the reason) where no context can be made.
 #include "approx/models.h"
+#include "core/image_compare.h"
 #include "core/scene.h"
 #include "realtime/gl/context.h"
 #include "realtime/gl/raster_gl.h"
@@ -89,21 +90,6 @@ TEST(Gl, ContextsOfEveryPlatformBuilt) {
     EXPECT_THROW(realtime::gl::parse_gl_platform("glx"), std::invalid_argument);
 }
 
-// The largest difference between the GL and the CPU pass relative to the CPU value, over every
-// pixel and channel whose CPU value is above 1e-6 of the image's largest (below that: relative
-// to that floor).
-double worst_relative(const std::vector<float>& gl, const std::vector<float>& cpu) {
-    double top = 0;
-    for (float v : cpu) top = std::max(top, static_cast<double>(std::fabs(v)));
-    const double floor = 1e-6 * top;
-    double worst = 0;
-    for (size_t i = 0; i < cpu.size(); ++i) {
-        const double d = std::fabs(static_cast<double>(gl[i]) - cpu[i]);
-        worst = std::max(worst, d / std::max(floor, std::fabs(static_cast<double>(cpu[i]))));
-    }
-    return worst;
-}
-
 // Two materials (pre-integration, 17 taps; SVD rank 2 with signed terms, 11 taps), a random
 // irradiance over a depth ramp with a 20-unit step, a disc without medium.
 struct Case {
@@ -175,10 +161,12 @@ TEST_P(GlSssPassTest, EqualsTheCpuPassOnIdenticalInputs) {
                 const std::vector<float> self = perturbed_cpu(c.g, c.mats, p);
                 // Material 0 (one term, positive weights) in every mode, and everything without
                 // rejection: 1e-5 relative, pixel by pixel.
-                const double m0 = worst_relative(of_material(c, gl, 0), of_material(c, cpu, 0));
-                const double m1 = worst_relative(of_material(c, gl, 1), of_material(c, cpu, 1));
+                const double m0 =
+                    max_relative_difference(of_material(c, gl, 0), of_material(c, cpu, 0));
+                const double m1 =
+                    max_relative_difference(of_material(c, gl, 1), of_material(c, cpu, 1));
                 const double m1_self =
-                    worst_relative(of_material(c, self, 1), of_material(c, cpu, 1));
+                    max_relative_difference(of_material(c, self, 1), of_material(c, cpu, 1));
                 std::printf(
                     "%-30s GL vs CPU, worst relative difference: material 0 %.2g, "
                     "material 1 (SVD rank 2) %.2g (CPU vs itself perturbed: %.2g)\n",
@@ -214,7 +202,7 @@ TEST_P(GlSssPassTest, NarrowAndWideKernels) {
             const std::vector<float> cpu = realtime::sss_pass(c.g, c.mats, p);
             std::vector<float> gl;
             pass.run(c.g, c.mats, p, gl);
-            const double worst = worst_relative(gl, cpu);
+            const double worst = max_relative_difference(gl, cpu);
             std::printf("z %g %s: worst relative difference %.3g\n", z, edge_mode_name(mode),
                         worst);
             EXPECT_LT(worst, 1e-5) << "z " << z << " " << edge_mode_name(mode);

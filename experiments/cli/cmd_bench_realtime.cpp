@@ -14,6 +14,7 @@
 #include "core/atomic_file.h"
 #include "core/build_info.h"
 #include "core/config.h"
+#include "core/image_compare.h"
 #include "core/material.h"
 #include "core/provenance.h"
 #include "core/scene.h"
@@ -68,17 +69,6 @@ struct Row {
     double floor_ms;  ///< < 0: none
     std::string backend = "software";
 };
-
-// The worst difference of a against b relative to b, over the values above 1e-6 of b's largest
-// (below: relative to that floor).
-double worst_relative(const std::vector<float>& a, const std::vector<float>& b) {
-    double top = 0, worst = 0;
-    for (float v : b) top = std::max(top, static_cast<double>(std::fabs(v)));
-    for (size_t i = 0; i < b.size(); ++i)
-        worst = std::max(worst, std::fabs(static_cast<double>(a[i]) - b[i]) /
-                                    std::max(1e-6 * top, std::fabs(static_cast<double>(b[i]))));
-    return worst;
-}
 
 /// The frame of the speed goal ("one shadow-mapped light"): the scene with only its first light
 /// that is not the environment, made a delta light with one shadow map -- a sun its axis, a
@@ -277,7 +267,7 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
                             std::printf(
                                 "%-18s GL sss pass against the CPU pass on the frame's inputs: "
                                 "worst relative difference %.2g\n",
-                                label.c_str(), worst_relative(out, cpu));
+                                label.c_str(), max_relative_difference(out, cpu));
                         }
                     }
 #endif

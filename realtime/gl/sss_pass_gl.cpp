@@ -15,6 +15,15 @@
 
 namespace ssslab::realtime::gl {
 
+namespace {
+
+// The shader's MODE of an edge mode (shaders/sss_pass.frag).
+int shader_mode(SssEdgeMode m) {
+    return m == SssEdgeMode::kNone ? 0 : m == SssEdgeMode::kFollowSurface ? 1 : 2;
+}
+
+}  // namespace
+
 struct GlSssPass::Impl {
     GlContext& ctx;
     GLuint vao = 0;
@@ -146,9 +155,7 @@ struct GlSssPass::Impl {
 
     // The draws of the pass on resident inputs; returns the texture that holds the result.
     GLuint draw(const Resident& r, const SssParams& p) {
-        const int mode = p.mode == SssEdgeMode::kNone            ? 0
-                         : p.mode == SssEdgeMode::kFollowSurface ? 1
-                                                                 : 2;
+        const int mode = shader_mode(p.mode);
         const bool jitter = p.jitter > 0;
         // Kernel scale [Freude14 Eq. 4.11]: pixels per mm at view depth 1, along x and y.
         const double px = r.w / (2.0 * p.tan_half * p.aspect * p.unit_mm);
@@ -208,46 +215,43 @@ struct GlSssPass::Impl {
     }
 };
 
+// The inputs checked and uploaded and the programs compiled (outside any timer query); the
+// uploads are released when it goes out of scope, whatever happens.
+struct Prepared {
+    GlSssPass::Impl& m;
+    GlSssPass::Impl::Resident r;
+    Prepared(GlSssPass::Impl& impl, const SssGBuffer& g,
+             const std::vector<SssMaterialKernel>& materials, const SssParams& p)
+        : m(impl) {
+        check_sss_inputs(g, materials, p);
+        for (size_t i = 0; i < g.pixels(); ++i)
+            if (!sss_pixel_ok(g.material[i], g.view_z[i], materials.size()))
+                refuse_sss_pixel(g, materials.size(), i);
+        m.ctx.make_current();
+        r = m.upload(g, materials, p);
+        for (int phase = 0; phase < 2; ++phase)
+            m.program(shader_mode(p.mode), p.jitter > 0, p.rotate, phase);
+        glFinish();
+    }
+    ~Prepared() { m.release(r); }
+    Prepared(const Prepared&) = delete;
+    Prepared& operator=(const Prepared&) = delete;
+};
+
 GlSssPass::GlSssPass(GlContext& context) : impl_(std::make_unique<Impl>(context)) {}
 GlSssPass::~GlSssPass() = default;
-
-namespace {
-
-void check_pixels(const SssGBuffer& g, size_t materials) {
-    for (size_t i = 0; i < g.pixels(); ++i)
-        if (!sss_pixel_ok(g.material[i], g.view_z[i], materials)) refuse_sss_pixel(g, materials, i);
-}
-
-}  // namespace
 
 void GlSssPass::run(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
                     const SssParams& p, std::vector<float>& out, GlSssTimes* times) {
     const auto t0 = std::chrono::steady_clock::now();
-    check_sss_inputs(g, materials, p);
-    check_pixels(g, materials.size());
-    impl_->ctx.make_current();
-    Impl::Resident r = impl_->upload(g, materials, p);
-    for (int phase = 0; phase < 2; ++phase)  // compiled outside the timer query
-        impl_->program(p.mode == SssEdgeMode::kNone            ? 0
-                       : p.mode == SssEdgeMode::kFollowSurface ? 1
-                                                               : 2,
-                       p.jitter > 0, p.rotate, phase);
-    glFinish();
+    Prepared in(*impl_, g, materials, p);
     const double upload = ms_since(t0);
     impl_->timer->begin();
-    GLuint result = 0;
-    try {
-        result = impl_->draw(r, p);
-    } catch (...) {
-        impl_->timer->end();
-        impl_->release(r);
-        throw;
-    }
+    const GLuint result = impl_->draw(in.r, p);
     impl_->timer->end();
     const auto t1 = std::chrono::steady_clock::now();
-    impl_->read(r, result, out);
+    impl_->read(in.r, result, out);
     const double readback = ms_since(t1);
-    impl_->release(r);
     if (times) {
         times->gpu_ms = impl_->timer->gpu_ms();
         times->draw_ms = impl_->timer->wall_ms();
@@ -260,23 +264,19 @@ void GlSssPass::run(const SssGBuffer& g, const std::vector<SssMaterialKernel>& m
 std::vector<GlSssTimes> GlSssPass::time_runs(const SssGBuffer& g,
                                              const std::vector<SssMaterialKernel>& materials,
                                              const SssParams& p, int repeat) {
-    check_sss_inputs(g, materials, p);
-    check_pixels(g, materials.size());
-    impl_->ctx.make_current();
-    Impl::Resident r = impl_->upload(g, materials, p);
-    impl_->draw(r, p);  // compiles the programs, outside the timer queries
+    Prepared in(*impl_, g, materials, p);
+    impl_->draw(in.r, p);  // a draw before the timed ones (llvmpipe compiles shaders lazily)
     glFinish();
     std::vector<GlSssTimes> ms;
     for (int i = 0; i < repeat; ++i) {
         impl_->timer->begin();
-        impl_->draw(r, p);
+        impl_->draw(in.r, p);
         impl_->timer->end();
         GlSssTimes t;
         t.gpu_ms = impl_->timer->gpu_ms();
         t.draw_ms = t.wall_ms = impl_->timer->wall_ms();
         ms.push_back(t);
     }
-    impl_->release(r);
     return ms;
 }
 

@@ -42,8 +42,9 @@ class GlSssPass {
                                       const std::vector<SssMaterialKernel>& materials,
                                       const SssParams& p, int repeat);
 
+    struct Impl;  ///< the GL objects (sss_pass_gl.cpp)
+
   private:
-    struct Impl;
     std::unique_ptr<Impl> impl_;
 };
 
