@@ -54,21 +54,6 @@ Vec3 around(const Vec3& axis, double c, double v) {
     return normalize(s * (sn * std::cos(phi)) + t * (sn * std::sin(phi)) + axis * c);
 }
 
-// One shadow-mapped light sample: a direction (orthographic map) or a point (perspective).
-struct LightSample {
-    bool directional = true;
-    Vec3 w{};     // directional: unit vector towards the light
-    Vec3 pos{};   // point
-    RGB value{};  // directional: irradiance at normal incidence; point: intensity [per sr]
-    // Sphere-light patch: intensity value * max(0, lobe . w) towards w (Lambertian emitter).
-    bool lobe = false;
-    Vec3 lobe_n{};
-    bool environment = false;     // a direction of the environment (its own map size)
-    bool thickness_view = false;  // its map gives GBuffer::thickness
-    bool lights = true;           // false: a thickness view only
-    int light = -1;               // index in Scene::lights
-};
-
 enum class Kind : std::uint8_t { kNone, kDiffuse, kMedium };
 
 struct Receiver {
@@ -298,6 +283,152 @@ const BoundaryTransmittance& tabulated_boundary(double eta, double alpha, int co
     return it->second;
 }
 
+LightPlan plan_lights(const Scene& scene, const Box& receivers, const LightingOptions& o) {
+    LightPlan plan;
+    plan.receivers = receivers;
+    Box& casters = plan.casters;
+    for (const SceneShape& s : scene.shapes) {
+        const auto b = s.mesh.bounds();
+        if (b[0].x <= b[1].x) {
+            casters.add(b[0]);
+            casters.add(b[1]);
+        }
+    }
+    const double scene_size =
+        casters.empty() ? 1.0 : std::max(1e-300, length(casters.hi - casters.lo));
+    plan.near = 1e-6 * scene_size;
+
+    // Light samples, in scene order.
+    std::vector<LightSample>& samples = plan.samples;
+    bool thickness_taken = false;
+    for (const SceneLight& l : scene.lights) {
+        const std::size_t first_sample = samples.size();
+        const bool first =
+            o.thickness_layer && !thickness_taken && l.type != LightType::kEnvironment;
+        thickness_taken = thickness_taken || first;
+        switch (l.type) {
+            case LightType::kDirectional: {
+                const Vec3 axis = normalize(l.direction);
+                if (l.angular_radius_deg <= 0) {
+                    LightSample s;
+                    s.w = axis;
+                    s.value = l.color;
+                    s.thickness_view = first;
+                    samples.push_back(s);
+                    break;
+                }
+                const double cos_max = l.disc_cos_max();
+                const double L_per = 1.0 / l.disc_projected_solid_angle();
+                const double omega = 2 * kPi * (1 - cos_max);
+                const int n = o.light_samples;
+                for (int k = 0; k < n; ++k) {
+                    LightSample s;
+                    // Uniform in solid angle over the cone: cos theta uniform in [cos_max, 1].
+                    s.w = around(axis, 1 - fib_u(k, n) * (1 - cos_max), fib_v(k));
+                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * L_per * omega / n;
+                    samples.push_back(s);
+                }
+                if (first) {
+                    LightSample s;
+                    s.w = axis;
+                    s.thickness_view = true;
+                    s.lights = false;
+                    samples.push_back(s);
+                }
+                break;
+            }
+            case LightType::kPoint: {
+                LightSample s;
+                s.directional = false;
+                s.pos = l.position;
+                s.value = l.color;
+                s.thickness_view = first;
+                samples.push_back(s);
+                break;
+            }
+            case LightType::kSphere: {
+                if (receivers.empty()) break;
+                // The cap every receiver could see: around the axis towards the receivers' box,
+                // half-angle (largest angle of a box corner off the axis) + arccos(r / (largest
+                // corner distance)), the visible cap of the farthest point.
+                const Vec3 c0 = l.position;
+                const Vec3 centre = (receivers.lo + receivers.hi) * 0.5;
+                const Vec3 axis = length(centre - c0) > 0 ? normalize(centre - c0) : Vec3{0, 0, 1};
+                double ang = 0, dmax = 0;
+                for (const Vec3& c : receivers.corners()) {
+                    const Vec3 d = c - c0;
+                    const double len = length(d);
+                    dmax = std::max(dmax, len);
+                    if (len > 0)
+                        ang = std::max(ang, std::acos(std::clamp(dot(d, axis) / len, -1.0, 1.0)));
+                }
+                const double rim =
+                    std::acos(std::clamp(l.radius / std::max(dmax, 1e-300), 0.0, 1.0));
+                const double cap = std::min(kPi, ang + rim), cos_cap = std::cos(cap);
+                const double area = 2 * kPi * l.radius * l.radius * (1 - cos_cap);
+                const int n = o.light_samples;
+                for (int k = 0; k < n; ++k) {
+                    LightSample s;
+                    s.directional = false;
+                    s.lobe = true;
+                    s.lobe_n = around(axis, 1 - fib_u(k, n) * (1 - cos_cap), fib_v(k));
+                    s.pos = c0 + s.lobe_n * l.radius;
+                    // A patch of area A / n with radiance L: intensity L (A / n) cos towards w.
+                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * area / n;
+                    samples.push_back(s);
+                }
+                if (first) {
+                    LightSample s;
+                    s.directional = false;
+                    s.pos = c0;
+                    s.thickness_view = true;
+                    s.lights = false;
+                    samples.push_back(s);
+                }
+                break;
+            }
+            case LightType::kEnvironment: {
+                const int n = o.environment_samples;
+                for (int k = 0; k < n; ++k) {
+                    LightSample s;
+                    const double z = 1 - 2 * fib_u(k, n), rr = std::sqrt(std::max(0.0, 1 - z * z));
+                    const double phi = 2 * kPi * fib_v(k);
+                    s.w = {rr * std::cos(phi), rr * std::sin(phi), z};
+                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * 4 * kPi / n;
+                    s.environment = true;
+                    samples.push_back(s);
+                }
+                break;
+            }
+        }
+        for (std::size_t k = first_sample; k < samples.size(); ++k)
+            samples[k].light = static_cast<int>(&l - scene.lights.data());
+    }
+    return plan;
+}
+
+std::vector<ShadowView> LightPlan::views(const LightSample& s, const LightingOptions& o) const {
+    if (s.directional)
+        return {fit_directional(s.w, receivers, casters,
+                                s.environment ? o.environment_map_size : o.shadow_map_size)};
+    return fit_point(s.pos, receivers, near, o.shadow_map_size);
+}
+
+void check_lighting_inputs(const RasterCamera& camera, const RasterFrame& frame,
+                           const LightingOptions& o) {
+    const int ss = frame.supersample;
+    const std::size_t N = static_cast<std::size_t>(frame.sample_width()) *
+                          static_cast<std::size_t>(frame.sample_height());
+    if (camera.width != frame.width || camera.height != frame.height || ss < 1 ||
+        frame.view_z.size() != N || frame.shape.size() != N || frame.triangle.size() != N ||
+        frame.ray_t.size() != N)
+        throw std::invalid_argument("lighting: the frame does not match the camera");
+    if (o.light_samples < 1 || o.environment_samples < 1 || o.shadow_map_size < 1 ||
+        o.shadow_map_size > 16384 || o.environment_map_size < 1 || o.environment_map_size > 16384 ||
+        o.transmittance_cosines < 2 || o.transmittance_quadrature < 1)
+        throw std::invalid_argument("lighting: options out of range");
+}
+
 GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& frame,
               const LightingOptions& o, const std::vector<SlabTransmittance>& slabs,
               LightingStats* stats) {
@@ -314,14 +445,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     const int ss = frame.supersample;
     const int W = frame.sample_width(), H = frame.sample_height();
     const std::size_t N = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
-    if (camera.width != frame.width || camera.height != frame.height || ss < 1 ||
-        frame.view_z.size() != N || frame.shape.size() != N || frame.triangle.size() != N ||
-        frame.ray_t.size() != N)
-        throw std::invalid_argument("lighting: the frame does not match the camera");
-    if (o.light_samples < 1 || o.environment_samples < 1 || o.shadow_map_size < 1 ||
-        o.shadow_map_size > 16384 || o.environment_map_size < 1 || o.environment_map_size > 16384 ||
-        o.transmittance_cosines < 2 || o.transmittance_quadrature < 1)
-        throw std::invalid_argument("lighting: options out of range");
+    check_lighting_inputs(camera, frame, o);
 
     GBuffer& g = out;
     g.width = W;
@@ -554,123 +678,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
             return a;
         });
 
-    Box casters;
-    for (const SceneShape& s : scene.shapes) {
-        const auto b = s.mesh.bounds();
-        if (b[0].x <= b[1].x) {
-            casters.add(b[0]);
-            casters.add(b[1]);
-        }
-    }
-    const double scene_size =
-        casters.empty() ? 1.0 : std::max(1e-300, length(casters.hi - casters.lo));
-
-    // Light samples, in scene order.
-    std::vector<LightSample> samples;
-    bool thickness_taken = false;
-    for (const SceneLight& l : scene.lights) {
-        const std::size_t first_sample = samples.size();
-        const bool first =
-            o.thickness_layer && !thickness_taken && l.type != LightType::kEnvironment;
-        thickness_taken = thickness_taken || first;
-        switch (l.type) {
-            case LightType::kDirectional: {
-                const Vec3 axis = normalize(l.direction);
-                if (l.angular_radius_deg <= 0) {
-                    LightSample s;
-                    s.w = axis;
-                    s.value = l.color;
-                    s.thickness_view = first;
-                    samples.push_back(s);
-                    break;
-                }
-                const double cos_max = l.disc_cos_max();
-                const double L_per = 1.0 / l.disc_projected_solid_angle();
-                const double omega = 2 * kPi * (1 - cos_max);
-                const int n = o.light_samples;
-                for (int k = 0; k < n; ++k) {
-                    LightSample s;
-                    // Uniform in solid angle over the cone: cos theta uniform in [cos_max, 1].
-                    s.w = around(axis, 1 - fib_u(k, n) * (1 - cos_max), fib_v(k));
-                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * L_per * omega / n;
-                    samples.push_back(s);
-                }
-                if (first) {
-                    LightSample s;
-                    s.w = axis;
-                    s.thickness_view = true;
-                    s.lights = false;
-                    samples.push_back(s);
-                }
-                break;
-            }
-            case LightType::kPoint: {
-                LightSample s;
-                s.directional = false;
-                s.pos = l.position;
-                s.value = l.color;
-                s.thickness_view = first;
-                samples.push_back(s);
-                break;
-            }
-            case LightType::kSphere: {
-                if (receivers.empty()) break;
-                // The cap every receiver could see: around the axis towards the receivers' box,
-                // half-angle (largest angle of a box corner off the axis) + arccos(r / (largest
-                // corner distance)), the visible cap of the farthest point.
-                const Vec3 c0 = l.position;
-                const Vec3 centre = (receivers.lo + receivers.hi) * 0.5;
-                const Vec3 axis = length(centre - c0) > 0 ? normalize(centre - c0) : Vec3{0, 0, 1};
-                double ang = 0, dmax = 0;
-                for (const Vec3& c : receivers.corners()) {
-                    const Vec3 d = c - c0;
-                    const double len = length(d);
-                    dmax = std::max(dmax, len);
-                    if (len > 0)
-                        ang = std::max(ang, std::acos(std::clamp(dot(d, axis) / len, -1.0, 1.0)));
-                }
-                const double rim =
-                    std::acos(std::clamp(l.radius / std::max(dmax, 1e-300), 0.0, 1.0));
-                const double cap = std::min(kPi, ang + rim), cos_cap = std::cos(cap);
-                const double area = 2 * kPi * l.radius * l.radius * (1 - cos_cap);
-                const int n = o.light_samples;
-                for (int k = 0; k < n; ++k) {
-                    LightSample s;
-                    s.directional = false;
-                    s.lobe = true;
-                    s.lobe_n = around(axis, 1 - fib_u(k, n) * (1 - cos_cap), fib_v(k));
-                    s.pos = c0 + s.lobe_n * l.radius;
-                    // A patch of area A / n with radiance L: intensity L (A / n) cos towards w.
-                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * area / n;
-                    samples.push_back(s);
-                }
-                if (first) {
-                    LightSample s;
-                    s.directional = false;
-                    s.pos = c0;
-                    s.thickness_view = true;
-                    s.lights = false;
-                    samples.push_back(s);
-                }
-                break;
-            }
-            case LightType::kEnvironment: {
-                const int n = o.environment_samples;
-                for (int k = 0; k < n; ++k) {
-                    LightSample s;
-                    const double z = 1 - 2 * fib_u(k, n), rr = std::sqrt(std::max(0.0, 1 - z * z));
-                    const double phi = 2 * kPi * fib_v(k);
-                    s.w = {rr * std::cos(phi), rr * std::sin(phi), z};
-                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * 4 * kPi / n;
-                    s.environment = true;
-                    samples.push_back(s);
-                }
-                break;
-            }
-        }
-        for (std::size_t k = first_sample; k < samples.size(); ++k)
-            samples[k].light = static_cast<int>(&l - scene.lights.data());
-    }
+    const LightPlan plan = plan_lights(scene, receivers, o);
+    const std::vector<LightSample>& samples = plan.samples;
     // Sphere lights are not in the shadow maps (as they are not in volpath's BVH), but they
     // occlude what lies behind them: the environment, suns and other lights.
     std::vector<int> spheres;
@@ -744,7 +753,6 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     const bool any_slab = std::any_of(slabs.begin(), slabs.end(), [](const SlabTransmittance& t) {
         return !t.thickness_mm.empty();
     });
-    const double near = 1e-6 * scene_size;
     // One map at a time, its storage reused from map to map and from frame to frame (scratch
     // of the calling thread; the result does not depend on it).
     // (A reference: the light passes' worker threads must see this thread's map, not theirs.)
@@ -768,13 +776,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
             },
             [](bool a, bool b) { return a || b; });
         if (!any) continue;
-        std::vector<ShadowView> views;
-        if (s.directional)
-            views.push_back(
-                fit_directional(s.w, receivers, casters,
-                                s.environment ? o.environment_map_size : o.shadow_map_size));
-        else
-            views = fit_point(s.pos, receivers, near, o.shadow_map_size);
+        const std::vector<ShadowView> views = plan.views(s, o);
         const bool need_map = o.shadows || s.thickness_view || any_slab;
         // Cube faces: a receiver belongs to the first face it projects into, found once per
         // light sample (kNoFace: none), so that each face's pass skips the others' receivers.

@@ -21,6 +21,7 @@
 
 #include "core/scene.h"
 #include "realtime/raster.h"
+#include "realtime/shadow_map.h"
 
 #include <array>
 #include <cstddef>
@@ -145,11 +146,50 @@ class BoundaryTransmittance {
 const BoundaryTransmittance& tabulated_boundary(double eta, double alpha, int cosines = 65,
                                                 int quadrature = 64);
 
+/// One shadow-mapped light sample of pass 1: a direction (orthographic map) or a point
+/// (perspective map, or cube faces). What every backend of the pass lights with (the GL twin,
+/// realtime/gl/lighting_gl.h, uploads them as they are).
+struct LightSample {
+    bool directional = true;
+    Vec3 w{};    ///< directional: unit vector towards the light
+    Vec3 pos{};  ///< point
+    /// Directional: irradiance at normal incidence; point: intensity [per sr].
+    std::array<double, 3> value{};
+    /// Sphere-light patch: intensity value * max(0, -lobe_n . w_i) towards the receiver
+    /// (Lambertian emitter; w_i points from the receiver to the patch).
+    bool lobe = false;
+    Vec3 lobe_n{};
+    bool environment = false;     ///< a direction of the environment (its own map size)
+    bool thickness_view = false;  ///< its map gives GBuffer::thickness
+    bool lights = true;           ///< false: a thickness view only
+    int light = -1;               ///< index in Scene::lights
+};
+
+/// The light samples of a frame and what their shadow maps are fitted to.
+struct LightPlan {
+    Box receivers;    ///< what the camera sees lit (diffuse surfaces, media seen from outside)
+    Box casters;      ///< every shape of the scene
+    double near = 0;  ///< point lights' near plane: 1e-6 of the casters' diagonal
+    std::vector<LightSample> samples;  ///< in scene order, each light's samples in turn
+    /// The shadow views of sample s: one orthographic map for a direction (the environment's
+    /// at environment_map_size), fit_point's frustum or cube faces for a point.
+    std::vector<ShadowView> views(const LightSample& s, const LightingOptions& o) const;
+};
+/// Every light of the scene as samples (see the file comment), stratified deterministically
+/// (Fibonacci), for receivers within `receivers`: sphere lights sample the cap of them that
+/// the box can see (none for an empty box).
+LightPlan plan_lights(const Scene& scene, const Box& receivers, const LightingOptions& o);
+
 struct LightingStats {
     int shadow_maps = 0;
     double shadow_ms = 0, shading_ms = 0;
     int light_samples = 0;  ///< point and directional samples of all lights (with or without map)
 };
+
+/// What shade() checks of its inputs (every backend of pass 1 calls it): std::invalid_argument
+/// for a frame that does not match the camera or options out of range.
+void check_lighting_inputs(const RasterCamera& camera, const RasterFrame& frame,
+                           const LightingOptions& o);
 
 /// Pass 1. `camera` is the camera the frame was rasterized with
 /// (RasterCamera::from_scene(scene.camera, frame.width, frame.height)); with supersampling the

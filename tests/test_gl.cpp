@@ -7,8 +7,10 @@
 #include "core/image_compare.h"
 #include "core/scene.h"
 #include "realtime/gl/context.h"
+#include "realtime/gl/lighting_gl.h"
 #include "realtime/gl/raster_gl.h"
 #include "realtime/gl/sss_pass_gl.h"
+#include "realtime/lighting.h"
 #include "realtime/sss_pass.h"
 #include "testing.h"
 
@@ -275,6 +277,68 @@ TEST_P(GlSssPassTest, RasterOfTheBuiltInScenesMatchesTheSoftwareRasterizer) {
         EXPECT_GT(same_triangle / n, 0.99) << name;
         EXPECT_LT(worst_z, 1e-5) << name;
         EXPECT_GT(p, 45.0) << name;
+    }
+}
+
+// ---- Pass 1 (realtime/gl/lighting_gl.h) against realtime::shade on the same raster frame ----
+
+// PSNR of a float layer against the CPU's (peak: the CPU layer's largest magnitude).
+double layer_psnr(const std::vector<float>& a, const std::vector<float>& b) {
+    return psnr(std::vector<double>(a.begin(), a.end()), std::vector<double>(b.begin(), b.end()));
+}
+
+TEST_P(GlSssPassTest, LightingOfTheBuiltInScenesMatchesTheCpuPass) {
+    realtime::gl::GlLighting lighting(*ctx);
+    for (const char* name : {"skin", "marble", "wholemilk", "apple", "ketchup"}) {
+        const Scene scene =
+            read_scene(testing::source_path("experiments/scenes/") + name + ".toml");
+        const int w = 320, h = 240;
+        const realtime::RasterFrame frame = realtime::rasterize(scene, {}, w, h);
+        const realtime::RasterCamera camera =
+            realtime::RasterCamera::from_scene(scene.camera, w, h);
+        realtime::LightingOptions o;
+        o.thickness_layer = true;
+        // Translucency through a slab table of every medium (any table: the two passes read
+        // the same one): T falling from 0.6 to 1e-4 over 0.1 to 20 mm.
+        std::vector<realtime::SlabTransmittance> slabs(scene.materials.size());
+        for (size_t m = 0; m < scene.materials.size(); ++m)
+            if (scene.materials[m].kind == SceneMaterial::Kind::kMedium)
+                for (double d : {0.1, 0.5, 2.0, 5.0, 20.0}) {
+                    slabs[m].thickness_mm.push_back(d);
+                    slabs[m].transmittance.push_back({0.6 * std::exp(-d / 1.5),
+                                                      0.6 * std::exp(-d / 2.5),
+                                                      0.6 * std::exp(-d / 4.0)});
+                }
+        realtime::LightingStats cs, gs;
+        const realtime::GBuffer cpu = realtime::shade(scene, camera, frame, o, slabs, &cs);
+        realtime::GBuffer gpu;
+        realtime::gl::GlLightingTimes t;
+        lighting.shade(scene, camera, frame, o, slabs, &gs, gpu, &t);
+        ASSERT_EQ(gpu.irradiance.size(), cpu.irradiance.size());
+        EXPECT_EQ(gpu.material, cpu.material) << name;
+        const std::vector<
+            std::pair<const char*, std::pair<const std::vector<float>*, const std::vector<float>*>>>
+            layers = {{"irradiance", {&gpu.irradiance, &cpu.irradiance}},
+                      {"specular", {&gpu.specular, &cpu.specular}},
+                      {"surface", {&gpu.surface, &cpu.surface}},
+                      {"translucency", {&gpu.translucency, &cpu.translucency}},
+                      {"thickness", {&gpu.thickness, &cpu.thickness}},
+                      {"exit_weight", {&gpu.exit_weight, &cpu.exit_weight}},
+                      {"normal", {&gpu.normal, &cpu.normal}}};
+        std::printf(
+            "%-10s maps %d (CPU %d), GL draws: maps %.1f ms, shading %.1f ms; call %.1f ms; PSNR "
+            "dB:",
+            name, gs.shadow_maps, cs.shadow_maps, t.shadow_wall_ms, t.shading_wall_ms, t.wall_ms);
+        for (const auto& [layer, ab] : layers) {
+            const double p = layer_psnr(*ab.first, *ab.second);
+            const auto mm = std::minmax_element(ab.second->begin(), ab.second->end());
+            const size_t nonzero = static_cast<size_t>(std::count_if(
+                ab.second->begin(), ab.second->end(), [](float v) { return v != 0; }));
+            std::printf(" %s %.1f [%.3g..%.3g, %zu nonzero]", layer, p, *mm.first, *mm.second,
+                        nonzero);
+            EXPECT_GT(p, 45.0) << name << " " << layer;
+        }
+        std::printf("\n");
     }
 }
 
