@@ -163,7 +163,10 @@ void rasterize_frame(const Scene& scene, const FrameOptions& o, RasterizedFrame&
     RasterOptions ro = o.raster;
     // Only the layers' composite reads coverage and depth.
     ro.pixel_layers = ro.pixel_layers && o.all_layers;
-    rasterize(scene, ro, w, h, f.raster);
+    if (o.rasterizer)
+        o.rasterizer(scene, ro, w, h, f.raster);
+    else
+        rasterize(scene, ro, w, h, f.raster);
     f.ms = ms_since(t0);
     f.camera = RasterCamera::from_scene(scene.camera, w, h);
     // The shapes seen (in parallel blocks), then their materials.
@@ -208,7 +211,11 @@ void light_frame(const Scene& scene, const RasterizedFrame& frame, const FrameOp
                  LitFrame& lit, const std::vector<SlabTransmittance>& slabs) {
     const auto t0 = Clock::now();
     lit.stats = {};
-    shade(scene, frame.camera, frame.raster, o.lighting, slabs, &lit.stats, lit.gbuffer);
+    if (o.lighting_pass)
+        o.lighting_pass(scene, frame.camera, frame.raster, o.lighting, slabs, &lit.stats,
+                        lit.gbuffer);
+    else
+        shade(scene, frame.camera, frame.raster, o.lighting, slabs, &lit.stats, lit.gbuffer);
     lit.ms = ms_since(t0);
 }
 

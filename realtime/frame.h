@@ -96,6 +96,16 @@ struct FrameOptions {
     /// false: pass 4 writes the radiance layer only (what a game presents: `ssslab bench
     /// --realtime` times its frames so); true: every layer of the file comment.
     bool all_layers = true;
+    /// The raster's backend: realtime::rasterize when empty; the GL twin
+    /// (realtime/gl/raster_gl.h, through realtime/gl/frame_gl.h) plugs in here.
+    std::function<void(const Scene&, const RasterOptions&, int width, int height, RasterFrame&)>
+        rasterizer;
+    /// Pass 1's backend: realtime::shade when empty; the GL twin (realtime/gl/lighting_gl.h)
+    /// plugs in here, with the same inputs and the same G-buffer.
+    std::function<void(const Scene&, const RasterCamera&, const RasterFrame&,
+                       const LightingOptions&, const std::vector<SlabTransmittance>&,
+                       LightingStats*, GBuffer&)>
+        lighting_pass;
     /// The separable pass's backend (SssMethod::kSeparable): realtime::sss_pass when empty; the
     /// GL twin (realtime/gl/sss_pass_gl.h) plugs in here, with the same plain-data inputs. The
     /// frame's "sss" time is then this call's wall time (uploads and read-back included).

@@ -3,6 +3,7 @@
 // media in view, the separable pass against the 2D reference on a separable kernel, determinism,
 // and `ssslab raster`.
 #include "approx/model_spec.h"
+#include "core/build_info.h"
 #include "core/film_image.h"
 #include "core/profile.h"
 #include "core/scene.h"
@@ -300,6 +301,57 @@ TEST(RasterCommand, WritesTheLayersThePassTimesAndRefusesBadInput) {
     EXPECT_NE(fit.err.find("kernel study"), std::string::npos) << fit.err;
     EXPECT_FALSE(fs::exists(dir / "x.exr"));
     EXPECT_FALSE(fs::exists(dir / "x.png"));
+}
+
+TEST(RasterCommand, TheGlBackendDrawsTheSameImage) {
+    testing::TempDir dir;
+    const fs::path scene = dir.write("ball.toml", kScene);
+    const std::vector<std::string> common = {
+        "--photons", "2000", "--cache", (dir / "res").string(), "--shadow-map", "512"};
+    auto args = [&](std::vector<std::string> a) {
+        a.insert(a.begin(), {"raster", scene.string()});
+        a.insert(a.end(), common.begin(), common.end());
+        return a;
+    };
+    // Bad input first (exit 2, the option named, nothing written), in every build.
+    const auto platform = testing::run_ssslab(
+        args({"--platform", "egl", "--out", (dir / "x.exr").string()}), dir.path());
+    EXPECT_EQ(platform.exit_code, 2);
+    EXPECT_NE(platform.err.find("--platform"), std::string::npos) << platform.err;
+    const auto ss = testing::run_ssslab(
+        args({"--backend", "gl", "--supersample", "2", "--out", (dir / "x.exr").string()}),
+        dir.path());
+    EXPECT_EQ(ss.exit_code, 2);
+    EXPECT_NE(ss.err.find(SSSLAB_HAVE_GL ? "--supersample" : "--backend"), std::string::npos)
+        << ss.err;
+    EXPECT_FALSE(fs::exists(dir / "x.exr"));
+    if (!SSSLAB_HAVE_GL) GTEST_SKIP() << "built without the GL twin";
+
+    const auto sw = testing::run_ssslab(args({"--out", (dir / "sw.exr").string()}), dir.path());
+    ASSERT_EQ(sw.exit_code, 0) << sw.err;
+    const auto gl = testing::run_ssslab(
+        args({"--backend", "gl", "--out", (dir / "gl.exr").string()}), dir.path());
+    if (gl.exit_code != 0 && gl.err.find("no OpenGL context") != std::string::npos)
+        GTEST_SKIP() << gl.err;
+    ASSERT_EQ(gl.exit_code, 0) << gl.err;
+    for (const char* what : {"backend gl", "sss_gpu", "lighting_draw", "shadow maps", "frame"})
+        EXPECT_NE(gl.out.find(what), std::string::npos) << what << "\n" << gl.out;
+    EXPECT_NE(testing::read_text(dir / "gl.exr.toml").find("backend = 'gl'"), std::string::npos);
+    // Every layer within 45 dB PSNR of the software image (peak: the software layer's).
+    const LayeredImage a = read_exr((dir / "gl.exr").string()),
+                       b = read_exr((dir / "sw.exr").string());
+    for (const ImageLayer& l : b.layers()) {
+        ASSERT_TRUE(a.has_layer(l.name())) << l.name();
+        const auto x = a.layer(l.name()).pixels(), y = l.pixels();
+        double peak = 0, se = 0;
+        for (size_t i = 0; i < y.size(); ++i) {
+            peak = std::max(peak, std::fabs(static_cast<double>(y[i])));
+            se += (static_cast<double>(x[i]) - y[i]) * (static_cast<double>(x[i]) - y[i]);
+        }
+        const double mse = se / static_cast<double>(y.size());
+        EXPECT_TRUE(mse == 0 || 10 * std::log10(peak * peak / mse) > 45)
+            << l.name() << " mse " << mse;
+    }
 }
 
 }  // namespace

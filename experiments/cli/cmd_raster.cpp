@@ -8,6 +8,7 @@
 // the media in view; so do the slab transmittances that translucency reads.
 #include "approx/model_spec.h"
 #include "core/atomic_file.h"
+#include "core/build_info.h"
 #include "core/config.h"
 #include "core/error.h"
 #include "core/film_image.h"
@@ -17,6 +18,9 @@
 #include "experiments/cli/common.h"
 #include "experiments/runner/realtime_inputs.h"
 #include "realtime/frame.h"
+#if SSSLAB_HAVE_GL
+#include "realtime/gl/frame_gl.h"
+#endif
 
 #include <tbb/task_arena.h>
 
@@ -44,6 +48,7 @@ struct RasterArgs {
     bool no_translucency = false, rotate = false;
     double exposure = 0;
     std::string cache = "results";
+    std::string backend = "software", platform = "auto";
     CommonOptions common;
 };
 
@@ -62,14 +67,24 @@ CLI::Validator model_spec() {
         "SPEC", "model spec");
 }
 
+// What the GL twin reports of a frame (empty for the software backend): its context, and per
+// pass the GL_TIME_ELAPSED query and the wall time of the draws (glFinish to glFinish).
+struct GlFrameReport {
+    std::string context;
+    std::vector<std::pair<std::string, double>> times_ms;
+};
+
 std::string raster_toml(const RasterArgs& a, const Scene& scene, const realtime::FrameOptions& o,
-                        const realtime::FrameResult& r, const runner::RealtimeInputs& in) {
+                        const realtime::FrameResult& r, const runner::RealtimeInputs& in,
+                        const GlFrameReport& gl) {
     auto doc = ConfigDocument::empty("raster.toml");
     ConfigTable root = doc->root();
     ConfigTable input = root.table_or_empty("input");
     input.record("scene_file", fs::absolute(a.scene).lexically_normal().string());
     input.record("scene_name", scene.name);
     ConfigTable st = root.table_or_empty("raster");
+    st.record("backend", a.backend);
+    if (!gl.context.empty()) st.record("gl_context", gl.context);
     st.record("model", a.model);
     st.record("taps", static_cast<std::int64_t>(a.taps));
     st.record("sss", std::string(realtime::to_string(o.method)));
@@ -89,6 +104,10 @@ std::string raster_toml(const RasterArgs& a, const Scene& scene, const realtime:
     ConfigTable t = root.table_or_empty("times_ms");
     for (const auto& p : r.times) t.record(p.pass, p.ms);
     t.record("frame", r.total_ms());
+    if (!gl.times_ms.empty()) {
+        ConfigTable gt = root.table_or_empty("gl_times_ms");
+        for (const auto& [pass, ms] : gl.times_ms) gt.record(pass, ms);
+    }
     ConfigTable g = root.table_or_empty("ground_truth");
     g.record("mcml_nodes_computed", static_cast<std::int64_t>(in.computed));
     g.record("mcml_nodes_reused", static_cast<std::int64_t>(in.reused));
@@ -141,6 +160,35 @@ int run_raster(const RasterArgs& a) {
     o.reference.samples = a.reference_samples;
     o.reference.seed = a.common.seed.value_or(1);
 
+    // The GL twin: its raster, lighting and separable SSS pass plugged into the frame.
+    GlFrameReport gl_report;
+#if SSSLAB_HAVE_GL
+    std::unique_ptr<realtime::gl::GlContext> gl_context;
+    std::unique_ptr<realtime::gl::GlFrameBackend> gl;
+#endif
+    if (a.backend != "gl" && a.platform != "auto")
+        throw InputError(kCommandLine, "--platform", "needs --backend gl");
+    if (a.backend == "gl") {
+#if SSSLAB_HAVE_GL
+        if (a.supersample != 1)
+            throw InputError(kCommandLine, "--supersample",
+                             "the GL twin draws one sample a pixel; use --backend software for "
+                             "supersampling");
+        std::string why;
+        gl_context = realtime::gl::try_gl_context(realtime::gl::parse_gl_platform(a.platform), why);
+        if (!gl_context)
+            throw InputError(kCommandLine, "--platform",
+                             "no OpenGL context on " + a.platform + ": " + why);
+        gl_report.context = gl_context->platform() + ", " + gl_context->renderer();
+        gl = std::make_unique<realtime::gl::GlFrameBackend>(*gl_context);
+        gl->install(o);
+#else
+        throw InputError(kCommandLine, "--backend",
+                         "this build has no GL twin (SSSLAB_WITH_GL; apt-get install "
+                         "libosmesa6-dev libegl-dev python3-glad)");
+#endif
+    }
+
     // The passes run with --threads workers (the image does not depend on how many).
     tbb::task_arena arena(a.common.threads > 0 ? a.common.threads : tbb::task_arena::automatic);
     realtime::RasterizedFrame frame;
@@ -182,9 +230,22 @@ int run_raster(const RasterArgs& a) {
     realtime::FrameResult r;
     arena.execute([&] { r = realtime::render_frame(scene, frame, materials, o, slabs); });
 
+#if SSSLAB_HAVE_GL
+    if (gl) {
+        const bool sss = o.method == realtime::SssMethod::kSeparable && !materials.empty();
+        gl_report.times_ms = {{"raster_gpu", gl->raster_times.gpu_ms},
+                              {"raster_draw", gl->raster_times.draw_ms},
+                              {"shadow_maps_gpu", gl->lighting_times.shadow_gpu_ms},
+                              {"shadow_maps_draw", gl->lighting_times.shadow_wall_ms},
+                              {"lighting_gpu", gl->lighting_times.shading_gpu_ms},
+                              {"lighting_draw", gl->lighting_times.shading_wall_ms},
+                              {"sss_gpu", sss ? gl->sss_times.gpu_ms : 0.0},
+                              {"sss_draw", sss ? gl->sss_times.draw_ms : 0.0}};
+    }
+#endif
     fs::path png = out;
     png.replace_extension(".png");
-    const std::string toml = raster_toml(a, scene, o, r, in);
+    const std::string toml = raster_toml(a, scene, o, r, in, gl_report);
     auto& md = r.image.metadata();
     md["ssslab.git_revision"] = git_revision();
     md["ssslab.command_line"] = command_line();
@@ -206,6 +267,12 @@ int run_raster(const RasterArgs& a) {
             frame.raster.sample_height(), frame.media_in_view.size(),
             frame.media_in_view.size() == 1 ? "" : "s", in.computed, in.reused, inputs_s,
             realtime::to_string(o.method), a.model.c_str(), a.taps);
+        if (!gl_report.context.empty()) {
+            std::printf("  backend gl (%s); GL_TIME_ELAPSED and draw wall times:\n",
+                        gl_report.context.c_str());
+            for (const auto& [pass, ms] : gl_report.times_ms)
+                std::printf("    %-18s %10.3f ms\n", pass.c_str(), ms);
+        }
         for (const auto& p : r.times) std::printf("  %-12s %10.3f ms\n", p.pass.c_str(), p.ms);
         std::printf("  %-12s %10.3f ms  (%d shadow maps) -> %s (+ .png, .exr.toml)\n", "frame",
                     r.total_ms(), r.lighting.shadow_maps, out.string().c_str());
@@ -279,6 +346,13 @@ void register_raster(CLI::App& app, std::function<int()>& action) {
         ->check(integer_in(1, 1 << 20));
     sub->add_flag("--no-translucency", a->no_translucency,
                   "No light through thin parts (and no MCML slab runs for it)");
+    sub->add_option("--backend", a->backend,
+                    "software (default: the CPU passes) or gl (the GL twin's raster, lighting "
+                    "and separable SSS pass, headless)")
+        ->check(one_of({"software", "gl"}));
+    sub->add_option("--platform", a->platform,
+                    "With --backend gl: the headless GL platform, auto (default), osmesa or egl")
+        ->check(one_of({"auto", "osmesa", "egl"}));
     add_photons_option(*sub, a->common,
                        "MCML photons per channel of each material's ground-truth profile "
                        "(default 1e6, as experiments/freude14/kernels.toml; cached)");
