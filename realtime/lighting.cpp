@@ -166,6 +166,23 @@ __attribute__((target_clones("avx2", "default"))) void directional_row(
 
 }  // namespace
 
+void GBuffer::resize(int w, int h) {
+    width = w;
+    height = h;
+    const std::size_t n = samples();
+    view_z.resize(n);
+    ray_t.resize(n);
+    normal.resize(3 * n);
+    shape.resize(n);
+    material.resize(n);
+    irradiance.resize(3 * n);
+    exit_weight.resize(n);
+    specular.resize(3 * n);
+    surface.resize(3 * n);
+    thickness.resize(n);
+    translucency.resize(3 * n);
+}
+
 std::array<double, 3> SlabTransmittance::at(double d) const {
     std::array<double, 3> r{};
     const std::size_t n = std::min(thickness_mm.size(), transmittance.size());
@@ -448,21 +465,9 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     check_lighting_inputs(camera, frame, o);
 
     GBuffer& g = out;
-    g.width = W;
-    g.height = H;
     // Sized only: the first pass below writes every entry of every array (a reused G-buffer of
     // the same size keeps its storage and is not cleared twice).
-    g.view_z.resize(N);
-    g.ray_t.resize(N);
-    g.normal.resize(3 * N);
-    g.shape.resize(N);
-    g.material.resize(N);
-    g.irradiance.resize(3 * N);
-    g.exit_weight.resize(N);
-    g.specular.resize(3 * N);
-    g.surface.resize(3 * N);
-    g.thickness.resize(N);
-    g.translucency.resize(3 * N);
+    g.resize(W, H);
 
     // Boundaries: one transmittance per (eta, alpha) of the scene's media, tabulated once per
     // process (as an engine precomputes its lookup tables at load time, not every frame).

@@ -103,6 +103,9 @@ struct GBuffer {
     std::size_t samples() const {
         return static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     }
+    /// Every array sized for w x h samples (sized only: a reused G-buffer of the same size keeps
+    /// its storage and values; every backend of pass 1 writes every entry).
+    void resize(int w, int h);
 };
 
 /// Diffuse transmittance of a slab of the material (normal incidence) against thickness, from

@@ -76,6 +76,28 @@ GLuint make_texture(int w, int h, GLenum internal, GLenum format, GLenum type, c
     return t;
 }
 
+GlMesh upload_mesh(GLuint vao, const std::vector<float>& vertices,
+                   std::span<const std::array<std::uint32_t, 3>> triangles) {
+    GlMesh m;
+    m.count = static_cast<GLsizei>(3 * triangles.size());
+    glGenBuffers(1, &m.vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, m.vbo);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(float)),
+                 vertices.data(), GL_STATIC_DRAW);
+    glGenBuffers(1, &m.ibo);
+    glBindVertexArray(vao);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ibo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(triangles.size() * 3 * sizeof(std::uint32_t)),
+                 triangles.data(), GL_STATIC_DRAW);
+    return m;
+}
+
+void release_mesh(const GlMesh& m) {
+    glDeleteBuffers(1, &m.vbo);
+    glDeleteBuffers(1, &m.ibo);
+}
+
 GlTimer::GlTimer() {
     glGenQueries(1, &query_);
 }

@@ -5,8 +5,12 @@
 
 #include <glad/gl.h>
 
+#include <array>
 #include <chrono>
+#include <cstdint>
+#include <span>
 #include <string>
+#include <vector>
 
 namespace ssslab::realtime::gl {
 
@@ -20,6 +24,16 @@ GLuint link_program(const std::string& vert, const std::string& frag, const std:
 /// A w x h texture (nearest, clamp-to-edge, no mipmaps) of `internal` format from data (or
 /// uninitialised when null).
 GLuint make_texture(int w, int h, GLenum internal, GLenum format, GLenum type, const void* data);
+
+/// A mesh's vertex buffer (floats, any number per vertex) and index buffer, the latter bound to
+/// `vao`; `count` indices.
+struct GlMesh {
+    GLuint vbo = 0, ibo = 0;
+    GLsizei count = 0;
+};
+GlMesh upload_mesh(GLuint vao, const std::vector<float>& vertices,
+                   std::span<const std::array<std::uint32_t, 3>> triangles);
+void release_mesh(const GlMesh& mesh);
 
 /// Times a stretch of GL commands two ways: GL_TIME_ELAPSED, what the GPU reports, and the wall
 /// time from a glFinish before it to a glFinish after it, what the caller waits. On llvmpipe the

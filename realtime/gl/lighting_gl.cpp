@@ -193,19 +193,12 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
     // Everything uploaded is released on every exit (an exception in a later pass included).
     std::vector<GLuint> tex;
     std::array<GLuint, 2> buf{}, tbo{};
-    struct Mesh {
-        GLuint vbo = 0, ibo = 0;
-        GLsizei count = 0;
-    };
-    std::vector<Mesh> meshes;
+    std::vector<GlMesh> meshes;
     struct Release {
         std::function<void()> f;
         ~Release() { f(); }
     } release{[&] {
-        for (const Mesh& mm : meshes) {
-            glDeleteBuffers(1, &mm.vbo);
-            glDeleteBuffers(1, &mm.ibo);
-        }
+        for (const GlMesh& mm : meshes) release_mesh(mm);
         glDeleteTextures(2, tbo.data());
         glDeleteBuffers(2, buf.data());
         glDeleteTextures(static_cast<GLsizei>(tex.size()), tex.data());
@@ -307,19 +300,7 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
             v[3 * i + 1] = static_cast<float>(d.y);
             v[3 * i + 2] = static_cast<float>(d.z);
         }
-        Mesh mm;
-        mm.count = static_cast<GLsizei>(3 * s.mesh.triangles.size());
-        glGenBuffers(1, &mm.vbo);
-        glBindBuffer(GL_ARRAY_BUFFER, mm.vbo);
-        glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(),
-                     GL_STATIC_DRAW);
-        glGenBuffers(1, &mm.ibo);
-        glBindVertexArray(m.vao);
-        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, mm.ibo);
-        glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-                     static_cast<GLsizeiptr>(s.mesh.triangles.size() * 3 * sizeof(std::uint32_t)),
-                     s.mesh.triangles.data(), GL_STATIC_DRAW);
-        meshes.push_back(mm);
+        meshes.push_back(upload_mesh(m.vao, v, s.mesh.triangles));
     }
     m.gbuffer_targets(W, H);
     check_gl("GlLighting upload");
@@ -548,19 +529,7 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
     }
     check_gl("GlLighting read-back");
     t.readback_ms += ms_since(t0);
-    g.width = W;
-    g.height = H;
-    g.view_z.resize(N);
-    g.ray_t.resize(N);
-    g.normal.resize(3 * N);
-    g.shape.resize(N);
-    g.material.resize(N);
-    g.irradiance.resize(3 * N);
-    g.exit_weight.resize(N);
-    g.specular.resize(3 * N);
-    g.surface.resize(3 * N);
-    g.thickness.resize(N);
-    g.translucency.resize(3 * N);
+    g.resize(W, H);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
             const size_t i = frame.sample_index(x, y);

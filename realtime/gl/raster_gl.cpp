@@ -95,8 +95,7 @@ void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, 
     // The meshes: clip coordinates in double through the software rasterizer's projection,
     // uploaded as floats with z = near.
     struct Draw {
-        GLuint vbo = 0, ibo = 0;
-        GLsizei count = 0;
+        GlMesh mesh;
         bool cull = false;
     };
     std::vector<Draw> draws;
@@ -113,17 +112,7 @@ void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, 
         }
         Draw d;
         d.cull = cull;
-        d.count = static_cast<GLsizei>(3 * s.mesh.triangles.size());
-        glGenBuffers(1, &d.vbo);
-        glBindBuffer(GL_ARRAY_BUFFER, d.vbo);
-        glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(),
-                     GL_STATIC_DRAW);
-        glGenBuffers(1, &d.ibo);
-        glBindVertexArray(m.vao);
-        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d.ibo);
-        glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-                     static_cast<GLsizeiptr>(s.mesh.triangles.size() * 3 * sizeof(std::uint32_t)),
-                     s.mesh.triangles.data(), GL_STATIC_DRAW);
+        d.mesh = upload_mesh(m.vao, v, s.mesh.triangles);
         draws.push_back(d);
     }
     check_gl("GlRaster upload");
@@ -156,11 +145,11 @@ void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, 
         else
             glDisable(GL_CULL_FACE);
         glUniform1i(shape_loc, static_cast<GLint>(i));
-        glBindBuffer(GL_ARRAY_BUFFER, d.vbo);
+        glBindBuffer(GL_ARRAY_BUFFER, d.mesh.vbo);
         glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 0, nullptr);
         glEnableVertexAttribArray(0);
-        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d.ibo);
-        glDrawElements(GL_TRIANGLES, d.count, GL_UNSIGNED_INT, nullptr);
+        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d.mesh.ibo);
+        glDrawElements(GL_TRIANGLES, d.mesh.count, GL_UNSIGNED_INT, nullptr);
     }
     m.timer->end();
     glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
@@ -180,10 +169,7 @@ void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, 
     glReadBuffer(GL_COLOR_ATTACHMENT2);
     glReadPixels(0, 0, w, h, GL_RED_INTEGER, GL_INT, tri.data());
     check_gl("GlRaster read-back");
-    for (const Draw& d : draws) {
-        glDeleteBuffers(1, &d.vbo);
-        glDeleteBuffers(1, &d.ibo);
-    }
+    for (const Draw& d : draws) release_mesh(d.mesh);
 
     f.width = w;
     f.height = h;
