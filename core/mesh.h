@@ -20,6 +20,14 @@ struct TriangleMesh {
     /// (p1 - p0) x (p2 - p0) points out of a closed mesh).
     std::vector<std::array<std::uint32_t, 3>> triangles;
 
+    /// The unit geometric normal of triangle t, normalize((p1 - p0) x (p2 - p0)): outward for a
+    /// closed mesh. The facet normal of every engine (volpath's hits and "normal" layer, the
+    /// real-time G-buffer on either backend), written once so that they agree to the bit.
+    Vec3 facet_normal(std::size_t t) const {
+        const auto& tri = triangles[t];
+        const Vec3 &v0 = positions[tri[0]], &v1 = positions[tri[1]], &v2 = positions[tri[2]];
+        return normalize(cross(v1 - v0, v2 - v0));
+    }
     double area() const;
     /// Signed enclosed volume (divergence theorem): positive for an outward-oriented closed mesh.
     double volume() const;

@@ -183,6 +183,11 @@ void GBuffer::resize(int w, int h) {
     translucency.resize(3 * n);
 }
 
+bool any_slab_table(const std::vector<SlabTransmittance>& slabs) {
+    return std::any_of(slabs.begin(), slabs.end(),
+                       [](const SlabTransmittance& t) { return !t.thickness_mm.empty(); });
+}
+
 std::array<double, 3> SlabTransmittance::at(double d) const {
     std::array<double, 3> r{};
     const std::size_t n = std::min(thickness_mm.size(), transmittance.size());
@@ -486,7 +491,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     auto slab_of = [&](int m) -> const SlabTransmittance* {
         if (m < 0 || static_cast<std::size_t>(m) >= slabs.size()) return nullptr;
         const SlabTransmittance& s = slabs[static_cast<std::size_t>(m)];
-        return s.thickness_mm.empty() || s.transmittance.empty() ? nullptr : &s;
+        return s.empty() ? nullptr : &s;
     };
 
     // Receivers and what the camera sees directly. A receiver (position, normals, direction
@@ -509,12 +514,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         facet[k].resize(m.triangles.size());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.triangles.size(), 4096),
                           [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t t = r.begin(); t != r.end(); ++t) {
-                                  const auto& tri = m.triangles[t];
-                                  const Vec3 &v0 = m.positions[tri[0]], &v1 = m.positions[tri[1]],
-                                             &v2 = m.positions[tri[2]];
-                                  facet[k][t] = normalize(cross(v1 - v0, v2 - v0));
-                              }
+                              for (std::size_t t = r.begin(); t != r.end(); ++t)
+                                  facet[k][t] = m.facet_normal(t);
                           });
     }
     // The receiver of sample (sx, sy), i its index, from the G-buffer as the first pass below
@@ -755,9 +756,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                 g.specular[3 * i + c] += static_cast<float>(f * cs * E[c]);
         }
     };
-    const bool any_slab = std::any_of(slabs.begin(), slabs.end(), [](const SlabTransmittance& t) {
-        return !t.thickness_mm.empty();
-    });
+    const bool any_slab = any_slab_table(slabs);
     // One map at a time, its storage reused from map to map and from frame to frame (scratch
     // of the calling thread; the result does not depend on it).
     // (A reference: the light passes' worker threads must see this thread's map, not theirs.)

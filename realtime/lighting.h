@@ -116,7 +116,12 @@ struct SlabTransmittance {
     /// Interpolated at d mm: log-linear in T between the entries (linear where one is 0),
     /// clamped to the first and last entry outside them; 0 for an empty table.
     std::array<double, 3> at(double d_mm) const;
+    /// No table: no translucency for the material.
+    bool empty() const { return thickness_mm.empty() || transmittance.empty(); }
 };
+/// Whether any material has thicknesses tabulated: pass 1 then renders the shadow map of every
+/// light sample (translucency looks thickness up there), with or without shadows.
+bool any_slab_table(const std::vector<SlabTransmittance>& slabs);
 
 /// Directional transmittance of a medium's boundary for light arriving from outside at cosine
 /// mu: 1 - F(mu, eta) for a smooth boundary (alpha = 0); for GGX alpha the transmission lobe of

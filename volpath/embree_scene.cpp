@@ -121,8 +121,7 @@ EmbreeScene::EmbreeScene(const std::vector<const TriangleMesh*>& meshes) : impl_
             ix[3 * i] = t[0];
             ix[3 * i + 1] = t[1];
             ix[3 * i + 2] = t[2];
-            normals.push_back(normalize(cross(m.positions[t[1]] - m.positions[t[0]],
-                                              m.positions[t[2]] - m.positions[t[0]])));
+            normals.push_back(m.facet_normal(i));
             const Vec3 a = stored(t[0]), b = stored(t[1]), c = stored(t[2]);
             const Vec3 n = cross(b - a, c - a);
             const double len = length(n);

@@ -216,17 +216,15 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
         ny(rays.ndc_y.begin(), rays.ndc_y.end());
     const GLuint t_nx = texture(W, 1, GL_R32F, GL_RED, GL_FLOAT, nx.data());
     const GLuint t_ny = texture(H, 1, GL_R32F, GL_RED, GL_FLOAT, ny.data());
-    // Facet normals as lighting.cpp computes them (double, then rounded as the G-buffer holds
+    // Facet normals (TriangleMesh::facet_normal, double, then rounded as the G-buffer holds
     // them), per shape its first facet and material.
     std::vector<float> facets;
     std::vector<std::int32_t> shape_info;
     for (const SceneShape& s : scene.shapes) {
         shape_info.push_back(static_cast<std::int32_t>(facets.size() / 3));
         shape_info.push_back(s.material);
-        for (const auto& tri : s.mesh.triangles) {
-            const Vec3 &v0 = s.mesh.positions[tri[0]], &v1 = s.mesh.positions[tri[1]],
-                       &v2 = s.mesh.positions[tri[2]];
-            const Vec3 n = normalize(cross(v1 - v0, v2 - v0));
+        for (size_t tri = 0; tri < s.mesh.triangles.size(); ++tri) {
+            const Vec3 n = s.mesh.facet_normal(tri);
             facets.insert(facets.end(), {static_cast<float>(n.x), static_cast<float>(n.y),
                                          static_cast<float>(n.z)});
         }
@@ -275,7 +273,7 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
         if (k < slabs.size()) {
             const SlabTransmittance& s = slabs[k];
             const size_t n = std::min(s.thickness_mm.size(), s.transmittance.size());
-            if (s.thickness_mm.empty() || s.transmittance.empty()) continue;
+            if (s.empty()) continue;
             r1[3] = static_cast<float>(n);
             for (size_t e = 0; e < n; ++e) {
                 float* q = &slab[4 * (k * slab_max + e)];
@@ -288,9 +286,7 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
     const GLuint t_bt = texture(C, M, GL_R32F, GL_RED, GL_FLOAT, bt.data());
     const GLuint t_slab =
         texture(static_cast<int>(slab_max), M, GL_RGBA32F, GL_RGBA, GL_FLOAT, slab.data());
-    const bool any_slab = std::any_of(slabs.begin(), slabs.end(), [](const SlabTransmittance& s) {
-        return !s.thickness_mm.empty() && !s.transmittance.empty();
-    });
+    const bool any_slab = any_slab_table(slabs);
     // The meshes, positions relative to the camera.
     for (const SceneShape& s : scene.shapes) {
         std::vector<float> v(3 * s.mesh.positions.size());
