@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
-#include <limits>
 #include <map>
 #include <numbers>
 #include <stdexcept>
@@ -44,7 +43,8 @@ void set_at(GLuint p, const std::string& name, int k, const Vec3& v) {
 }
 
 struct ShadowTargets {
-    GLuint fbo = 0, depth = 0, shape = 0, zbuf = 0;
+    GLuint depth = 0, shape = 0;  // ShadowMap::depth, ShadowMap::shape
+    GlFramebuffer fb;
 };
 
 }  // namespace
@@ -55,15 +55,16 @@ struct GlLighting::Impl {
     std::unique_ptr<GlTimer> timer;
     // The G-buffer's targets at w x h: irradiance, specular, surface, translucency (+thickness),
     // normal (+exit weight) as RGBA32F, kind and material as RG32I.
-    // fbo: all six (the receiver pass); fbo_light: the first four, blended by the light passes,
+    // fb: all six (the receiver pass); fb_light: the first four, blended by the light passes,
     // which read the last two as textures.
-    GLuint fbo = 0, fbo_light = 0;
+    GlFramebuffer fb, fb_light;
     std::array<GLuint, 6> targets{};
     int w = 0, h = 0;
     std::map<int, ShadowTargets> maps;  // by size
 
     explicit Impl(GlContext& c) : ctx(c) {
         ctx.make_current();
+        require_gl(4, 5, "the GL lighting needs OpenGL 4.5 (glClipControl for its shadow maps)");
         receiver =
             link_program(shaders::fullscreen_vert, lighting_source(shaders::lighting_receiver_frag),
                          "realtime/gl/shaders/lighting_receiver.frag");
@@ -82,8 +83,7 @@ struct GlLighting::Impl {
         for (auto& [size, t] : maps) {
             const GLuint tex[] = {t.depth, t.shape};
             glDeleteTextures(2, tex);
-            glDeleteRenderbuffers(1, &t.zbuf);
-            glDeleteFramebuffers(1, &t.fbo);
+            release_framebuffer(t.fb);
         }
         timer.reset();
         glDeleteVertexArrays(1, &vao);
@@ -93,10 +93,10 @@ struct GlLighting::Impl {
     }
     void release_targets() {
         glDeleteTextures(static_cast<GLsizei>(targets.size()), targets.data());
-        glDeleteFramebuffers(1, &fbo);
-        glDeleteFramebuffers(1, &fbo_light);
+        release_framebuffer(fb);
+        release_framebuffer(fb_light);
         targets = {};
-        fbo = fbo_light = 0;
+        fb = fb_light = {};
         w = h = 0;
     }
     void gbuffer_targets(int width, int height) {
@@ -108,24 +108,10 @@ struct GlLighting::Impl {
             targets[static_cast<size_t>(k)] =
                 make_texture(w, h, GL_RGBA32F, GL_RGBA, GL_FLOAT, nullptr);
         targets[5] = make_texture(w, h, GL_RG32I, GL_RG_INTEGER, GL_INT, nullptr);
-        glGenFramebuffers(1, &fbo);
-        glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-        for (int k = 0; k < 6; ++k)
-            glFramebufferTexture2D(GL_FRAMEBUFFER, static_cast<GLenum>(GL_COLOR_ATTACHMENT0 + k),
-                                   GL_TEXTURE_2D, targets[static_cast<size_t>(k)], 0);
-        if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-            throw std::runtime_error("GlLighting: the G-buffer framebuffer is incomplete");
-        glGenFramebuffers(1, &fbo_light);
-        glBindFramebuffer(GL_FRAMEBUFFER, fbo_light);
-        for (int k = 0; k < 4; ++k)
-            glFramebufferTexture2D(GL_FRAMEBUFFER, static_cast<GLenum>(GL_COLOR_ATTACHMENT0 + k),
-                                   GL_TEXTURE_2D, targets[static_cast<size_t>(k)], 0);
-        const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
-                               GL_COLOR_ATTACHMENT3};
-        glDrawBuffers(4, bufs);
-        if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-            throw std::runtime_error("GlLighting: the light pass framebuffer is incomplete");
-        check_gl("GlLighting targets");
+        fb = make_framebuffer(w, h, {targets.begin(), targets.end()}, false,
+                              "GlLighting's G-buffer");
+        fb_light = make_framebuffer(w, h, {targets.begin(), targets.begin() + 4}, false,
+                                    "GlLighting's light passes");
     }
     const ShadowTargets& shadow_targets(int size) {
         auto it = maps.find(size);
@@ -133,19 +119,7 @@ struct GlLighting::Impl {
         ShadowTargets t;
         t.depth = make_texture(size, size, GL_R32F, GL_RED, GL_FLOAT, nullptr);
         t.shape = make_texture(size, size, GL_R32I, GL_RED_INTEGER, GL_INT, nullptr);
-        glGenRenderbuffers(1, &t.zbuf);
-        glBindRenderbuffer(GL_RENDERBUFFER, t.zbuf);
-        glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, size, size);
-        glGenFramebuffers(1, &t.fbo);
-        glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.depth, 0);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, t.shape, 0);
-        glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t.zbuf);
-        const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-        glDrawBuffers(2, bufs);
-        if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-            throw std::runtime_error("GlLighting: the shadow map framebuffer is incomplete");
-        check_gl("GlLighting shadow targets");
+        t.fb = make_framebuffer(size, size, {t.depth, t.shape}, true, "GlLighting's shadow map");
         return maps.emplace(size, t).first->second;
     }
 };
@@ -303,20 +277,17 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
     t.upload_ms = ms_since(t0);
 
     // What both lighting programs read.
+    // What both lighting programs read (p made current), on texture units 0-5; returns the
+    // first free unit.
     auto bind_common = [&](GLuint p) {
         glUseProgram(p);
         int unit = 0;
-        auto bind = [&](const char* name, GLenum target, GLuint id) {
-            glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
-            glBindTexture(target, id);
-            set_int(p, name, unit++);
-        };
-        bind("u_view_z", GL_TEXTURE_2D, t_z);
-        bind("u_shape", GL_TEXTURE_2D, t_shape);
-        bind("u_ndc_x", GL_TEXTURE_2D, t_nx);
-        bind("u_ndc_y", GL_TEXTURE_2D, t_ny);
-        bind("u_mat", GL_TEXTURE_2D, t_mat);
-        bind("u_boundary", GL_TEXTURE_2D, t_bt);
+        bind_texture(p, "u_view_z", unit++, t_z);
+        bind_texture(p, "u_shape", unit++, t_shape);
+        bind_texture(p, "u_ndc_x", unit++, t_nx);
+        bind_texture(p, "u_ndc_y", unit++, t_ny);
+        bind_texture(p, "u_mat", unit++, t_mat);
+        bind_texture(p, "u_boundary", unit++, t_bt);
         set(p, "u_forward", rays.forward);
         set(p, "u_right", rays.right);
         set(p, "u_up", rays.up);
@@ -356,26 +327,18 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
     };
 
     // ---- The receiver pass.
-    glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, m.fb.fbo);
     glViewport(0, 0, W, H);
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_CULL_FACE);
     glDisable(GL_BLEND);
-    const GLenum all[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
-                          GL_COLOR_ATTACHMENT3, GL_COLOR_ATTACHMENT4, GL_COLOR_ATTACHMENT5};
-    glDrawBuffers(6, all);
     m.timer->begin();
     {
         int unit = bind_common(m.receiver);
-        auto bind = [&](const char* name, GLenum target, GLuint id) {
-            glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
-            glBindTexture(target, id);
-            set_int(m.receiver, name, unit++);
-        };
-        bind("u_facet", GL_TEXTURE_BUFFER, tbo[0]);
-        bind("u_shape_info", GL_TEXTURE_BUFFER, tbo[1]);
-        bind("u_ray_t", GL_TEXTURE_2D, t_t);
-        bind("u_triangle", GL_TEXTURE_2D, t_tri);
+        bind_texture(m.receiver, "u_facet", unit++, tbo[0], GL_TEXTURE_BUFFER);
+        bind_texture(m.receiver, "u_shape_info", unit++, tbo[1], GL_TEXTURE_BUFFER);
+        bind_texture(m.receiver, "u_ray_t", unit++, t_t);
+        bind_texture(m.receiver, "u_triangle", unit++, t_tri);
         glBindVertexArray(m.vao);
         glDrawArrays(GL_TRIANGLES, 0, 3);
     }
@@ -398,7 +361,20 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
                 receivers.add(cam +
                               rays.unnormalized(x, y) * frame.view_z[frame.sample_index(x, y)]);
 
-    // ---- Light samples: shadow maps and light passes, in the CPU's order.
+    // ---- Light samples: shadow maps and light passes, in the CPU's order. The light program's
+    // inputs are set as often as they change: per frame here, per sample and per view below
+    // (uniforms stay with a program and texture units with the context; the shadow maps'
+    // program reads no texture).
+    const GLuint p = m.light;
+    int unit = bind_common(p);
+    bind_texture(p, "u_normal", unit++, m.targets[4]);
+    bind_texture(p, "u_kind", unit++, m.targets[5]);
+    bind_texture(p, "u_slab", unit++, t_slab);
+    const int map_unit = unit;
+    set(p, "u_unit_mm", scene.unit_mm);
+    set_int(p, "u_shadows", o.shadows);
+    set(p, "u_normal_offset", o.normal_offset_texels);
+    set(p, "u_depth_bias", o.depth_bias_texels);
     const LightPlan plan = plan_lights(scene, receivers, o);
     for (const LightSample& s : plan.samples) {
         const std::vector<ShadowView> views = plan.views(s, o);
@@ -406,33 +382,41 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
         if (static_cast<int>(views.size()) > kMaxViews)
             throw std::logic_error("GlLighting: more views than cube faces");
         const bool need_map = o.shadows || s.thickness_view || any_slab;
+        glUseProgram(p);
+        set_int(p, "u_directional", s.directional);
+        set_int(p, "u_lobe", s.lobe);
+        set_int(p, "u_thickness_view", s.thickness_view);
+        set_int(p, "u_lights", s.lights);
+        set(p, "u_w", s.w);
+        set(p, "u_pos_rel", s.pos - cam);
+        set(p, "u_lobe_n", s.lobe_n);
+        set(p, "u_value", s.value);
+        set_int(p, "u_light", s.light);
+        set_int(p, "u_need_map", need_map);
+        set_int(p, "u_views", static_cast<int>(views.size()));
+        for (size_t k = 0; k < views.size(); ++k) {
+            const ShadowView::Projection pk = views[k].projection();
+            const int ki = static_cast<int>(k);
+            set_at(p, "u_origin_rel", ki, views[k].origin - cam);
+            set_at(p, "u_px", ki, pk.x);
+            set_at(p, "u_py", ki, pk.y);
+            set_at(p, "u_pw", ki, pk.w);
+        }
         for (size_t vi = 0; vi < views.size(); ++vi) {
             const ShadowView& v = views[vi];
-            const ShadowView::Projection proj = v.projection();
-            const Vec3 origin_rel = v.origin - cam;
             const ShadowTargets& st = m.shadow_targets(v.size);
             if (need_map) {
+                const ShadowView::Projection proj = v.projection();
                 // Depth range of an orthographic map: the casters' farthest corner.
                 double range = 0;
                 for (const Vec3& c : plan.casters.corners())
                     range = std::max(range, dot(c - v.origin, v.forward));
-                glBindFramebuffer(GL_FRAMEBUFFER, st.fbo);
+                glBindFramebuffer(GL_FRAMEBUFFER, st.fb.fbo);
                 glViewport(0, 0, v.size, v.size);
                 m.timer->begin();
-                glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
-                glEnable(GL_DEPTH_TEST);
-                glDepthFunc(GL_GREATER);
-                glDepthMask(GL_TRUE);
-                glDisable(GL_BLEND);
-                const float inf = std::numeric_limits<float>::infinity();
-                const float clear_z[4] = {inf, 0, 0, 0};
-                const GLint clear_none[4] = {-1, 0, 0, 0};
-                const float clear_depth = 0;
-                glClearBufferfv(GL_COLOR, 0, clear_z);
-                glClearBufferiv(GL_COLOR, 1, clear_none);
-                glClearBufferfv(GL_DEPTH, 0, &clear_depth);
+                begin_id_pass(1);
                 glUseProgram(m.shadow);
-                set(m.shadow, "u_origin_rel", origin_rel);
+                set(m.shadow, "u_origin_rel", v.origin - cam);
                 set(m.shadow, "u_px", proj.x);
                 set(m.shadow, "u_py", proj.y);
                 set(m.shadow, "u_pw", proj.w);
@@ -443,67 +427,30 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
                 glBindVertexArray(m.vao);
                 for (size_t k = 0; k < meshes.size(); ++k) {
                     glUniform1i(shape_loc, static_cast<GLint>(k));
-                    glBindBuffer(GL_ARRAY_BUFFER, meshes[k].vbo);
-                    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
-                    glEnableVertexAttribArray(0);
-                    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, meshes[k].ibo);
-                    glDrawElements(GL_TRIANGLES, meshes[k].count, GL_UNSIGNED_INT, nullptr);
+                    draw_mesh(meshes[k], 3);
                 }
                 m.timer->end();
-                glDisable(GL_DEPTH_TEST);
-                glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+                end_id_pass();
                 t.shadow_gpu_ms += m.timer->gpu_ms();
                 t.shadow_wall_ms += m.timer->wall_ms();
                 ++t.shadow_maps;
                 check_gl("GlLighting shadow map");
             }
             // The light pass of this view.
-            glBindFramebuffer(GL_FRAMEBUFFER, m.fbo_light);
+            glBindFramebuffer(GL_FRAMEBUFFER, m.fb_light.fbo);
             glViewport(0, 0, W, H);
             glEnable(GL_BLEND);
             glBlendEquation(GL_FUNC_ADD);
             glBlendFunc(GL_ONE, GL_ONE);
             m.timer->begin();
-            const GLuint p = m.light;
-            int unit = bind_common(p);
-            auto bind = [&](const char* name, GLenum target, GLuint id) {
-                glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
-                glBindTexture(target, id);
-                set_int(p, name, unit++);
-            };
-            bind("u_normal", GL_TEXTURE_2D, m.targets[4]);
-            bind("u_kind", GL_TEXTURE_2D, m.targets[5]);
-            bind("u_slab", GL_TEXTURE_2D, t_slab);
-            bind("u_map_depth", GL_TEXTURE_2D, st.depth);
-            bind("u_map_shape", GL_TEXTURE_2D, st.shape);
-            set(p, "u_unit_mm", scene.unit_mm);
-            set_int(p, "u_directional", s.directional);
-            set_int(p, "u_lobe", s.lobe);
-            set_int(p, "u_thickness_view", s.thickness_view);
-            set_int(p, "u_lights", s.lights);
-            set(p, "u_w", s.w);
-            set(p, "u_pos_rel", s.pos - cam);
-            set(p, "u_lobe_n", s.lobe_n);
-            set(p, "u_value", s.value);
-            set_int(p, "u_light", s.light);
-            set_int(p, "u_views", static_cast<int>(views.size()));
+            glUseProgram(p);
+            bind_texture(p, "u_map_depth", map_unit, st.depth);
+            bind_texture(p, "u_map_shape", map_unit + 1, st.shape);
             set_int(p, "u_view", static_cast<int>(vi));
-            for (size_t k = 0; k < views.size(); ++k) {
-                const ShadowView::Projection pk = views[k].projection();
-                const int ki = static_cast<int>(k);
-                set_at(p, "u_origin_rel", ki, views[k].origin - cam);
-                set_at(p, "u_px", ki, pk.x);
-                set_at(p, "u_py", ki, pk.y);
-                set_at(p, "u_pw", ki, pk.w);
-            }
             set_int(p, "u_ortho", v.orthographic);
             set(p, "u_near", v.near);
             set(p, "u_texel", v.texel_size(1.0));  // per unit depth (perspective)
             set_int(p, "u_size", v.size);
-            set_int(p, "u_need_map", need_map);
-            set_int(p, "u_shadows", o.shadows);
-            set(p, "u_normal_offset", o.normal_offset_texels);
-            set(p, "u_depth_bias", o.depth_bias_texels);
             glBindVertexArray(m.vao);
             glDrawArrays(GL_TRIANGLES, 0, 3);
             m.timer->end();
@@ -517,7 +464,7 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
     // ---- Read back into the G-buffer (rows flipped back).
     t0 = std::chrono::steady_clock::now();
     std::array<std::vector<float>, 5> layer;
-    glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, m.fb.fbo);
     for (int k = 0; k < 5; ++k) {
         layer[static_cast<size_t>(k)].resize(4 * N);
         glReadBuffer(static_cast<GLenum>(GL_COLOR_ATTACHMENT0 + k));

@@ -15,19 +15,13 @@ struct GlRaster::Impl {
     GlContext& ctx;
     GLuint program = 0, vao = 0;
     std::unique_ptr<GlTimer> timer;
-    GLuint fbo = 0, tex_z = 0, tex_shape = 0, tex_tri = 0, depth = 0;
+    GLuint tex_z = 0, tex_shape = 0, tex_tri = 0;
+    GlFramebuffer fb;
     int w = 0, h = 0;
 
     explicit Impl(GlContext& c) : ctx(c) {
         ctx.make_current();
-        GLint major = 0, minor = 0;
-        glGetIntegerv(GL_MAJOR_VERSION, &major);
-        glGetIntegerv(GL_MINOR_VERSION, &minor);
-        if (major * 10 + minor < 45)
-            throw std::runtime_error(
-                "the GL raster needs OpenGL 4.5 (glClipControl), this "
-                "context has " +
-                std::to_string(major) + "." + std::to_string(minor));
+        require_gl(4, 5, "the GL raster needs OpenGL 4.5 (glClipControl)");
         program = link_program(shaders::raster_vert, shaders::raster_frag,
                                "realtime/gl/shaders/raster.{vert,frag}");
         glGenVertexArrays(1, &vao);
@@ -44,9 +38,9 @@ struct GlRaster::Impl {
     void release_targets() {
         const GLuint t[] = {tex_z, tex_shape, tex_tri};
         glDeleteTextures(3, t);
-        glDeleteRenderbuffers(1, &depth);
-        glDeleteFramebuffers(1, &fbo);
-        fbo = tex_z = tex_shape = tex_tri = depth = 0;
+        release_framebuffer(fb);
+        fb = {};
+        tex_z = tex_shape = tex_tri = 0;
         w = h = 0;
     }
     // The render targets at width x height (kept while the size is unchanged).
@@ -58,20 +52,7 @@ struct GlRaster::Impl {
         tex_z = make_texture(w, h, GL_R32F, GL_RED, GL_FLOAT, nullptr);
         tex_shape = make_texture(w, h, GL_R32I, GL_RED_INTEGER, GL_INT, nullptr);
         tex_tri = make_texture(w, h, GL_R32I, GL_RED_INTEGER, GL_INT, nullptr);
-        glGenRenderbuffers(1, &depth);
-        glBindRenderbuffer(GL_RENDERBUFFER, depth);
-        glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, w, h);
-        glGenFramebuffers(1, &fbo);
-        glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex_z, 0);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, tex_shape, 0);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_TEXTURE_2D, tex_tri, 0);
-        glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth);
-        const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
-        glDrawBuffers(3, bufs);
-        if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-            throw std::runtime_error("GlRaster: the G-buffer framebuffer is incomplete");
-        check_gl("GlRaster targets");
+        fb = make_framebuffer(w, h, {tex_z, tex_shape, tex_tri}, true, "GlRaster's G-buffer");
     }
 };
 
@@ -118,43 +99,24 @@ void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, 
     check_gl("GlRaster upload");
 
     m.timer->begin();
-    glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, m.fb.fbo);
     glViewport(0, 0, w, h);
-    glDisable(GL_BLEND);
-    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_GREATER);  // reversed depth: near / w
-    glDepthMask(GL_TRUE);
-    const float inf = std::numeric_limits<float>::infinity();
-    const float clear_z[4] = {inf, 0, 0, 0};
-    const GLint clear_none[4] = {-1, 0, 0, 0};
-    const float clear_depth = 0;
-    glClearBufferfv(GL_COLOR, 0, clear_z);
-    glClearBufferiv(GL_COLOR, 1, clear_none);
-    glClearBufferiv(GL_COLOR, 2, clear_none);
-    glClearBufferfv(GL_DEPTH, 0, &clear_depth);
+    begin_id_pass(2);
     glUseProgram(m.program);
     const GLint shape_loc = glGetUniformLocation(m.program, "u_shape");
     glFrontFace(GL_CCW);
     glCullFace(GL_BACK);
     glBindVertexArray(m.vao);
     for (size_t i = 0; i < draws.size(); ++i) {
-        const Draw& d = draws[i];
-        if (d.cull)
+        if (draws[i].cull)
             glEnable(GL_CULL_FACE);
         else
             glDisable(GL_CULL_FACE);
         glUniform1i(shape_loc, static_cast<GLint>(i));
-        glBindBuffer(GL_ARRAY_BUFFER, d.mesh.vbo);
-        glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 0, nullptr);
-        glEnableVertexAttribArray(0);
-        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d.mesh.ibo);
-        glDrawElements(GL_TRIANGLES, d.mesh.count, GL_UNSIGNED_INT, nullptr);
+        draw_mesh(draws[i].mesh, 4);
     }
     m.timer->end();
-    glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
-    glDisable(GL_DEPTH_TEST);
-    glDisable(GL_CULL_FACE);
+    end_id_pass();
     check_gl("GlRaster draw");
 
     // Read back, rows flipped (GL's window origin is the lower left, the frame's rows go down).

@@ -147,12 +147,6 @@ struct GlSssPass::Impl {
         r = Resident{};
     }
 
-    void bind(GLuint prog, const char* name, int unit, GLuint tex) {
-        glActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(unit));
-        glBindTexture(GL_TEXTURE_2D, tex);
-        glUniform1i(glGetUniformLocation(prog, name), unit);
-    }
-
     // The draws of the pass on resident inputs; returns the texture that holds the result.
     GLuint draw(const Resident& r, const SssParams& p) {
         const int mode = shader_mode(p.mode);
@@ -173,13 +167,13 @@ struct GlSssPass::Impl {
                 const GLuint target = phase == 0 ? r.tmp : r.acc[k % 2];
                 glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, target,
                                        0);
-                bind(prog, "u_src", 0, phase == 0 ? r.input : r.tmp);
-                bind(prog, "u_input", 1, r.input);
-                bind(prog, "u_prev", 2, k > 0 ? r.acc[(k + 1) % 2] : r.input);
-                bind(prog, "u_mat", 3, r.mat);
-                bind(prog, "u_taps", 4, r.taps);
-                bind(prog, "u_jit", 5, r.jit);
-                bind(prog, "u_meta", 6, r.meta);
+                bind_texture(prog, "u_src", 0, phase == 0 ? r.input : r.tmp);
+                bind_texture(prog, "u_input", 1, r.input);
+                bind_texture(prog, "u_prev", 2, k > 0 ? r.acc[(k + 1) % 2] : r.input);
+                bind_texture(prog, "u_mat", 3, r.mat);
+                bind_texture(prog, "u_taps", 4, r.taps);
+                bind_texture(prog, "u_jit", 5, r.jit);
+                bind_texture(prog, "u_meta", 6, r.meta);
                 glUniform1i(glGetUniformLocation(prog, "u_term"), k);
                 glUniform1i(glGetUniformLocation(prog, "u_rank"), r.rank);
                 glUniform2i(glGetUniformLocation(prog, "u_size"), r.w, r.h);
