@@ -233,17 +233,6 @@ TEST_P(GlSssPassTest, RefusesWhatTheCpuPassRefuses) {
 
 // ---- The G-buffer's geometry (realtime/gl/raster_gl.h) against the software rasterizer ----
 
-// PSNR of a against b (peak: b's largest value), in dB.
-double psnr(const std::vector<double>& a, const std::vector<double>& b) {
-    double peak = 0, se = 0;
-    for (size_t i = 0; i < b.size(); ++i) {
-        peak = std::max(peak, std::fabs(b[i]));
-        se += (a[i] - b[i]) * (a[i] - b[i]);
-    }
-    const double mse = se / static_cast<double>(b.size());
-    return mse > 0 ? 10 * std::log10(peak * peak / mse) : 999.0;
-}
-
 TEST_P(GlSssPassTest, RasterOfTheBuiltInScenesMatchesTheSoftwareRasterizer) {
     realtime::gl::GlRaster raster(*ctx);
     for (const char* name : {"skin", "marble", "wholemilk", "apple", "ketchup"}) {
@@ -268,7 +257,7 @@ TEST_P(GlSssPassTest, RasterOfTheBuiltInScenesMatchesTheSoftwareRasterizer) {
                 worst_z = std::max(worst_z, std::fabs(gl.view_z[i] - sw.view_z[i]) / sw.view_z[i]);
         }
         const double n = static_cast<double>(sw.shape.size());
-        const double p = psnr(gl.depth, sw.depth);
+        const double p = testing::psnr(gl.depth, sw.depth);
         std::printf(
             "%-10s %zu of %zu samples covered; same shape %.5f, same triangle %.5f, "
             "view z within %.2g; depth layer PSNR %.1f dB; GL draws %.2f ms (timer "
@@ -283,11 +272,6 @@ TEST_P(GlSssPassTest, RasterOfTheBuiltInScenesMatchesTheSoftwareRasterizer) {
 }
 
 // ---- Pass 1 (realtime/gl/lighting_gl.h) against realtime::shade on the same raster frame ----
-
-// PSNR of a float layer against the CPU's (peak: the CPU layer's largest magnitude).
-double layer_psnr(const std::vector<float>& a, const std::vector<float>& b) {
-    return psnr(std::vector<double>(a.begin(), a.end()), std::vector<double>(b.begin(), b.end()));
-}
 
 // Translucency through a slab table of every medium (any table: the two backends read the same
 // one): T falling from 0.6 to 1e-4 over 0.1 to 20 mm.
@@ -337,7 +321,7 @@ TEST_P(GlSssPassTest, LightingOfTheBuiltInScenesMatchesTheCpuPass) {
             "dB:",
             name, gs.shadow_maps, cs.shadow_maps, t.shadow_wall_ms, t.shading_wall_ms, t.wall_ms);
         for (const auto& [layer, ab] : layers) {
-            const double p = layer_psnr(*ab.first, *ab.second);
+            const double p = testing::psnr(*ab.first, *ab.second);
             const auto mm = std::minmax_element(ab.second->begin(), ab.second->end());
             const size_t nonzero = static_cast<size_t>(std::count_if(
                 ab.second->begin(), ab.second->end(), [](float v) { return v != 0; }));
@@ -380,8 +364,7 @@ TEST_P(GlSssPassTest, FramesOfTheBuiltInScenesMatchTheSoftwareRenderer) {
         for (const ImageLayer& sl : sr.image.layers()) {
             ASSERT_TRUE(gr.image.has_layer(sl.name())) << name << " " << sl.name();
             const auto a = gr.image.layer(sl.name()).pixels(), b = sl.pixels();
-            const double p = psnr(std::vector<double>(a.begin(), a.end()),
-                                  std::vector<double>(b.begin(), b.end()));
+            const double p = testing::psnr(a, b);
             std::printf(" %s %.1f", sl.name().c_str(), p);
             EXPECT_GT(p, 45.0) << name << " " << sl.name();
         }
