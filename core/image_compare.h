@@ -22,7 +22,10 @@
 
 #include "core/film_image.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -110,5 +113,20 @@ NoiseCorrectedRms noise_corrected_rms(const std::vector<double>& a, const std::v
 /// judged against the image's scale). Equal sizes; two backends' parity (realtime/gl).
 double max_relative_difference(const std::vector<float>& a, const std::vector<float>& b,
                                double floor_fraction = 1e-6);
+
+/// PSNR of image a against image b in dB, the peak b's largest magnitude (999 where they are
+/// equal): two backends' parity (realtime/gl: the tests, `ssslab bench --realtime --backend gl`).
+/// Any indexable float or double sequences of one size.
+template <class A, class B>
+double psnr(const A& a, const B& b) {
+    double peak = 0, se = 0;
+    for (std::size_t i = 0; i < b.size(); ++i) {
+        const double x = static_cast<double>(a[i]), y = static_cast<double>(b[i]);
+        peak = std::max(peak, std::fabs(y));
+        se += (x - y) * (x - y);
+    }
+    const double mse = se / static_cast<double>(b.size());
+    return mse > 0 ? 10 * std::log10(peak * peak / mse) : 999.0;
+}
 
 }  // namespace ssslab

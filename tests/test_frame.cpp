@@ -5,6 +5,7 @@
 #include "approx/model_spec.h"
 #include "core/build_info.h"
 #include "core/film_image.h"
+#include "core/image_compare.h"
 #include "core/profile.h"
 #include "core/scene.h"
 #include "realtime/frame.h"
@@ -342,7 +343,7 @@ TEST(RasterCommand, TheGlBackendDrawsTheSameImage) {
                        b = read_exr((dir / "sw.exr").string());
     for (const ImageLayer& l : b.layers()) {
         ASSERT_TRUE(a.has_layer(l.name())) << l.name();
-        EXPECT_GT(testing::psnr(a.layer(l.name()).pixels(), l.pixels()), 45.0) << l.name();
+        EXPECT_GT(psnr(a.layer(l.name()).pixels(), l.pixels()), 45.0) << l.name();
     }
 }
 

@@ -257,7 +257,7 @@ TEST_P(GlSssPassTest, RasterOfTheBuiltInScenesMatchesTheSoftwareRasterizer) {
                 worst_z = std::max(worst_z, std::fabs(gl.view_z[i] - sw.view_z[i]) / sw.view_z[i]);
         }
         const double n = static_cast<double>(sw.shape.size());
-        const double p = testing::psnr(gl.depth, sw.depth);
+        const double p = psnr(gl.depth, sw.depth);
         std::printf(
             "%-10s %zu of %zu samples covered; same shape %.5f, same triangle %.5f, "
             "view z within %.2g; depth layer PSNR %.1f dB; GL draws %.2f ms (timer "
@@ -321,7 +321,7 @@ TEST_P(GlSssPassTest, LightingOfTheBuiltInScenesMatchesTheCpuPass) {
             "dB:",
             name, gs.shadow_maps, cs.shadow_maps, t.shadow_wall_ms, t.shading_wall_ms, t.wall_ms);
         for (const auto& [layer, ab] : layers) {
-            const double p = testing::psnr(*ab.first, *ab.second);
+            const double p = psnr(*ab.first, *ab.second);
             const auto mm = std::minmax_element(ab.second->begin(), ab.second->end());
             const size_t nonzero = static_cast<size_t>(std::count_if(
                 ab.second->begin(), ab.second->end(), [](float v) { return v != 0; }));
@@ -364,7 +364,7 @@ TEST_P(GlSssPassTest, FramesOfTheBuiltInScenesMatchTheSoftwareRenderer) {
         for (const ImageLayer& sl : sr.image.layers()) {
             ASSERT_TRUE(gr.image.has_layer(sl.name())) << name << " " << sl.name();
             const auto a = gr.image.layer(sl.name()).pixels(), b = sl.pixels();
-            const double p = testing::psnr(a, b);
+            const double p = psnr(a, b);
             std::printf(" %s %.1f", sl.name().c_str(), p);
             EXPECT_GT(p, 45.0) << name << " " << sl.name();
         }

@@ -116,20 +116,6 @@ approx::ImageRGB random_image(int w, int h, double pixel_mm, unsigned seed);
 /// max |out - ref| over max |ref|; `out` RGB interleaved as the pass writes it.
 double rel_diff(const std::vector<float>& out, const approx::ImageRGB& ref);
 double rel_diff(const std::vector<float>& a, const std::vector<float>& b);
-/// PSNR of image a against image b in dB, the peak b's largest magnitude (999 where they are
-/// equal): two backends' parity (realtime/gl). Any indexable float or double sequences of one
-/// size.
-template <class A, class B>
-double psnr(const A& a, const B& b) {
-    double peak = 0, se = 0;
-    for (std::size_t i = 0; i < b.size(); ++i) {
-        const double x = static_cast<double>(a[i]), y = static_cast<double>(b[i]);
-        peak = std::max(peak, std::fabs(y));
-        se += (x - y) * (x - y);
-    }
-    const double mse = se / static_cast<double>(b.size());
-    return mse > 0 ? 10 * std::log10(peak * peak / mse) : 999.0;
-}
 /// Every edge mode, and its name for messages ("none", "follow", "reject").
 extern const std::array<realtime::SssEdgeMode, 3> kSssEdgeModes;
 const char* edge_mode_name(realtime::SssEdgeMode m);

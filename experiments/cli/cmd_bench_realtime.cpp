@@ -6,10 +6,11 @@
 // no jitter), the composite, and the whole frame (realtime/frame.h, all of them in sequence).
 // The SSS pass is set beside a streaming floor measured in the same run: the bytes the pass
 // reads and writes (per 1D pass irradiance, view z and material in, 3 floats out; rank 1, so 2
-// passes) moved by a plain parallel loop with the same thread count. With --backend gl, the
-// passes the GL twin has (realtime/gl: the SSS pass so far) run in the same process on the
-// frame's own inputs: their draws timed by GL_TIME_ELAPSED, the whole call (uploads, read-back)
-// by the wall clock, and their result compared with the CPU pass's.
+// passes) moved by a plain parallel loop with the same thread count. With --backend gl, the GL
+// twin's passes (realtime/gl: raster, shadow maps, lighting, sss) run in the same process on the
+// frame's own inputs: their draws timed glFinish to glFinish and by GL_TIME_ELAPSED, the whole
+// call (uploads, read-back) by the wall clock, and their result compared with the CPU pass's;
+// then the whole frame through the GL backend hooks.
 #include "approx/model_spec.h"
 #include "core/atomic_file.h"
 #include "core/build_info.h"
@@ -24,8 +25,7 @@
 #include "realtime/frame.h"
 #include "realtime/sss_pass.h"
 #if SSSLAB_HAVE_GL
-#include "realtime/gl/raster_gl.h"
-#include "realtime/gl/sss_pass_gl.h"
+#include "realtime/gl/frame_gl.h"
 #endif
 
 #include <tbb/blocked_range.h>
@@ -36,6 +36,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <sstream>
@@ -97,6 +98,134 @@ std::string num(double v) {
     return buf;
 }
 
+#if SSSLAB_HAVE_GL
+/// The fastest of several values.
+struct Fastest {
+    double v = 1e300;
+    void add(double x) { v = std::min(v, x); }
+};
+
+/// The GL twin's rows beside the software ones (all threads), each pass on the frame's own
+/// inputs (the software raster frame, its G-buffer, the SSS pass's captured inputs), so that
+/// each result is compared with the CPU pass's on identical inputs, after one untimed call (the
+/// driver compiles shader variants at their first draws: llvmpipe's first light passes of a
+/// scene took 10x their later time): a pass's draws glFinish to
+/// glFinish ("pass") and by GL_TIME_ELAPSED ("pass (timer)"), its whole call with uploads and
+/// read-back ("pass+transfer"), and the whole frame through the backend hooks (composite: the
+/// CPU's, as in realtime/gl/frame_gl.h).
+void bench_gl(realtime::gl::GlFrameBackend& gl, const Scene& s, const realtime::RasterizedFrame& f,
+              const realtime::LitFrame& lit,
+              const std::map<int, realtime::FrameMaterial>& materials,
+              const realtime::FrameOptions& fo, int repeat, double floor_ms,
+              const std::string& label, std::vector<Row>& rows) {
+    realtime::FrameOptions go = fo;
+    gl.install(go);
+    auto row = [&](const char* pass, const Fastest& v, double floor = -1) {
+        rows.push_back({label, 0, pass, v.v, floor, "gl"});
+    };
+
+    // The raster: the G-buffer's geometry, its samples against the software frame's.
+    Fastest raster, raster_timer, raster_call;
+    realtime::RasterizedFrame gf;
+    for (int k = -1; k < repeat; ++k) {  // k = -1: the warm-up
+        realtime::rasterize_frame(s, go, gf);
+        if (k < 0) continue;
+        raster.add(gl.raster_times.draw_ms);
+        raster_timer.add(gl.raster_times.gpu_ms);
+        raster_call.add(gl.raster_times.wall_ms);
+    }
+    size_t same = 0;
+    for (size_t i = 0; i < gf.raster.shape.size(); ++i)
+        same += gf.raster.shape[i] == f.raster.shape[i] &&
+                gf.raster.triangle[i] == f.raster.triangle[i];
+    std::printf(
+        "%-18s GL raster against the software raster: the same triangle at %.5f of the "
+        "samples\n",
+        label.c_str(), static_cast<double>(same) / static_cast<double>(gf.raster.shape.size()));
+
+    // Pass 1 on the software raster frame; "lighting+transfer" is defined as the software
+    // row "lighting": the whole pass less its shadow maps.
+    Fastest maps, maps_timer, shading, shading_timer, pass1;
+    realtime::LitFrame gl_lit;
+    for (int k = -1; k < repeat; ++k) {
+        realtime::light_frame(s, f, go, gl_lit);
+        if (k < 0) continue;
+        const realtime::gl::GlLightingTimes& lt = gl.lighting_times;
+        maps.add(lt.shadow_wall_ms);
+        maps_timer.add(lt.shadow_gpu_ms);
+        shading.add(lt.shading_wall_ms);
+        shading_timer.add(lt.shading_gpu_ms);
+        pass1.add(gl_lit.ms - gl_lit.stats.shadow_ms);
+    }
+    std::printf(
+        "%-18s GL pass 1 against the CPU's on the same raster frame: PSNR irradiance "
+        "%.1f dB, specular %.1f dB, surface %.1f dB\n",
+        label.c_str(), psnr(gl_lit.gbuffer.irradiance, lit.gbuffer.irradiance),
+        psnr(gl_lit.gbuffer.specular, lit.gbuffer.specular),
+        psnr(gl_lit.gbuffer.surface, lit.gbuffer.surface));
+
+    // The SSS pass's inputs as the frame builds them, then the GL twin on them: its draws
+    // (inputs resident), its whole call and its result against the CPU pass's.
+    realtime::SssGBuffer sg;
+    std::vector<realtime::SssMaterialKernel> taps;
+    realtime::SssParams sp;
+    std::vector<float> cpu;
+    realtime::FrameOptions cap = fo;
+    cap.separable_pass = [&](const realtime::SssGBuffer& g_,
+                             const std::vector<realtime::SssMaterialKernel>& t_,
+                             const realtime::SssParams& p_, std::vector<float>& out) {
+        sg = g_;
+        taps = t_;
+        sp = p_;
+        realtime::sss_pass(g_, t_, p_, out);
+        cpu = out;
+    };
+    realtime::render_frame(s, f, lit, materials, cap);
+    Fastest sss, sss_timer, sss_call;
+    std::vector<float> out;
+    if (!taps.empty()) {
+        for (const auto& tm : gl.sss.time_runs(sg, taps, sp, repeat)) {
+            sss.add(tm.draw_ms);
+            sss_timer.add(tm.gpu_ms);
+        }
+        for (int k = 0; k < repeat; ++k) {
+            realtime::gl::GlSssTimes tm;
+            gl.sss.run(sg, taps, sp, out, &tm);
+            sss_call.add(tm.wall_ms);
+        }
+        std::printf(
+            "%-18s GL sss pass against the CPU pass on the frame's inputs: worst "
+            "relative difference %.2g\n",
+            label.c_str(), max_relative_difference(out, cpu));
+    }
+
+    // A frame as an engine draws it, every pass on the GL twin (the composite the CPU's).
+    realtime::RasterizedFrame ff;
+    realtime::LitFrame lf;
+    Fastest frame;
+    frame.add(1e3 * best_seconds(repeat, [&] {
+                  realtime::rasterize_frame(s, go, ff);
+                  realtime::light_frame(s, ff, go, lf);
+                  realtime::render_frame(s, ff, lf, materials, go);
+              }));
+
+    row("raster", raster);
+    row("raster (timer)", raster_timer);
+    row("raster+transfer", raster_call);
+    row("shadow maps", maps);
+    row("shadow maps (timer)", maps_timer);
+    row("lighting", shading);
+    row("lighting (timer)", shading_timer);
+    row("lighting+transfer", pass1);
+    if (!taps.empty()) {
+        row("sss", sss, floor_ms);
+        row("sss (timer)", sss_timer);
+        row("sss+transfer", sss_call);
+    }
+    row("frame", frame);
+}
+#endif
+
 }  // namespace
 
 int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, int width,
@@ -105,15 +234,12 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
     const std::vector<std::filesystem::path> files = list_scenes(scenes_dir, only);
 #if SSSLAB_HAVE_GL
     std::unique_ptr<realtime::gl::GlContext> gl_context;
-    std::unique_ptr<realtime::gl::GlSssPass> gl_pass;
-    std::unique_ptr<realtime::gl::GlRaster> gl_raster;
+    std::unique_ptr<realtime::gl::GlFrameBackend> gl;
     if (backend == "gl") {
         gl_context = realtime::gl::GlContext::create(realtime::gl::parse_gl_platform(platform));
-        gl_pass = std::make_unique<realtime::gl::GlSssPass>(*gl_context);
-        gl_raster = std::make_unique<realtime::gl::GlRaster>(*gl_context);
-        std::printf("GL twin: %s, %s, OpenGL %s (the passes it has: raster, sss)\n",
-                    gl_context->platform().c_str(), gl_context->renderer().c_str(),
-                    gl_context->version().c_str());
+        gl = std::make_unique<realtime::gl::GlFrameBackend>(*gl_context);
+        std::printf("GL twin: %s, %s, OpenGL %s\n", gl_context->platform().c_str(),
+                    gl_context->renderer().c_str(), gl_context->version().c_str());
     }
 #else
     (void)platform;  // cmd_bench.cpp refuses --backend gl in a build without the GL twin
@@ -131,7 +257,7 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
     const approx::ModelSpec model = approx::parse_model("svd:rank=1");
 
     std::vector<Row> rows;
-    std::printf("%-18s %11s %7s %-12s %10s %10s %7s\n", "scene", "W x H", "threads", "pass", "ms",
+    std::printf("%-18s %11s %7s %-19s %10s %10s %7s\n", "scene", "W x H", "threads", "pass", "ms",
                 "floor_ms", "ratio");
     for (const auto& file : files) {
         const Scene full = read_scene(file.string());
@@ -159,6 +285,7 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
                 materials[m] = realtime::make_frame_material(p, model, kTaps, false);
             int maps = 0;
             for (int t : counts) {
+                const size_t first = rows.size();
                 tbb::task_arena arena(t);
                 arena.execute([&] {
                     realtime::RasterizedFrame f;
@@ -206,73 +333,10 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
                     rows.push_back({label, t, "composite", composite, -1});
                     rows.push_back({label, t, "frame", frame * 1e3, -1});
 #if SSSLAB_HAVE_GL
-                    if (gl_pass && t == counts.back()) {
-                        // The SSS pass's inputs as the frame builds them, then the GL twin on
-                        // them: its draws (GL_TIME_ELAPSED, inputs resident, fastest of
-                        // repeat), its whole call (upload and read-back too) and its result
-                        // against the CPU pass's.
-                        realtime::SssGBuffer sg;
-                        std::vector<realtime::SssMaterialKernel> taps;
-                        realtime::SssParams sp;
-                        std::vector<float> cpu;
-                        realtime::FrameOptions cap = fo;
-                        cap.separable_pass = [&](const realtime::SssGBuffer& g_,
-                                                 const std::vector<realtime::SssMaterialKernel>& t_,
-                                                 const realtime::SssParams& p_,
-                                                 std::vector<float>& out) {
-                            sg = g_;
-                            taps = t_;
-                            sp = p_;
-                            realtime::sss_pass(g_, t_, p_, out);
-                            cpu = out;
-                        };
-                        realtime::render_frame(s, f, lit, materials, cap);
-                        if (!taps.empty()) {
-                            double draws = 1e300, timer = 1e300;
-                            for (const auto& tm : gl_pass->time_runs(sg, taps, sp, repeat)) {
-                                draws = std::min(draws, tm.draw_ms);
-                                timer = std::min(timer, tm.gpu_ms);
-                            }
-                            double whole = 1e300;
-                            std::vector<float> out;
-                            for (int k = 0; k < repeat; ++k) {
-                                realtime::gl::GlSssTimes tm;
-                                gl_pass->run(sg, taps, sp, out, &tm);
-                                whole = std::min(whole, tm.wall_ms);
-                            }
-                            // The raster: the G-buffer's geometry, its samples against the
-                            // software frame's.
-                            double raster_draws = 1e300, raster_call = 1e300;
-                            realtime::RasterFrame gf;
-                            for (int k = 0; k < repeat; ++k) {
-                                realtime::gl::GlRasterTimes rt;
-                                gl_raster->rasterize(s, fo.raster, width, height, gf, &rt);
-                                raster_draws = std::min(raster_draws, rt.draw_ms);
-                                raster_call = std::min(raster_call, rt.wall_ms);
-                            }
-                            size_t same = 0;
-                            for (size_t i = 0; i < gf.shape.size(); ++i)
-                                same += gf.shape[i] == f.raster.shape[i] &&
-                                        gf.triangle[i] == f.raster.triangle[i];
-                            rows.push_back({label, 0, "raster", raster_draws, -1, "gl"});
-                            rows.push_back({label, 0, "raster+transfer", raster_call, -1, "gl"});
-                            std::printf(
-                                "%-18s GL raster against the software raster: the same "
-                                "triangle at %.5f of the samples\n",
-                                label.c_str(),
-                                static_cast<double>(same) / static_cast<double>(gf.shape.size()));
-                            rows.push_back({label, 0, "sss", draws, floor * 1e3, "gl"});
-                            rows.push_back({label, 0, "sss (timer)", timer, -1, "gl"});
-                            rows.push_back({label, 0, "sss+transfer", whole, -1, "gl"});
-                            std::printf(
-                                "%-18s GL sss pass against the CPU pass on the frame's inputs: "
-                                "worst relative difference %.2g\n",
-                                label.c_str(), max_relative_difference(out, cpu));
-                        }
-                    }
+                    if (gl && t == counts.back())
+                        bench_gl(*gl, s, f, lit, materials, fo, repeat, floor * 1e3, label, rows);
 #endif
                 });
-                const size_t first = rows.size() - (rows.back().backend == "gl" ? 11 : 6);
                 for (size_t k = first; k < rows.size(); ++k) {
                     const Row& r = rows[k];
                     char size[32], fl[32] = "", ratio[32] = "";
@@ -283,7 +347,7 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
                     }
                     const std::string th =
                         r.backend == "gl" ? std::string("gl") : std::to_string(r.threads);
-                    std::printf("%-18s %11s %7s %-12s %10.3f %10s %7s\n", r.scene.c_str(), size,
+                    std::printf("%-18s %11s %7s %-19s %10.3f %10s %7s\n", r.scene.c_str(), size,
                                 th.c_str(), r.pass.c_str(), r.ms, fl, ratio);
                 }
             }
@@ -303,13 +367,13 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
     if (backend == "gl")
         std::printf(
             "threads gl: the GL twin (its platform's own threads; llvmpipe: LP_NUM_THREADS, "
-            "default all cores); raster: the G-buffer's geometry (view z, shape, triangle), "
-            "meshes uploaded, draws glFinish to glFinish; raster+transfer: the whole call "
-            "(projection, uploads, read-back); sss: its draws alone, inputs resident, glFinish "
-            "to glFinish; "
-            "sss (timer): the same by GL_TIME_ELAPSED (llvmpipe's query does not see its "
-            "deferred rasterization: read sss there); sss+transfer: the whole call, G-buffer "
-            "and taps uploaded and the result read back.\n");
+            "default all cores), each pass on the software frame's inputs after one untimed call "
+            "(shader variants compiled at first draw). A pass's row: its "
+            "draws, glFinish to glFinish (meshes, G-buffer and taps resident); (timer): the same "
+            "by GL_TIME_ELAPSED (llvmpipe's query does not see its deferred rasterization: read "
+            "the plain row there); +transfer: the whole call (projection, uploads, read-back; "
+            "for pass 1 defined as the software row: the whole pass less its shadow maps). "
+            "frame: raster, pass 1 and sss on the GL twin, the composite the CPU's.\n");
 
     if (!csv.empty()) {
         std::ostringstream o;
