@@ -96,6 +96,7 @@ inline constexpr std::uint32_t kTest = 0x9000;     ///< + test id
 inline constexpr std::uint32_t kVolpath = 0xA000;  ///< + run index (< 0x1000)
 inline constexpr std::uint32_t kScene = 0xB000;    ///< procedural scene geometry (+ shape index)
 inline constexpr std::uint32_t kSssReference = 0xC000;  ///< realtime/sss_reference.h's sampling
+inline constexpr std::uint32_t kPointCloud = 0xD000;    ///< approx/hierarchical.h's surface points
 }  // namespace rng_domain
 
 }  // namespace ssslab
