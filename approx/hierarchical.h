@@ -34,40 +34,16 @@
 // Lengths in mm throughout (the point cloud is built from scene units with unit_mm).
 #pragma once
 
+#include "approx/radial_function.h"
 #include "core/mesh.h"
-#include "core/profile.h"
 #include "core/vec3.h"
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <functional>
-#include <memory>
 #include <vector>
 
 namespace ssslab::approx {
-
-class DiffusionProfile;
-
-/// R_d(r) per RGB channel [1/mm^2] at r [mm]: what the integration sums. Thread-safe once built.
-class RadialFunction {
-  public:
-    /// An MC profile (core/profile.h) as its bin means: R_d(r) = the mean over the annulus holding
-    /// r (piecewise constant, so that its integral over the plane is the profile's reflectance
-    /// inside the grid exactly), 0 beyond the grid (the profile's `beyond` is not placed).
-    static RadialFunction from_profile(const RadialProfile& p);
-    /// Analytic profiles, one per channel, whose lengths are in mm (coefficients per mm).
-    /// R_d is per unit power entering (approx/diffusion.h's convention).
-    static RadialFunction from_diffusion(
-        const std::array<std::shared_ptr<const DiffusionProfile>, 3>& channels);
-    /// Any function of r [mm] returning R_d per channel [1/mm^2].
-    explicit RadialFunction(std::function<std::array<double, 3>(double)> f) : f_(std::move(f)) {}
-
-    std::array<double, 3> operator()(double r_mm) const { return f_(r_mm); }
-
-  private:
-    std::function<std::array<double, 3>(double)> f_;
-};
 
 /// One point of the cloud.
 struct SurfacePoint {

@@ -1,0 +1,258 @@
+#include "approx/munoz.h"
+
+#include "approx/fft.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace ssslab::approx {
+
+namespace {
+
+using detail::Fft2D;
+using detail::fft_size;
+
+void check(const MunozView& v, const MunozOptions& o) {
+    auto fail = [](const std::string& what) { throw std::invalid_argument("munoz: " + what); };
+    if (o.layers < 1 || o.layers > 16)
+        fail("layers must be in 1..16, got " + std::to_string(o.layers));
+    if (!(o.threshold >= 0 && o.threshold < 1))
+        fail("threshold must be in [0, 1), got " + std::to_string(o.threshold));
+    if (o.downsample < 1 || o.downsample > 8)
+        fail("downsample must be in 1..8, got " + std::to_string(o.downsample));
+    if (v.width < 1 || v.height < 1) fail("the view has no pixels");
+    const size_t n = static_cast<size_t>(v.width) * static_cast<size_t>(v.height);
+    if (v.front_z.size() != n || v.back_z.size() != n) fail("front_z or back_z: wrong size");
+    for (int c = 0; c < 3; ++c)
+        if (v.front_irradiance[c].size() != n || v.back_irradiance[c].size() != n)
+            fail("front_irradiance or back_irradiance: wrong size");
+    if (!std::isfinite(v.pixel_mm) || !std::isfinite(v.pixel_mm_per_depth))
+        fail("pixel_mm and pixel_mm_per_depth must be finite");
+    for (size_t i = 0; i < n; ++i) {
+        const float f = v.front_z[i], b = v.back_z[i];
+        if (std::isnan(f) || std::isnan(b)) fail("a NaN depth at pixel " + std::to_string(i));
+        if (std::isinf(f) && !std::isinf(b))
+            fail("pixel " + std::to_string(i) + " has a back sample and no front one");
+        if (std::isfinite(b) && b < f)
+            fail("pixel " + std::to_string(i) + ": the back sample is nearer than the front one");
+        for (float z : {f, b})
+            if (std::isfinite(z) && !(v.pixel_mm + v.pixel_mm_per_depth * z > 0))
+                fail("the pixel size at depth " + std::to_string(z) + " mm is not positive");
+        for (int c = 0; c < 3; ++c)
+            for (float e : {v.front_irradiance[c][i], v.back_irradiance[c][i]})
+                if (!std::isfinite(e) || e < 0)
+                    fail("irradiance must be finite and >= 0 (pixel " + std::to_string(i) + ")");
+    }
+}
+
+/// Where a depth falls between the layers: the lower layer and the fraction towards the next.
+struct LayerPos {
+    int l0 = 0;
+    double s = 0;
+};
+
+LayerPos layer_of(double z, double z_min, double dz, int layers) {
+    if (layers == 1 || !(dz > 0)) return {0, 0};
+    const double u = std::clamp((z - z_min) / dz, 0.0, static_cast<double>(layers - 1));
+    const int l0 = std::min(static_cast<int>(std::floor(u)), layers - 2);
+    return {l0, u - l0};
+}
+
+}  // namespace
+
+MunozResult munoz_exitance(const MunozView& v, const RadialFunction& rd, const MunozOptions& o) {
+    const auto t0 = std::chrono::steady_clock::now();
+    check(v, o);
+    const int w = v.width, h = v.height, nl = o.layers, d = o.downsample;
+    const size_t n = static_cast<size_t>(w) * static_cast<size_t>(h);
+    MunozResult res;
+    for (auto& m : res.exitance) m.assign(n, 0.0f);
+
+    // The layers over the depths of every sample [Munoz11 §4.2].
+    double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
+    for (size_t i = 0; i < n; ++i)
+        for (float z : {v.front_z[i], v.back_z[i]})
+            if (std::isfinite(z)) {
+                z_min = std::min(z_min, static_cast<double>(z));
+                z_max = std::max(z_max, static_cast<double>(z));
+            }
+    if (!std::isfinite(z_min)) return res;  // no object in view
+    const double dz = nl > 1 ? (z_max - z_min) / (nl - 1) : 0.0;
+    res.stats.dz_mm = dz;
+    auto layer_z = [&](int l) { return z_min + l * dz; };
+    auto pixel_at = [&](double z) { return v.pixel_mm + v.pixel_mm_per_depth * z; };
+
+    // Irradiance maps per layer and channel on the coarse grid: each sample's irradiance split
+    // between its two nearest layers, averaged over the downsampling block (power conserved).
+    const int wc = (w + d - 1) / d, hc = (h + d - 1) / d;
+    const size_t nc = static_cast<size_t>(wc) * static_cast<size_t>(hc);
+    std::vector<std::array<std::vector<double>, 3>> e(static_cast<size_t>(nl));
+    for (auto& layer : e)
+        for (auto& c : layer) c.assign(nc, 0.0);
+    const double block = 1.0 / (static_cast<double>(d) * d);
+    auto deposit = [&](size_t i, double z, const std::array<std::vector<float>, 3>& irr) {
+        const LayerPos p = layer_of(z, z_min, dz, nl);
+        double w0 = 1, w1 = 0;
+        if (nl > 1 && dz > 0) {
+            w1 = o.split == MunozSplit::equal ? 0.5 : p.s;
+            w0 = 1 - w1;
+        }
+        const size_t x = i % static_cast<size_t>(w), y = i / static_cast<size_t>(w);
+        const size_t j = (y / d) * static_cast<size_t>(wc) + x / d;
+        for (int c = 0; c < 3; ++c) {
+            const double ec = irr[c][i] * block;
+            e[p.l0][c][j] += w0 * ec;
+            if (w1 > 0) e[p.l0 + 1][c][j] += w1 * ec;
+        }
+    };
+    std::vector<char> seen(static_cast<size_t>(nl), 0);
+    for (size_t i = 0; i < n; ++i) {
+        if (!std::isfinite(v.front_z[i])) continue;
+        deposit(i, v.front_z[i], v.front_irradiance);
+        if (std::isfinite(v.back_z[i])) deposit(i, v.back_z[i], v.back_irradiance);
+        // Eq. 7 reads the two layers about the visible depth.
+        const LayerPos p = layer_of(v.front_z[i], z_min, dz, nl);
+        seen[p.l0] = 1;
+        if (nl > 1 && dz > 0) seen[p.l0 + 1] = 1;
+    }
+    for (int l = 0; l < nl; ++l) res.stats.layers_used += seen[l] || !o.skip_invisible;
+
+    // Eq. 6 by FFT: zero-padded to a linear convolution of the coarse maps with kernels over
+    // every offset -(wc - 1)..(wc - 1), -(hc - 1)..(hc - 1).
+    const int nx = fft_size(2 * wc - 1), ny = fft_size(2 * hc - 1);
+    const size_t nspec = static_cast<size_t>(nx / 2 + 1) * static_cast<size_t>(ny);
+    const size_t nreal = static_cast<size_t>(nx) * static_cast<size_t>(ny);
+    Fft2D fft(nx, ny);
+    using Spectrum = std::vector<std::complex<double>>;
+    auto to_spectrum = [&](Spectrum& out) {
+        fft.forward();
+        out.resize(nspec);
+        const fftw_complex* s = fft.spec();
+        for (size_t k = 0; k < nspec; ++k) out[k] = {s[k][0], s[k][1]};
+    };
+    const std::array<double, 3> r0 = rd(0.0);
+    std::vector<std::array<std::vector<double>, 3>> m(static_cast<size_t>(nl));
+
+    for (int c = 0; c < 3; ++c) {
+        // Spectra of the layers that hold irradiance in this channel.
+        std::vector<Spectrum> es(static_cast<size_t>(nl));
+        for (int i = 0; i < nl; ++i) {
+            const auto& ei = e[i][c];
+            if (std::all_of(ei.begin(), ei.end(), [](double x) { return x == 0; })) continue;
+            double* r = fft.real();
+            std::fill(r, r + nreal, 0.0);
+            for (int y = 0; y < hc; ++y)
+                for (int x = 0; x < wc; ++x)
+                    r[static_cast<size_t>(y) * nx + x] = ei[static_cast<size_t>(y) * wc + x];
+            to_spectrum(es[i]);
+        }
+        // Kernel spectra by (in-plane pixel side, layer distance e) [Eq. 5].
+        std::map<std::pair<double, int>, Spectrum> kernels;
+        auto kernel = [&](double side, int dist) -> const Spectrum& {
+            auto it = kernels.find({side, dist});
+            if (it != kernels.end()) return it->second;
+            double* r = fft.real();
+            const double ez = dist * dz;
+            tbb::parallel_for(tbb::blocked_range<int>(0, ny), [&](const auto& range) {
+                for (int y = range.begin(); y < range.end(); ++y) {
+                    // Wrapped offsets: rows/columns past half the size are negative offsets;
+                    // offsets beyond the maps' reach never meet a pixel and stay 0.
+                    const int oy = y <= ny / 2 ? y : y - ny;
+                    for (int x = 0; x < nx; ++x) {
+                        const int ox = x <= nx / 2 ? x : x - nx;
+                        double k = 0;
+                        if (std::abs(ox) < wc && std::abs(oy) < hc) {
+                            const double px = side * ox, py = side * oy;
+                            k = rd(std::sqrt(px * px + py * py + ez * ez))[c];
+                        }
+                        r[static_cast<size_t>(y) * nx + x] = k;
+                    }
+                }
+            });
+            Spectrum s;
+            to_spectrum(s);
+            return kernels.emplace(std::make_pair(side, dist), std::move(s)).first->second;
+        };
+        for (int l = 0; l < nl; ++l) {
+            m[l][c].assign(nc, 0.0);
+            Spectrum acc(nspec, {0.0, 0.0});
+            bool any = false;
+            for (int i = 0; i < nl; ++i) {
+                if (es[i].empty()) continue;
+                const int dist = std::abs(i - l);
+                if (o.skip_invisible && !seen[l]) {
+                    ++res.stats.skipped_invisible;
+                    continue;
+                }
+                // Eq. 8: contributions below t R_d(0) are dropped.
+                if (o.threshold > 0 && o.threshold * r0[c] > rd(dist * dz)[c]) {
+                    ++res.stats.skipped_threshold;
+                    continue;
+                }
+                const double side = d * pixel_at(0.5 * (layer_z(i) + layer_z(l)));
+                const double source = d * pixel_at(layer_z(i));
+                const double area = source * source;
+                const Spectrum& k = kernel(side, dist);
+                const Spectrum& ei = es[i];
+                for (size_t q = 0; q < nspec; ++q) acc[q] += area * ei[q] * k[q];
+                ++res.stats.convolutions;
+                any = true;
+            }
+            if (!any) continue;
+            fftw_complex* s = fft.spec();
+            for (size_t q = 0; q < nspec; ++q) {
+                s[q][0] = acc[q].real();
+                s[q][1] = acc[q].imag();
+            }
+            fft.inverse();
+            const double norm = 1.0 / static_cast<double>(nreal);
+            const double* r = fft.real();
+            for (int y = 0; y < hc; ++y)
+                for (int x = 0; x < wc; ++x)
+                    m[l][c][static_cast<size_t>(y) * wc + x] =
+                        r[static_cast<size_t>(y) * nx + x] * norm;
+        }
+    }
+
+    // Eq. 7: each visible sample interpolates the two layers about its depth, the coarse maps
+    // read bilinearly at the pixel's centre.
+    auto coarse = [&](const std::vector<double>& map, int x, int y) {
+        if (d == 1) return map[static_cast<size_t>(y) * wc + x];
+        const double u = std::clamp((x + 0.5) / d - 0.5, 0.0, wc - 1.0);
+        const double t = std::clamp((y + 0.5) / d - 0.5, 0.0, hc - 1.0);
+        const int x0 = std::min(static_cast<int>(u), wc - 1),
+                  y0 = std::min(static_cast<int>(t), hc - 1);
+        const int x1 = std::min(x0 + 1, wc - 1), y1 = std::min(y0 + 1, hc - 1);
+        const double fx = u - x0, fy = t - y0;
+        auto at = [&](int xx, int yy) { return map[static_cast<size_t>(yy) * wc + xx]; };
+        return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x1, y0)) +
+               fy * ((1 - fx) * at(x0, y1) + fx * at(x1, y1));
+    };
+    for (size_t i = 0; i < n; ++i) {
+        if (!std::isfinite(v.front_z[i])) continue;
+        const int x = static_cast<int>(i % static_cast<size_t>(w));
+        const int y = static_cast<int>(i / static_cast<size_t>(w));
+        const LayerPos p = layer_of(v.front_z[i], z_min, dz, nl);
+        for (int c = 0; c < 3; ++c) {
+            double val = 0;
+            if (!m[p.l0][c].empty()) val += (1 - p.s) * coarse(m[p.l0][c], x, y);
+            if (p.s > 0 && !m[p.l0 + 1][c].empty()) val += p.s * coarse(m[p.l0 + 1][c], x, y);
+            res.exitance[c][i] = static_cast<float>(std::max(val, 0.0));
+        }
+    }
+    res.stats.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return res;
+}
+
+}  // namespace ssslab::approx

@@ -1,0 +1,315 @@
+// Munoz11's layered convolution (approx/munoz.h) against a direct implementation of its
+// equations written here without FFTs (Eqs. 5-7: layers, the split of each sample, per-distance
+// kernels, the interpolation of the visible depth): one layer on a flat slab is the direct 2D
+// sum; several layers, front and back samples, a perspective pixel size and every split rule
+// agree with the direct sum to rounding; a constant irradiance on a large flat medium converges
+// to E R_dr at second order in the pixel size (the midpoint rule of a smooth profile); the
+// threshold of Eq. 8 and the skipping of invisible layers; bad input.
+#include "approx/diffusion.h"
+#include "approx/munoz.h"
+#include "core/rng.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+
+namespace ssslab::approx {
+namespace {
+
+const double kInf = std::numeric_limits<double>::infinity();
+
+std::shared_ptr<const DiffusionProfile> dipole(double sigma_a, double sigma_s) {
+    DiffusionMedium m;
+    m.sigma_a = sigma_a;
+    m.sigma_s = sigma_s;
+    m.eta = 1.3;
+    return make_diffusion_profile("dipole", m);
+}
+
+std::array<std::shared_ptr<const DiffusionProfile>, 3> media() {
+    return {dipole(0.05, 2.0), dipole(0.2, 2.0), dipole(0.02, 1.5)};
+}
+
+MunozView empty_view(int w, int h, double pixel_mm, double per_depth) {
+    MunozView v;
+    v.width = w;
+    v.height = h;
+    v.pixel_mm = pixel_mm;
+    v.pixel_mm_per_depth = per_depth;
+    const size_t n = static_cast<size_t>(w) * h;
+    v.front_z.assign(n, static_cast<float>(kInf));
+    v.back_z.assign(n, static_cast<float>(kInf));
+    for (int c = 0; c < 3; ++c) {
+        v.front_irradiance[c].assign(n, 0.0f);
+        v.back_irradiance[c].assign(n, 0.0f);
+    }
+    return v;
+}
+
+/// The paper's equations summed directly: every sample's irradiance to its layers (equal halves
+/// or linear), every pair of layers with its kernel (in-plane distance at the mean depth's pixel
+/// size, the source pixel's area at its layer), Eq. 7 at the visible depth.
+std::array<std::vector<double>, 3> direct(const MunozView& v, const RadialFunction& rd,
+                                          const MunozOptions& o) {
+    const int w = v.width, h = v.height, nl = o.layers;
+    const size_t n = static_cast<size_t>(w) * h;
+    double z0 = kInf, z1 = -kInf;
+    for (size_t i = 0; i < n; ++i)
+        for (float z : {v.front_z[i], v.back_z[i]})
+            if (std::isfinite(z)) z0 = std::min(z0, double(z)), z1 = std::max(z1, double(z));
+    const double dz = nl > 1 ? (z1 - z0) / (nl - 1) : 0;
+    auto pos = [&](double z, int& l0, double& s) {
+        l0 = 0;
+        s = 0;
+        if (nl == 1 || dz == 0) return;
+        const double u = (z - z0) / dz;
+        l0 = std::min(int(std::floor(u)), nl - 2);
+        s = u - l0;
+    };
+    auto k = [&](double z) { return v.pixel_mm + v.pixel_mm_per_depth * z; };
+    // Layer maps E_l(q), full resolution.
+    std::vector<std::array<std::vector<double>, 3>> e(nl);
+    for (auto& l : e)
+        for (auto& c : l) c.assign(n, 0.0);
+    for (size_t i = 0; i < n; ++i) {
+        if (!std::isfinite(v.front_z[i])) continue;
+        for (int side = 0; side < 2; ++side) {
+            const double z = side == 0 ? v.front_z[i] : v.back_z[i];
+            if (!std::isfinite(z)) continue;
+            const auto& irr = side == 0 ? v.front_irradiance : v.back_irradiance;
+            int l0;
+            double s;
+            pos(z, l0, s);
+            const double w1 = (nl == 1 || dz == 0) ? 0 : (o.split == MunozSplit::equal ? 0.5 : s);
+            for (int c = 0; c < 3; ++c) {
+                e[l0][c][i] += (1 - w1) * irr[c][i];
+                if (w1 > 0) e[l0 + 1][c][i] += w1 * irr[c][i];
+            }
+        }
+    }
+    std::array<std::vector<double>, 3> out;
+    for (auto& c : out) c.assign(n, 0.0);
+    for (size_t p = 0; p < n; ++p) {
+        if (!std::isfinite(v.front_z[p])) continue;
+        int l0;
+        double s;
+        pos(v.front_z[p], l0, s);
+        const int px = int(p % w), py = int(p / w);
+        for (int l : {l0, l0 + 1}) {
+            const double wl = l == l0 ? 1 - s : s;
+            if (wl == 0 || l >= nl) continue;
+            for (int i = 0; i < nl; ++i) {
+                const double zi = z0 + i * dz, zl = z0 + l * dz;
+                const double side = k(0.5 * (zi + zl)), area = k(zi) * k(zi);
+                const double ez = std::abs(i - l) * dz;
+                for (size_t q = 0; q < n; ++q) {
+                    const double dx = side * (px - int(q % w)), dy = side * (py - int(q / w));
+                    const auto r = rd(std::sqrt(dx * dx + dy * dy + ez * ez));
+                    for (int c = 0; c < 3; ++c) out[c][p] += wl * area * r[c] * e[i][c][q];
+                }
+            }
+        }
+    }
+    return out;
+}
+
+double worst_relative(const MunozResult& a, const std::array<std::vector<double>, 3>& b) {
+    double peak = 0, worst = 0;
+    for (int c = 0; c < 3; ++c)
+        for (size_t i = 0; i < b[c].size(); ++i) peak = std::max(peak, std::fabs(b[c][i]));
+    for (int c = 0; c < 3; ++c)
+        for (size_t i = 0; i < b[c].size(); ++i)
+            worst = std::max(worst, std::fabs(a.exitance[c][i] - b[c][i]) / peak);
+    return worst;
+}
+
+TEST(Munoz, OneLayerOnAFlatSlabIsTheDirect2DSum) {
+    const RadialFunction rd = RadialFunction::from_diffusion(media());
+    MunozView v = empty_view(24, 20, 0.1, 0);
+    RngStream rng(1, rng_domain::kTest + 310, 0);
+    for (size_t i = 0; i < v.front_z.size(); ++i) {
+        v.front_z[i] = 100;
+        for (int c = 0; c < 3; ++c) v.front_irradiance[c][i] = static_cast<float>(rng.uniform());
+    }
+    for (int layers : {1, 4}) {  // a flat object: every sample in layer 0 whatever n_l
+        MunozOptions o;
+        o.layers = layers;
+        const MunozResult r = munoz_exitance(v, rd, o);
+        const double err = worst_relative(r, direct(v, rd, o));
+        std::printf("layers %d: worst difference from the direct sum %.2g of the peak\n", layers,
+                    err);
+        EXPECT_LT(err, 1e-6) << layers;  // float output: 6e-8 relative rounding
+        EXPECT_EQ(r.stats.convolutions, 3);
+    }
+}
+
+TEST(Munoz, LayersFrontAndBackAndPerspectiveFollowTheEquations) {
+    const RadialFunction rd = RadialFunction::from_diffusion(media());
+    MunozView v = empty_view(18, 14, 0.02, 0.002);  // pixel 0.22-0.24 mm at 100-110 mm
+    RngStream rng(2, rng_domain::kTest + 311, 0);
+    for (size_t i = 0; i < v.front_z.size(); ++i) {
+        if (rng.uniform() < 0.15) continue;  // outside the object
+        v.front_z[i] = static_cast<float>(100 + 4 * rng.uniform());
+        if (rng.uniform() < 0.8) v.back_z[i] = static_cast<float>(106 + 4 * rng.uniform());
+        for (int c = 0; c < 3; ++c) {
+            v.front_irradiance[c][i] = static_cast<float>(rng.uniform());
+            v.back_irradiance[c][i] = static_cast<float>(0.3 * rng.uniform());
+        }
+    }
+    for (MunozSplit split : {MunozSplit::equal, MunozSplit::linear})
+        for (int layers : {2, 3, 6}) {
+            MunozOptions o;
+            o.layers = layers;
+            o.split = split;
+            o.skip_invisible = false;
+            const MunozResult r = munoz_exitance(v, rd, o);
+            const double err = worst_relative(r, direct(v, rd, o));
+            std::printf(
+                "%s split, %d layers: worst difference %.2g of the peak, %lld "
+                "convolutions\n",
+                split == MunozSplit::equal ? "equal" : "linear", layers, err,
+                static_cast<long long>(r.stats.convolutions));
+            EXPECT_LT(err, 1e-6) << layers;
+            EXPECT_EQ(r.stats.convolutions, 3 * layers * layers);
+            // Skipping the layers no visible sample reads changes nothing.
+            o.skip_invisible = true;
+            const MunozResult s = munoz_exitance(v, rd, o);
+            for (int c = 0; c < 3; ++c) EXPECT_EQ(s.exitance[c], r.exitance[c]);
+            EXPECT_EQ(s.stats.convolutions + s.stats.skipped_invisible, r.stats.convolutions);
+        }
+}
+
+// A flat medium of 100 x 100 mm under E = (1, 0.5, 2): M at the centre converges to E R_dr. The
+// kernel is the midpoint rule of a profile smooth in (x, y) (the dipole is a function of
+// r^2 + z_r^2): its error falls at least as the square of the pixel size (faster for a smooth,
+// decaying integrand), down to the part of R_dr beyond the image (50 mm from the centre: below
+// 16 e^-15 = 5e-6 for the widest medium, sigma_tr = 0.30 / mm).
+TEST(Munoz, AConstantIrradianceOnALargeFlatMediumConvergesToTheTotalDiffuseReflectance) {
+    const auto m = media();
+    const RadialFunction rd = RadialFunction::from_diffusion(m);
+    const std::array<float, 3> e = {1, 0.5f, 2};
+    std::array<double, 3> last{};
+    for (int pass = 0; pass < 2; ++pass) {
+        const int size = pass == 0 ? 101 : 201;
+        const double pixel = 100.0 / size;
+        MunozView v = empty_view(size, size, pixel, 0);
+        for (size_t i = 0; i < v.front_z.size(); ++i) {
+            v.front_z[i] = 50;
+            for (int c = 0; c < 3; ++c) v.front_irradiance[c][i] = e[c];
+        }
+        const MunozResult r = munoz_exitance(v, rd, MunozOptions{});
+        const size_t centre = static_cast<size_t>(size / 2) * size + size / 2;
+        for (int c = 0; c < 3; ++c) {
+            const double expected = e[c] * m[c]->total_rd();
+            const double err = std::fabs(r.exitance[c][centre] - expected) / expected;
+            std::printf("pixel %.3f mm, channel %d: M %.6g, E R_dr %.6g, relative error %.2g\n",
+                        pixel, c, r.exitance[c][centre], expected, err);
+            if (pass == 1) {
+                // Halving the pixel divides the error by 4 or more, until the truncation.
+                EXPECT_TRUE(err < 0.3 * last[c] || err < 1e-5) << c << ": " << err;
+            }
+            last[c] = err;
+        }
+    }
+}
+
+TEST(Munoz, TheThresholdDropsFarLayersAndDownsamplingKeepsThePower) {
+    const RadialFunction rd = RadialFunction::from_diffusion(media());
+    MunozView v = empty_view(40, 40, 0.25, 0);
+    for (int y = 0; y < 40; ++y)
+        for (int x = 0; x < 40; ++x) {
+            const size_t i = static_cast<size_t>(y) * 40 + x;
+            v.front_z[i] = static_cast<float>(100 + 0.2 * x);  // a slanted face, 8 mm deep
+            v.back_z[i] = 120;
+            for (int c = 0; c < 3; ++c) {
+                v.front_irradiance[c][i] = 1;
+                v.back_irradiance[c][i] = 0.5;
+            }
+        }
+    // Layers 0-3 hold the front (100-107.8 mm), 6-7 the back (120 mm): 6 sources per target.
+    const std::int64_t pairs = 3 * 8 * 6;
+    MunozOptions o;
+    o.layers = 8;
+    o.skip_invisible = false;
+    std::int64_t last = -1;
+    for (double t : {0.0, 1e-3, 0.05, 0.9}) {
+        o.threshold = t;
+        const MunozResult r = munoz_exitance(v, rd, o);
+        std::printf("t %.3g: %lld convolutions, %lld skipped, %.3f s\n", t,
+                    static_cast<long long>(r.stats.convolutions),
+                    static_cast<long long>(r.stats.skipped_threshold), r.stats.seconds);
+        EXPECT_EQ(r.stats.convolutions + r.stats.skipped_threshold, pairs);
+        if (t == 0) {
+            EXPECT_EQ(r.stats.skipped_threshold, 0);
+        }
+        // The layer itself (e = 0) is never dropped: t R_d(0) < R_d(0).
+        EXPECT_LE(r.stats.skipped_threshold, pairs - 3 * 6);
+        EXPECT_GE(r.stats.skipped_threshold, last);
+        last = r.stats.skipped_threshold;
+    }
+    EXPECT_GT(last, 0);
+    // Downsampled by 2: the coarse maps hold the same power, so the exitance of a smooth input
+    // stays close (the kernels' quadrature is coarser: a second-order change).
+    o.threshold = 0;
+    const MunozResult full = munoz_exitance(v, rd, o);
+    o.downsample = 2;
+    const MunozResult half = munoz_exitance(v, rd, o);
+    double sf = 0, sh = 0;
+    for (size_t i = 0; i < full.exitance[0].size(); ++i) {
+        sf += full.exitance[0][i];
+        sh += half.exitance[0][i];
+    }
+    std::printf("downsample 2: mean exitance %.5g against %.5g at full resolution\n", sh / 1600,
+                sf / 1600);
+    EXPECT_NEAR(sh / sf, 1.0, 0.05);
+}
+
+TEST(Munoz, BadInputIsRefusedNamingTheOption) {
+    const RadialFunction rd = RadialFunction::from_diffusion(media());
+    MunozView v = empty_view(4, 4, 0.1, 0);
+    v.front_z[5] = 10;
+    auto refused = [&](const MunozView& view, const MunozOptions& o, const char* word) {
+        try {
+            munoz_exitance(view, rd, o);
+            ADD_FAILURE() << "accepted: " << word;
+        } catch (const std::invalid_argument& ex) {
+            EXPECT_NE(std::string(ex.what()).find(word), std::string::npos) << ex.what();
+        }
+    };
+    MunozOptions o;
+    o.layers = 0;
+    refused(v, o, "layers");
+    o.layers = 17;
+    refused(v, o, "layers");
+    o = {};
+    o.threshold = -0.1;
+    refused(v, o, "threshold");
+    o.threshold = 1;
+    refused(v, o, "threshold");
+    o = {};
+    o.downsample = 0;
+    refused(v, o, "downsample");
+    MunozView b = v;
+    b.back_z[5] = 5;
+    refused(b, {}, "back sample");
+    b = v;
+    b.back_z[6] = 5;
+    refused(b, {}, "no front");
+    b = v;
+    b.front_irradiance[1][5] = -1;
+    refused(b, {}, "irradiance");
+    b = v;
+    b.front_z.pop_back();
+    refused(b, {}, "front_z");
+    b = v;
+    b.pixel_mm = 0;
+    refused(b, {}, "pixel size");
+    // Nothing in view: zeros, no error.
+    const MunozResult none = munoz_exitance(empty_view(3, 3, 0.1, 0), rd, {});
+    EXPECT_EQ(none.exitance[0], std::vector<float>(9, 0.0f));
+}
+
+}  // namespace
+}  // namespace ssslab::approx
