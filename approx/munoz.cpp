@@ -11,6 +11,8 @@
 #include <complex>
 #include <limits>
 #include <map>
+#include <set>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -69,6 +71,69 @@ LayerPos layer_of(double z, double z_min, double dz, int layers) {
 }
 
 }  // namespace
+
+MunozOptions parse_munoz(const std::string& spec) {
+    MunozOptions o;
+    std::set<std::string> seen;
+    std::stringstream in(spec);
+    std::string item;
+    auto number = [](const std::string& key, const std::string& v) {
+        size_t used = 0;
+        double x = 0;
+        try {
+            x = std::stod(v, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used != v.size() || v.empty() || !std::isfinite(x))
+            throw std::invalid_argument("munoz \"" + key + "\": \"" + v + "\" is not a number");
+        return x;
+    };
+    auto whole = [&](const std::string& key, const std::string& v) {
+        const double x = number(key, v);
+        if (x != std::floor(x))
+            throw std::invalid_argument("munoz \"" + key + "\": " + v + " is not a whole number");
+        return static_cast<int>(std::clamp(x, -1e9, 1e9));
+    };
+    while (std::getline(in, item, ',')) {
+        const size_t eq = item.find('=');
+        if (eq == std::string::npos)
+            throw std::invalid_argument("munoz: \"" + item + "\" is not key=value");
+        const std::string key = item.substr(0, eq), v = item.substr(eq + 1);
+        if (!seen.insert(key).second)
+            throw std::invalid_argument("munoz: \"" + key + "\" is given twice");
+        if (key == "layers")
+            o.layers = whole(key, v);
+        else if (key == "t")
+            o.threshold = number(key, v);
+        else if (key == "downsample")
+            o.downsample = whole(key, v);
+        else if (key == "split" && (v == "equal" || v == "linear"))
+            o.split = v == "equal" ? MunozSplit::equal : MunozSplit::linear;
+        else if (key == "visible" && (v == "skip" || v == "all"))
+            o.skip_invisible = v == "skip";
+        else if (key == "split" || key == "visible")
+            throw std::invalid_argument("munoz \"" + key + "\": unknown value \"" + v + "\"");
+        else
+            throw std::invalid_argument("munoz: unknown key \"" + key +
+                                        "\" (known: layers, t, downsample, split, visible)");
+    }
+    if (o.layers < 1 || o.layers > 16)
+        throw std::invalid_argument("munoz \"layers\": must be in 1..16");
+    if (!(o.threshold >= 0 && o.threshold < 1))
+        throw std::invalid_argument("munoz \"t\": must be in [0, 1)");
+    if (o.downsample < 1 || o.downsample > 8)
+        throw std::invalid_argument("munoz \"downsample\": must be in 1..8");
+    return o;
+}
+
+std::string munoz_label(const MunozOptions& o) {
+    std::ostringstream s;
+    s << "layers=" << o.layers << ",t=" << o.threshold << ",downsample=" << o.downsample
+      << ",split=" << (o.split == MunozSplit::equal ? "equal" : "linear")
+      << ",visible=" << (o.skip_invisible ? "skip" : "all");
+    return s.str();
+}
 
 MunozResult munoz_exitance(const MunozView& v, const RadialFunction& rd, const MunozOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();

@@ -39,6 +39,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace ssslab::approx {
@@ -82,6 +83,14 @@ struct MunozResult {
     std::array<std::vector<float>, 3> exitance;
     MunozStats stats;
 };
+
+/// A variant named in an experiment config: "layers=4", "layers=8,t=0.001,downsample=2",
+/// "layers=4,split=linear,visible=all" (keys layers, t, downsample, split = equal | linear,
+/// visible = skip | all); unset keys keep MunozOptions' defaults. Throws std::invalid_argument
+/// naming the key for an unknown key, a repeated one or a value out of range.
+MunozOptions parse_munoz(const std::string& spec);
+/// The canonical text of a variant (every key), as parse_munoz reads it.
+std::string munoz_label(const MunozOptions& o);
 
 /// Throws std::invalid_argument naming the option or field for layers outside 1..16, a
 /// threshold outside [0, 1), downsample outside 1..8, layer maps of mismatched sizes, a

@@ -80,6 +80,7 @@ struct Viewport {
     int ws, hs;    // sample grid
     double guard;  // |x / w|, |y / w| <= guard keeps snapped coordinates in range
     bool cull;
+    bool cull_front;
     bool ortho;  // RasterOptions::orthographic: no perspective divide, linear attributes
 };
 
@@ -141,7 +142,7 @@ void setup_triangle(const RasterMesh& m, std::uint32_t t, std::int32_t shape, do
                                    (fy[id[1]] - fy[id[0]]) * (fx[id[2]] - fx[id[0]]);
         // Counter-clockwise seen from the front is clockwise in y-down raster coordinates, i.e.
         // a negative area2. Zero area covers nothing.
-        if (area2 == 0 || (vp.cull && area2 > 0)) continue;
+        if (area2 == 0 || (vp.cull && area2 > 0) || (vp.cull_front && area2 < 0)) continue;
         if (area2 < 0) std::swap(id[1], id[2]);
         SetupTriangle s;
         std::int64_t minx = fx[id[0]], maxx = minx, miny = fy[id[0]], maxy = miny;
@@ -371,7 +372,7 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
     tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t bi) {
         const Block& b = blocks[bi];
         const RasterMesh& m = meshes[b.mesh];
-        const Viewport vp{ws, hs, guard, m.cull_back_faces, o.orthographic};
+        const Viewport vp{ws, hs, guard, m.cull_back_faces, m.cull_front_faces, o.orthographic};
         setup[bi].clear();
         for (std::size_t t = b.begin; t < b.end; ++t)
             setup_triangle(m, static_cast<std::uint32_t>(t), static_cast<std::int32_t>(b.mesh),
@@ -484,9 +485,11 @@ void rasterize(const Scene& scene, const RasterOptions& o, int width, int height
     const RasterCamera camera = RasterCamera::from_scene(scene.camera, width, height);
     std::vector<RasterMesh> meshes;
     meshes.reserve(scene.shapes.size());
-    for (const SceneShape& s : scene.shapes)
-        meshes.push_back(project(
-            camera, s.mesh, o.cull_closed && (s.closed ? *s.closed : check_mesh(s.mesh).closed())));
+    for (const SceneShape& s : scene.shapes) {
+        const bool cull = o.cull_closed && (s.closed ? *s.closed : check_mesh(s.mesh).closed());
+        meshes.push_back(project(camera, s.mesh, cull && !o.cull_front_closed));
+        meshes.back().cull_front_faces = cull && o.cull_front_closed;
+    }
     rasterize(camera, meshes, o, out);
 }
 

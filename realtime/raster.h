@@ -77,6 +77,9 @@ struct RasterMesh {
     /// Skip triangles facing away from the camera: right for closed, outward-oriented meshes,
     /// wrong for open ones (a plane seen from below would vanish).
     bool cull_back_faces = false;
+    /// Skip triangles facing the camera instead: a closed mesh's far side (the back samples of
+    /// layered methods such as Munoz11's, experiments/runner/munoz_frame.h).
+    bool cull_front_faces = false;
 };
 /// A world-space mesh through the camera (the triangles are referenced, not copied).
 RasterMesh project(const RasterCamera& camera, const TriangleMesh& mesh, bool cull_back_faces);
@@ -89,6 +92,10 @@ struct RasterOptions {
     double near = 1e-3;       ///< near plane [world units]: geometry closer is clipped away
     bool depth_test = true;   ///< false: the last triangle drawn at a sample wins
     bool cull_closed = true;  ///< rasterize(Scene): cull back faces of closed meshes
+    /// rasterize(Scene): cull the front faces of closed meshes instead (with cull_closed), so
+    /// that each sample sees the nearest face turned away from the camera: a medium's far side.
+    /// The software rasterizer only (GlRaster refuses it).
+    bool cull_front_closed = false;
     /// Fill view_z and shape only (shadow maps): ray_t, triangle, barycentric, fragments,
     /// coverage and depth are left empty, 12 bytes a sample instead of 44.
     bool depth_only = false;

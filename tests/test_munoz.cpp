@@ -6,8 +6,13 @@
 // to E R_dr at second order in the pixel size (the midpoint rule of a smooth profile); the
 // threshold of Eq. 8 and the skipping of invisible layers; bad input.
 #include "approx/diffusion.h"
+#include "approx/model_spec.h"
 #include "approx/munoz.h"
 #include "core/rng.h"
+#include "core/scene.h"
+#include "experiments/runner/munoz_frame.h"
+#include "realtime/frame.h"
+#include "testing.h"
 
 #include <gtest/gtest.h>
 
@@ -309,6 +314,88 @@ TEST(Munoz, BadInputIsRefusedNamingTheOption) {
     // Nothing in view: zeros, no error.
     const MunozResult none = munoz_exitance(empty_view(3, 3, 0.1, 0), rd, {});
     EXPECT_EQ(none.exitance[0], std::vector<float>(9, 0.0f));
+}
+
+// In a real-time frame (experiments/runner/munoz_frame.h): the far sides seen behind the near
+// ones, and the subsurface layer equal to the exit weight times the layered exitance of the
+// G-buffer's near samples and the back frame's far ones, computed here from the two G-buffers
+// (the units: R_d per entered irradiance, the albedo the composite applies cancelled).
+TEST(MunozFrame, TheSubsurfaceLayerIsTheExitWeightTimesTheLayeredExitance) {
+    const Scene scene = read_scene(testing::source_path("experiments/scenes/wholemilk.toml"));
+    realtime::FrameOptions fo;
+    fo.width = 64;
+    fo.height = 48;
+    fo.lighting.light_samples = 1;
+    fo.lighting.environment_samples = 4;
+    fo.lighting.shadow_map_size = 256;
+    const realtime::RasterizedFrame frame = realtime::rasterize_frame(scene, fo);
+    const realtime::LitFrame lit = realtime::light_frame(scene, frame, fo);
+    const realtime::LitFrame back = runner::light_back_frame(scene, fo);
+    ASSERT_EQ(frame.media_in_view.size(), 1u);
+    const int m = frame.media_in_view[0];
+    RadialProfile prof = testing::analytic_profile(0.02, 400, 4.0);
+    prof.rsp = {0.02, 0.03, 0.04};
+    const std::map<int, RadialProfile> profiles = {{m, prof}};
+    const std::map<int, realtime::FrameMaterial> materials = {
+        {m, realtime::make_frame_material(prof, approx::parse_model("svd:rank=1"), 17, false)}};
+    MunozOptions mo;
+    mo.layers = 4;
+    const runner::MunozFrame mf =
+        runner::render_munoz_frame(scene, frame, lit, back, materials, profiles, mo, fo);
+    EXPECT_GT(mf.stats.convolutions, 0);
+
+    const realtime::GBuffer& fg = lit.gbuffer;
+    const realtime::GBuffer& bg = back.gbuffer;
+    const size_t n = fg.view_z.size();
+    MunozView v = empty_view(fg.width, fg.height, 0, 2 * frame.camera.tan_half / fg.height);
+    size_t medium = 0, with_back = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (fg.material[i] != m) continue;
+        ++medium;
+        v.front_z[i] = static_cast<float>(fg.view_z[i] * scene.unit_mm);
+        for (int c = 0; c < 3; ++c) v.front_irradiance[c][i] = fg.irradiance[3 * i + c];
+        if (bg.material[i] != m) continue;
+        ++with_back;
+        EXPECT_GT(bg.view_z[i], fg.view_z[i]) << i;
+        v.back_z[i] = static_cast<float>(bg.view_z[i] * scene.unit_mm);
+        for (int c = 0; c < 3; ++c) v.back_irradiance[c][i] = bg.irradiance[3 * i + c];
+    }
+    // A closed medium: every ray that enters it leaves it.
+    EXPECT_GT(medium, 300u);
+    EXPECT_GT(static_cast<double>(with_back), 0.98 * static_cast<double>(medium));
+    const RadialFunction per_incident = RadialFunction::from_profile(prof);
+    const RadialFunction rd([&](double r) {
+        auto x = per_incident(r);
+        for (int c = 0; c < 3; ++c) x[c] /= 1 - prof.rsp[c];
+        return x;
+    });
+    const MunozResult r = munoz_exitance(v, rd, mo);
+    const ImageLayer& sub = mf.frame.image.layer("subsurface");
+    double worst = 0, peak = 0;
+    for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) {
+            const double want = fg.material[i] == m ? fg.exit_weight[i] * r.exitance[c][i] : 0.0;
+            peak = std::max(peak, want);
+            worst = std::max(worst, std::fabs(sub.pixels()[3 * i + c] - want));
+        }
+    EXPECT_GT(peak, 0);
+    EXPECT_LT(worst, 1e-5 * peak);
+}
+
+TEST(MunozSpec, NamesVariantsAndRefusesBadOnes) {
+    const MunozOptions o = parse_munoz("layers=8,t=0.001,downsample=2,split=linear,visible=all");
+    EXPECT_EQ(o.layers, 8);
+    EXPECT_EQ(o.threshold, 0.001);
+    EXPECT_EQ(o.downsample, 2);
+    EXPECT_EQ(o.split, MunozSplit::linear);
+    EXPECT_FALSE(o.skip_invisible);
+    EXPECT_EQ(parse_munoz(munoz_label(o)).layers, 8);
+    EXPECT_EQ(munoz_label(parse_munoz("layers=4")),
+              "layers=4,t=0,downsample=1,split=equal,visible=skip");
+    for (const char* bad :
+         {"layers=0", "layers=17", "layers=2.5", "t=-1", "t=1", "t=x", "downsample=9", "split=odd",
+          "colour=red", "layers", "layers=4,layers=5"})
+        EXPECT_THROW(parse_munoz(bad), std::invalid_argument) << bad;
 }
 
 }  // namespace

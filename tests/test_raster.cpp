@@ -149,6 +149,39 @@ TEST(Raster, BackFaceCullingByScreenWinding) {
     const RasterFrame f = rasterize(screen_camera(W, H), std::span(&s.mesh, 1));
     EXPECT_EQ(count_if_equal(f.triangle, 0), 15u);
     EXPECT_EQ(count_if_equal(f.triangle, 1), 0u);
+    // Front-face culling keeps the other one: its 10 samples (the 25 of the square less the
+    // diagonal's, which the fill rule gives the first).
+    s.mesh.cull_back_faces = false;
+    s.mesh.cull_front_faces = true;
+    const RasterFrame b = rasterize(screen_camera(W, H), std::span(&s.mesh, 1));
+    EXPECT_EQ(count_if_equal(b.triangle, 0), 0u);
+    EXPECT_EQ(count_if_equal(b.triangle, 1), 10u);
+}
+
+// A closed sphere (radius 2, 10 from the camera) with its front faces culled: every sample sees
+// the far side of the same ray, the two hits symmetric about the ray's closest point to the
+// centre, at 10 cos(theta) = 10 view_z / ray_t along the ray.
+TEST(Raster, FrontFaceCullingSeesTheFarSideOfAClosedMesh) {
+    Scene scene;  // the default camera: at (0, 0, 10) looking at the origin
+    SceneShape sh;
+    sh.mesh = make_sphere(2, 5);
+    scene.shapes.push_back(sh);
+    RasterOptions o;
+    RasterFrame front, back;
+    rasterize(scene, o, 64, 64, front);
+    o.cull_front_closed = true;
+    rasterize(scene, o, 64, 64, back);
+    size_t seen = 0;
+    for (size_t i = 0; i < front.view_z.size(); ++i) {
+        if (!std::isfinite(front.view_z[i])) continue;
+        ++seen;
+        ASSERT_TRUE(std::isfinite(back.view_z[i])) << i;
+        // Within the tessellation's error (the sag of a level-5 icosphere's faces, ~1e-3 r).
+        const double mid = 0.5 * (front.ray_t[i] + back.ray_t[i]);
+        EXPECT_NEAR(mid, 10 * front.view_z[i] / front.ray_t[i], 0.01) << i;
+        EXPECT_GT(back.view_z[i], front.view_z[i] + 0.1) << i;
+    }
+    EXPECT_GT(seen, 500u);
 }
 
 // ---- watertightness ----------------------------------------------------------------------------

@@ -45,6 +45,7 @@ light_samples = 2
 environment_samples = 4
 shadow_map_size = 128
 reference_samples = 16
+munoz = ["layers=1", "layers=3,t=0.001,downsample=2"]
 )";
 }
 
@@ -127,6 +128,27 @@ TEST_F(RealtimeStudy, TablesNameTheirColumnsAndHoldEveryModelAndChannel) {
     for (const char* png : {"volpath.png", "reference.png", "svd_rank1.png", "diff_svd_rank1.png",
                             "cut_preintegration.png", "cutdiff_preintegration.png"})
         EXPECT_TRUE(fs::exists(out() / "realtime" / "ball" / png)) << png;
+}
+
+// Munoz11's variants (munoz = [...]): a row per scene and variant with its parameters, errors
+// with standard errors and time.
+TEST_F(RealtimeStudy, MunozVariantsAreScoredLikeTheModels) {
+    const auto t = csv_rows(testing::read_text(out() / "realtime" / "munoz11.csv"));
+    ASSERT_EQ(t.size(), 1u + 2);
+    const auto& h = t[0];
+    EXPECT_EQ(t[1][column(h, "variant")], "layers=1 t=0 downsample=1 split=equal visible=skip");
+    EXPECT_EQ(t[2][column(h, "layers")], "3");
+    EXPECT_EQ(t[2][column(h, "threshold")], "0.001");
+    EXPECT_EQ(t[2][column(h, "downsample")], "2");
+    for (size_t i = 1; i < t.size(); ++i) {
+        EXPECT_EQ(t[i][0], "ball");
+        for (const char* c : {"rms_vs_reference", "rms_vs_volpath", "rms_vs_volpath_se", "seconds"})
+            EXPECT_GE(std::stod(t[i][column(h, c)]), 0) << c;
+        // A different method from the screen-space reference (the path tracer's 12 spp may
+        // hide the error: noise-corrected, it can be 0).
+        EXPECT_GT(std::stod(t[i][column(h, "rms_vs_reference")]), 0);
+        EXPECT_GT(std::stoll(t[i][column(h, "convolutions")]), 0);
+    }
 }
 
 // Error against the SSS pass time as a figure per scene (scripts/plot.py, "error_vs_time"), in
@@ -276,6 +298,14 @@ TEST(RealtimeStudyConfig, BadModelsAndMaterialsAreLocated) {
     r = run_ssslab({"run", "e.toml"}, dir.path());
     EXPECT_EQ(r.exit_code, 2);
     EXPECT_NE(r.err.find("outputs.realtime.backend"), std::string::npos) << r.err;
+    for (const char* bad : {"\"layers=0\"", "\"layers=4,colour=red\"", "\"t=2\""}) {
+        cfg = config(R"(["svd:rank=1"])");
+        cfg.replace(cfg.find("munoz = ["), 9, std::string("munoz = [") + bad + ", ");
+        dir.write("e.toml", cfg);
+        r = run_ssslab({"run", "e.toml"}, dir.path());
+        EXPECT_EQ(r.exit_code, 2) << bad;
+        EXPECT_NE(r.err.find("outputs.realtime.munoz"), std::string::npos) << r.err;
+    }
     EXPECT_FALSE(fs::exists(dir / "results"));
 }
 

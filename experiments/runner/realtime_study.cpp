@@ -1,6 +1,7 @@
 #include "experiments/runner/realtime_study.h"
 
 #include "approx/model_spec.h"
+#include "approx/munoz.h"
 #include "core/atomic_file.h"
 #include "core/build_info.h"
 #include "core/error.h"
@@ -9,6 +10,7 @@
 #include "core/png.h"
 #include "core/scene.h"
 #include "experiments/runner/engines.h"
+#include "experiments/runner/munoz_frame.h"
 #include "experiments/runner/plots.h"
 #include "experiments/runner/realtime_inputs.h"
 #include "experiments/runner/report.h"
@@ -245,6 +247,18 @@ RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_
     s.quick_factor = t.number("quick_factor", 0.125, Range::left_open(0, 1));
     s.quick_size = static_cast<int>(t.integer("quick_size", 64, Range::closed(4, 16384)));
     s.images = t.boolean("images", true);
+    if (auto v = t.optional_string_list("munoz")) {
+        std::set<std::string> labels;
+        for (size_t i = 0; i < v->size(); ++i) {
+            try {
+                if (!labels.insert(approx::munoz_label(approx::parse_munoz((*v)[i]))).second)
+                    t.fail_item("munoz", i, "variant \"" + (*v)[i] + "\" is listed twice");
+            } catch (const std::invalid_argument& e) {
+                t.fail_item("munoz", i, e.what());
+            }
+        }
+        s.munoz = *v;
+    }
     return s;
 }
 
@@ -255,12 +269,15 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
     const fs::path dir = stage / "realtime";
     fs::create_directories(dir);
     tbb::task_arena arena(ctx.threads > 0 ? ctx.threads : tbb::task_arena::automatic);
-    std::ostringstream table, sweep, decomposition, html;
+    std::ostringstream table, sweep, decomposition, html, munoz;
     table << "scene,model,label,taps,channel,pixels,rms_vs_reference,rms_vs_reference_se,"
              "norm_table,norm_scene,rel_rms_vs_reference,rms_vs_volpath,rms_vs_volpath_se,"
              "raw_rms_vs_volpath,volpath_noise_rms,sss_ms,frame_ms,kernel_build_s\n";
     sweep << "scene,model,label,taps,jitter,rotate,rms_vs_reference_rgb,rms_vs_reference_rgb_se,"
              "rms_vs_volpath_rgb,rms_vs_volpath_rgb_se,sss_ms,frame_ms\n";
+    munoz << "scene,variant,layers,threshold,downsample,split,rms_vs_reference,"
+             "rms_vs_reference_se,rms_vs_volpath,rms_vs_volpath_se,seconds,convolutions,"
+             "skipped_threshold,skipped_invisible\n";
     decomposition << "scene,channel,pixels,reference_signal_rms,separability_model,separability,"
                      "screen_space,screen_space_se,specular,specular_se,surfaces,surfaces_se,total,"
                      "total_se\n";
@@ -492,6 +509,47 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                     sweep_row(sc);
                 }
 
+        // Munoz11's layered convolution in place of the SSS pass: the media's far sides lit
+        // once, then every variant scored like a model.
+        if (!spec.munoz.empty()) {
+            realtime::LitFrame back;
+            arena.execute([&] { back = light_back_frame(scene, fo, slabs); });
+            const auto& k = kernels_of(spec.models[0], spec.taps, true);
+            for (const std::string& text : spec.munoz) {
+                const approx::MunozOptions mo = approx::parse_munoz(text);
+                MunozFrame mf;
+                arena.execute([&] {
+                    mf = render_munoz_frame(scene, frame, lit, back, k, in.profiles, mo, fo);
+                });
+                Score sc;
+                score_frame(mf.frame, sc);
+                const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
+                std::string variant = approx::munoz_label(mo);  // spaces for commas
+                std::replace(variant.begin(), variant.end(), ',', ' ');
+                munoz << scene.name << "," << variant << "," << mo.layers << ","
+                      << fmt(mo.threshold) << "," << mo.downsample << ","
+                      << (mo.split == approx::MunozSplit::equal ? "equal" : "linear") << ","
+                      << fmt(ref_rgb.rms) << "," << fmt(ref_rgb.rms_se) << "," << fmt(vp_rgb.rms)
+                      << "," << fmt(vp_rgb.rms_se) << "," << fmt(mf.stats.seconds) << ","
+                      << mf.stats.convolutions << "," << mf.stats.skipped_threshold << ","
+                      << mf.stats.skipped_invisible << "\n";
+                // Under regression like the models: scene.munoz_l<layers>_t<t>_d<downsample>
+                // [_linear][_all].rms_vs_volpath, the RGB error.
+                const std::string id = "munoz_l" + std::to_string(mo.layers) + "_t" +
+                                       fmt(mo.threshold) + "_d" + std::to_string(mo.downsample) +
+                                       (mo.split == approx::MunozSplit::linear ? "_linear" : "") +
+                                       (mo.skip_invisible ? "" : "_all");
+                metrics.push_back({scene.name + "." + metric_label(id) + ".rms_vs_volpath", "1",
+                                   vp_rgb.rms, vp_rgb.rms_se, true, 0});
+                if (!ctx.quiet)
+                    std::printf(
+                        "  realtime %s: munoz %s: RGB error %.4g +- %.2g against the path "
+                        "tracer, %.3g s\n",
+                        scene.name.c_str(), approx::munoz_label(mo).c_str(), vp_rgb.rms,
+                        vp_rgb.rms_se, mf.stats.seconds);
+            }
+        }
+
         // The error decomposition: separability (the first model against the screen-space
         // reference), the screen-space assumption (reference against the path tracer), the
         // lighting (specular on the media, radiance of the diffuse surfaces) and the total
@@ -666,6 +724,7 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
     write_file_atomic(dir / "error_vs_time.csv", sweep.str());
     write_file_atomic(dir / "decomposition.csv", decomposition.str());
     write_file_atomic(dir / "thesis_table_6_4.csv", thesis.str());
+    if (!spec.munoz.empty()) write_file_atomic(dir / "munoz11.csv", munoz.str());
 
     // Error against time, a figure per scene (scripts/plot.py "error_vs_time"), drawn here:
     // this section is written before the report's other plots are. Against the SSS pass's time:

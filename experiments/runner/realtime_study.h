@@ -26,6 +26,9 @@
 //   quick_factor = 0.125          # --quick: spp and photons times this (spp at least 12) ...
 //   quick_size = 64               # ... and at most this many pixels wide and high
 //   images = true                 # PNG panels, difference images, cut-outs, the flip viewer
+//   munoz = ["layers=4", "layers=8,t=0.001,downsample=2"]   # Munoz11's layered convolution
+//                                 # (approx::parse_munoz) in place of the SSS pass, with the
+//                                 # media's far sides as back samples (munoz_frame.h)
 //
 // The scored pixels of a scene are those whose samples all see a medium (material layer); per
 // model and channel: the RMS against the screen-space reference (exact where the reference
@@ -34,7 +37,9 @@
 // Table 6.4 (the largest per-channel error of the table is 1; per scene too).
 //
 // results/<name>/realtime/: table_6_4.csv, error_vs_time.csv, decomposition.csv,
-// thesis_table_6_4.csv (Freude14's numbers beside ours), and with images <scene>/*.png; per scene
+// thesis_table_6_4.csv (Freude14's numbers beside ours), munoz11.csv (with munoz: per scene and
+// variant the RGB error against the screen-space reference and the path tracer with standard
+// errors, the layered convolution's seconds and counts), and with images <scene>/*.png; per scene
 // results/<name>/plots/realtime_error_vs_time_<scene>.{png,svg}: the RGB error against the
 // screen-space reference and against the path tracer (+-1 SE) over the SSS pass time, log axes
 // (scripts/plot.py "error_vs_time", drawn with plots.h draw_plots and shown in the section).
@@ -77,6 +82,7 @@ struct RealtimeStudySpec {
     double quick_factor = 0.125;
     int quick_size = 64;
     bool images = true;
+    std::vector<std::string> munoz;  ///< Munoz11 variants (approx::parse_munoz texts)
 };
 
 /// Parse [outputs.realtime]; every scene is read and validated here.

@@ -64,9 +64,10 @@ void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, 
     const auto t0 = std::chrono::steady_clock::now();
     if (o.supersample != 1)
         throw std::invalid_argument("GlRaster: supersampling is not supported yet");
-    if (o.orthographic || !o.depth_test || o.on_tile)
+    if (o.orthographic || !o.depth_test || o.on_tile || o.cull_front_closed)
         throw std::invalid_argument(
-            "GlRaster: orthographic views, no depth test and tile callbacks are not supported");
+            "GlRaster: orthographic views, no depth test, tile "
+            "callbacks and front-face culling are not supported");
     const RasterCamera camera = RasterCamera::from_scene(scene.camera, width, height);
     const int w = camera.width, h = camera.height;
     Impl& m = *impl_;
