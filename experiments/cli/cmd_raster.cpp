@@ -170,10 +170,6 @@ int run_raster(const RasterArgs& a) {
         throw InputError(kCommandLine, "--platform", "needs --backend gl");
     if (a.backend == "gl") {
 #if SSSLAB_HAVE_GL
-        if (a.supersample != 1)
-            throw InputError(kCommandLine, "--supersample",
-                             "the GL twin draws one sample a pixel; use --backend software for "
-                             "supersampling");
         std::string why;
         gl_context = realtime::gl::try_gl_context(realtime::gl::parse_gl_platform(a.platform), why);
         if (!gl_context)

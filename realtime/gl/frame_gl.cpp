@@ -5,9 +5,6 @@
 namespace ssslab::realtime::gl {
 
 void GlFrameBackend::install(FrameOptions& o) {
-    if (o.raster.supersample != 1)
-        throw std::invalid_argument("the GL twin draws one sample a pixel (supersample " +
-                                    std::to_string(o.raster.supersample) + " asked for)");
     o.rasterizer = [this](const Scene& scene, const RasterOptions& ro, int w, int h,
                           RasterFrame& out) {
         raster.rasterize(scene, ro, w, h, out, &raster_times);

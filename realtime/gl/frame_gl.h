@@ -19,7 +19,6 @@ class GlFrameBackend {
         : raster(context), lighting(context), sss(context) {}
 
     /// Points o's backend hooks at this object's passes (which must outlive o's frames).
-    /// GlRaster draws one sample a pixel: std::invalid_argument for o.raster.supersample > 1.
     void install(FrameOptions& o);
 
     GlRaster raster;

@@ -62,14 +62,16 @@ GlRaster::~GlRaster() = default;
 void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, int height,
                          RasterFrame& f, GlRasterTimes* times) {
     const auto t0 = std::chrono::steady_clock::now();
-    if (o.supersample != 1)
-        throw std::invalid_argument("GlRaster: supersampling is not supported yet");
+    if (o.supersample < 1) throw std::invalid_argument("GlRaster: supersample must be >= 1");
     if (o.orthographic || !o.depth_test || o.on_tile || o.cull_front_closed)
         throw std::invalid_argument(
             "GlRaster: orthographic views, no depth test, tile "
             "callbacks and front-face culling are not supported");
+    // Supersampled as the software rasterizer: the same field of view on a grid of s x s
+    // samples a pixel (the clip coordinates do not depend on the grid), pixels box-filtered.
     const RasterCamera camera = RasterCamera::from_scene(scene.camera, width, height);
-    const int w = camera.width, h = camera.height;
+    const int ss = o.supersample;
+    const int w = camera.width * ss, h = camera.height * ss;
     Impl& m = *impl_;
     m.ctx.make_current();
     m.targets(w, h);
@@ -134,18 +136,19 @@ void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, 
     check_gl("GlRaster read-back");
     for (const Draw& d : draws) release_mesh(d.mesh);
 
-    f.width = w;
-    f.height = h;
-    f.supersample = 1;
+    f.width = camera.width;
+    f.height = camera.height;
+    f.supersample = ss;
     f.view_z.resize(n);
     f.ray_t.resize(n);
     f.shape.resize(n);
     f.triangle.resize(n);
     f.barycentric.clear();
     f.fragments.clear();
-    f.coverage.assign(o.pixel_layers ? n : 0, 0.0);
-    f.depth.assign(o.pixel_layers ? n : 0, 0.0);
-    const RasterCamera::SampleRays rays = camera.sample_rays(1);
+    const size_t pixels = static_cast<size_t>(f.width) * f.height;
+    f.coverage.assign(o.pixel_layers ? pixels : 0, 0.0);
+    f.depth.assign(o.pixel_layers ? pixels : 0, 0.0);
+    const RasterCamera::SampleRays rays = camera.sample_rays(ss);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const size_t k = f.sample_index(x, y);
@@ -157,11 +160,24 @@ void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, 
             f.view_z[k] =
                 covered ? static_cast<double>(z[g]) : std::numeric_limits<double>::infinity();
             f.ray_t[k] = covered ? f.view_z[k] * rays.length_per_depth(x, y) : 0.0;
-            if (o.pixel_layers) {
-                f.coverage[k] = covered ? 1.0 : 0.0;
-                f.depth[k] = f.ray_t[k];
-            }
         }
+    // The pixels as the software rasterizer filters them: coverage the covered fraction, depth
+    // the samples' mean ray distance (0 for those that see nothing).
+    if (o.pixel_layers)
+        for (int y = 0; y < f.height; ++y)
+            for (int x = 0; x < f.width; ++x) {
+                int covered = 0;
+                double sum_t = 0;
+                for (int j = 0; j < ss; ++j)
+                    for (int i = 0; i < ss; ++i) {
+                        const size_t k = f.sample_index(x * ss + i, y * ss + j);
+                        covered += f.shape[k] >= 0;
+                        sum_t += f.ray_t[k];
+                    }
+                const size_t p = f.pixel_index(x, y);
+                f.coverage[p] = static_cast<double>(covered) / (ss * ss);
+                f.depth[p] = sum_t / (ss * ss);
+            }
     if (times) {
         times->gpu_ms = m.timer->gpu_ms();
         times->draw_ms = m.timer->wall_ms();

@@ -35,8 +35,9 @@ class GlRaster {
     GlRaster(const GlRaster&) = delete;
     GlRaster& operator=(const GlRaster&) = delete;
 
-    /// `rasterize(scene, options, width, height, out)` on the GPU. Supports supersample 1, the
-    /// perspective camera and the depth test; barycentrics and fragment counts are not filled
+    /// `rasterize(scene, options, width, height, out)` on the GPU. Supports supersampling (the
+    /// same sample grid, pixels box-filtered as the software's), the perspective camera and
+    /// the depth test; barycentrics and fragment counts are not filled
     /// (out.barycentric and out.fragments are left empty). Throws std::invalid_argument for
     /// options it does not support.
     void rasterize(const Scene& scene, const RasterOptions& options, int width, int height,
