@@ -24,6 +24,11 @@ namespace {
 using detail::Fft2D;
 using detail::fft_size;
 
+// MunozKernel::pixel_average: the pixels within this many of the centre averaged over
+// kSub x kSub points (beyond, the profile is smooth over a pixel or negligible).
+constexpr int kAveragedRing = 4;
+constexpr int kSub = 16;
+
 void check(const MunozView& v, const MunozOptions& o) {
     auto fail = [](const std::string& what) { throw std::invalid_argument("munoz: " + what); };
     if (o.layers < 1 || o.layers > 16)
@@ -112,11 +117,14 @@ MunozOptions parse_munoz(const std::string& spec) {
             o.split = v == "equal" ? MunozSplit::equal : MunozSplit::linear;
         else if (key == "visible" && (v == "skip" || v == "all"))
             o.skip_invisible = v == "skip";
-        else if (key == "split" || key == "visible")
+        else if (key == "kernel" && (v == "point" || v == "average"))
+            o.kernel = v == "point" ? MunozKernel::point : MunozKernel::pixel_average;
+        else if (key == "split" || key == "visible" || key == "kernel")
             throw std::invalid_argument("munoz \"" + key + "\": unknown value \"" + v + "\"");
         else
-            throw std::invalid_argument("munoz: unknown key \"" + key +
-                                        "\" (known: layers, t, downsample, split, visible)");
+            throw std::invalid_argument(
+                "munoz: unknown key \"" + key +
+                "\" (known: layers, t, downsample, split, visible, kernel)");
     }
     if (o.layers < 1 || o.layers > 16)
         throw std::invalid_argument("munoz \"layers\": must be in 1..16");
@@ -131,7 +139,8 @@ std::string munoz_label(const MunozOptions& o) {
     std::ostringstream s;
     s << "layers=" << o.layers << ",t=" << o.threshold << ",downsample=" << o.downsample
       << ",split=" << (o.split == MunozSplit::equal ? "equal" : "linear")
-      << ",visible=" << (o.skip_invisible ? "skip" : "all");
+      << ",visible=" << (o.skip_invisible ? "skip" : "all")
+      << ",kernel=" << (o.kernel == MunozKernel::point ? "point" : "average");
     return s.str();
 }
 
@@ -237,8 +246,20 @@ MunozResult munoz_exitance(const MunozView& v, const RadialFunction& rd, const M
                         const int ox = x <= nx / 2 ? x : x - nx;
                         double k = 0;
                         if (std::abs(ox) < wc && std::abs(oy) < hc) {
-                            const double px = side * ox, py = side * oy;
-                            k = rd(std::sqrt(px * px + py * py + ez * ez))[c];
+                            if (o.kernel == MunozKernel::pixel_average &&
+                                std::max(std::abs(ox), std::abs(oy)) <= kAveragedRing) {
+                                // The mean over the pixel's square, kSub x kSub midpoints.
+                                for (int j = 0; j < kSub; ++j)
+                                    for (int i = 0; i < kSub; ++i) {
+                                        const double px = side * (ox + (i + 0.5) / kSub - 0.5);
+                                        const double py = side * (oy + (j + 0.5) / kSub - 0.5);
+                                        k += rd(std::sqrt(px * px + py * py + ez * ez))[c];
+                                    }
+                                k /= kSub * kSub;
+                            } else {
+                                const double px = side * ox, py = side * oy;
+                                k = rd(std::sqrt(px * px + py * py + ez * ez))[c];
+                            }
                         }
                         r[static_cast<size_t>(y) * nx + x] = k;
                     }

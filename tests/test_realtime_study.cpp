@@ -45,7 +45,7 @@ light_samples = 2
 environment_samples = 4
 shadow_map_size = 128
 reference_samples = 16
-munoz = ["layers=1", "layers=3,t=0.001,downsample=2"]
+munoz = ["layers=1", "layers=3,t=0.001,downsample=2,kernel=average"]
 )";
 }
 
@@ -136,7 +136,8 @@ TEST_F(RealtimeStudy, MunozVariantsAreScoredLikeTheModels) {
     const auto t = csv_rows(testing::read_text(out() / "realtime" / "munoz11.csv"));
     ASSERT_EQ(t.size(), 1u + 2);
     const auto& h = t[0];
-    EXPECT_EQ(t[1][column(h, "variant")], "layers=1 t=0 downsample=1 split=equal visible=skip");
+    EXPECT_EQ(t[1][column(h, "variant")],
+              "layers=1 t=0 downsample=1 split=equal visible=skip kernel=point");
     EXPECT_EQ(t[2][column(h, "layers")], "3");
     EXPECT_EQ(t[2][column(h, "threshold")], "0.001");
     EXPECT_EQ(t[2][column(h, "downsample")], "2");

@@ -534,11 +534,12 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                       << mf.stats.convolutions << "," << mf.stats.skipped_threshold << ","
                       << mf.stats.skipped_invisible << "\n";
                 // Under regression like the models: scene.munoz_l<layers>_t<t>_d<downsample>
-                // [_linear][_all].rms_vs_volpath, the RGB error.
+                // [_linear][_all][_avg].rms_vs_volpath, the RGB error.
                 const std::string id = "munoz_l" + std::to_string(mo.layers) + "_t" +
                                        fmt(mo.threshold) + "_d" + std::to_string(mo.downsample) +
                                        (mo.split == approx::MunozSplit::linear ? "_linear" : "") +
-                                       (mo.skip_invisible ? "" : "_all");
+                                       (mo.skip_invisible ? "" : "_all") +
+                                       (mo.kernel == approx::MunozKernel::point ? "" : "_avg");
                 metrics.push_back({scene.name + "." + metric_label(id) + ".rms_vs_volpath", "1",
                                    vp_rgb.rms, vp_rgb.rms_se, true, 0});
                 if (!ctx.quiet)
