@@ -3,10 +3,10 @@
 #include "core/rng.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <queue>
@@ -321,11 +321,7 @@ std::array<double, 3> PointOctree::exitance(const RadialFunction& rd, const Vec3
     std::array<double, 3> m{};
     HierarchicalStats s;
     visit(nodes_[0], rd, x_mm, o, m, s);
-    if (stats) {
-        stats->nodes_visited += s.nodes_visited;
-        stats->clusters += s.clusters;
-        stats->points += s.points;
-    }
+    if (stats) *stats += s;
     return m;
 }
 
@@ -333,26 +329,15 @@ std::vector<std::array<double, 3>> PointOctree::exitance(const RadialFunction& r
                                                          const std::vector<Vec3>& x_mm,
                                                          const HierarchicalOptions& o,
                                                          HierarchicalStats* stats) const {
-    if (!(o.max_solid_angle >= 0))
+    if (!(o.max_solid_angle >= 0))  // also with no queries
         throw std::invalid_argument("PointOctree: max_solid_angle must be >= 0");
     std::vector<std::array<double, 3>> out(x_mm.size());
-    std::atomic<std::uint64_t> visited{0}, clusters{0}, points{0};
+    tbb::combinable<HierarchicalStats> counts;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, x_mm.size(), 64), [&](const auto& r) {
-        HierarchicalStats s;
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-            std::array<double, 3> m{};
-            visit(nodes_[0], rd, x_mm[i], o, m, s);
-            out[i] = m;
-        }
-        visited += s.nodes_visited;
-        clusters += s.clusters;
-        points += s.points;
+        for (size_t i = r.begin(); i < r.end(); ++i)
+            out[i] = exitance(rd, x_mm[i], o, &counts.local());
     });
-    if (stats) {
-        stats->nodes_visited += visited;
-        stats->clusters += clusters;
-        stats->points += points;
-    }
+    if (stats) counts.combine_each([stats](const HierarchicalStats& s) { *stats += s; });
     return out;
 }
 

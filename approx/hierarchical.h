@@ -80,6 +80,13 @@ struct HierarchicalStats {
     std::uint64_t nodes_visited = 0;  ///< nodes whose criterion was evaluated
     std::uint64_t clusters = 0;       ///< nodes taken as one point
     std::uint64_t points = 0;         ///< single points summed (in opened leaves)
+
+    HierarchicalStats& operator+=(const HierarchicalStats& o) {
+        nodes_visited += o.nodes_visited;
+        clusters += o.clusters;
+        points += o.points;
+        return *this;
+    }
 };
 
 /// The octree over a point cloud [Bitterli13 §3.3.1]: each node splits its points into the octants

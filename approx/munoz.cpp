@@ -29,14 +29,20 @@ using detail::fft_size;
 constexpr int kAveragedRing = 4;
 constexpr int kSub = 16;
 
-void check(const MunozView& v, const MunozOptions& o) {
+/// The options' ranges (munoz_exitance and parse_munoz; the config key of the threshold is t).
+void check_options(const MunozOptions& o) {
     auto fail = [](const std::string& what) { throw std::invalid_argument("munoz: " + what); };
     if (o.layers < 1 || o.layers > 16)
         fail("layers must be in 1..16, got " + std::to_string(o.layers));
     if (!(o.threshold >= 0 && o.threshold < 1))
-        fail("threshold must be in [0, 1), got " + std::to_string(o.threshold));
+        fail("threshold t must be in [0, 1), got " + std::to_string(o.threshold));
     if (o.downsample < 1 || o.downsample > 8)
         fail("downsample must be in 1..8, got " + std::to_string(o.downsample));
+}
+
+void check(const MunozView& v, const MunozOptions& o) {
+    auto fail = [](const std::string& what) { throw std::invalid_argument("munoz: " + what); };
+    check_options(o);
     if (v.width < 1 || v.height < 1) fail("the view has no pixels");
     const size_t n = static_cast<size_t>(v.width) * static_cast<size_t>(v.height);
     if (v.front_z.size() != n || v.back_z.size() != n) fail("front_z or back_z: wrong size");
@@ -126,12 +132,7 @@ MunozOptions parse_munoz(const std::string& spec) {
                 "munoz: unknown key \"" + key +
                 "\" (known: layers, t, downsample, split, visible, kernel)");
     }
-    if (o.layers < 1 || o.layers > 16)
-        throw std::invalid_argument("munoz \"layers\": must be in 1..16");
-    if (!(o.threshold >= 0 && o.threshold < 1))
-        throw std::invalid_argument("munoz \"t\": must be in [0, 1)");
-    if (o.downsample < 1 || o.downsample > 8)
-        throw std::invalid_argument("munoz \"downsample\": must be in 1..8");
+    check_options(o);
     return o;
 }
 
@@ -330,9 +331,8 @@ MunozResult munoz_exitance(const MunozView& v, const RadialFunction& rd, const M
         const int y = static_cast<int>(i / static_cast<size_t>(w));
         const LayerPos p = layer_of(v.front_z[i], z_min, dz, nl);
         for (int c = 0; c < 3; ++c) {
-            double val = 0;
-            if (!m[p.l0][c].empty()) val += (1 - p.s) * coarse(m[p.l0][c], x, y);
-            if (p.s > 0 && !m[p.l0 + 1][c].empty()) val += p.s * coarse(m[p.l0 + 1][c], x, y);
+            double val = (1 - p.s) * coarse(m[p.l0][c], x, y);
+            if (p.s > 0) val += p.s * coarse(m[p.l0 + 1][c], x, y);
             res.exitance[c][i] = static_cast<float>(std::max(val, 0.0));
         }
     }

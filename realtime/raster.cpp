@@ -449,24 +449,31 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
     });
     if (o.depth_only || ss == 1) return;
 
-    // Supersampled: ray distances per sample, box-filtered pixels.
+    // Supersampled: ray distances per sample, then the pixels box-filtered.
+    tbb::parallel_for(0, f.sample_height(), [&](int sy) {
+        for (int sx = 0; sx < f.sample_width(); ++sx) {
+            const std::size_t k = f.sample_index(sx, sy);
+            f.ray_t[k] = f.shape[k] < 0 ? 0.0 : ray_t(sx, sy, k);
+        }
+    });
+    if (pixels) resolve_pixel_layers(f);
+}
+
+void resolve_pixel_layers(RasterFrame& f) {
+    const int ss = f.supersample;
+    f.coverage.resize(static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height));
+    f.depth.resize(f.coverage.size());
     tbb::parallel_for(0, f.height, [&](int y) {
         for (int x = 0; x < f.width; ++x) {
             int covered = 0;
             double sum_t = 0;
             for (int j = 0; j < ss; ++j)
                 for (int i = 0; i < ss; ++i) {
-                    const int sx = x * ss + i, sy = y * ss + j;
-                    const std::size_t k = f.sample_index(sx, sy);
-                    if (f.shape[k] < 0) {
-                        f.ray_t[k] = 0;
-                        continue;
-                    }
-                    f.ray_t[k] = ray_t(sx, sy, k);
+                    const std::size_t k = f.sample_index(x * ss + i, y * ss + j);
+                    if (f.shape[k] < 0) continue;
                     ++covered;
                     sum_t += f.ray_t[k];
                 }
-            if (!pixels) continue;
             const std::size_t p = f.pixel_index(x, y);
             f.coverage[p] = static_cast<double>(covered) / (ss * ss);
             f.depth[p] = sum_t / (ss * ss);

@@ -173,6 +173,11 @@ void rasterize(const RasterCamera& camera, std::span<const RasterMesh> meshes,
                const RasterOptions& options, RasterFrame& out);
 void rasterize(const Scene& scene, const RasterOptions& options, int width, int height,
                RasterFrame& out);
+/// The per-pixel layers from the samples' shape and ray_t: coverage (the fraction of the
+/// pixel's samples that see a shape) and depth (their mean ray distance, 0 for those that see
+/// nothing), volpath's box filter; both sized to the pixels. The software rasterizer's and the
+/// GL twin's (realtime/gl/raster_gl.h) supersampled frames.
+void resolve_pixel_layers(RasterFrame& f);
 
 /// Fixed point of the snapped raster coordinates: 8 fractional bits (1/256 pixel).
 inline constexpr int kSubpixelBits = 8;

@@ -145,9 +145,6 @@ void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, 
     f.triangle.resize(n);
     f.barycentric.clear();
     f.fragments.clear();
-    const size_t pixels = static_cast<size_t>(f.width) * f.height;
-    f.coverage.assign(o.pixel_layers ? pixels : 0, 0.0);
-    f.depth.assign(o.pixel_layers ? pixels : 0, 0.0);
     const RasterCamera::SampleRays rays = camera.sample_rays(ss);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
@@ -161,23 +158,13 @@ void GlRaster::rasterize(const Scene& scene, const RasterOptions& o, int width, 
                 covered ? static_cast<double>(z[g]) : std::numeric_limits<double>::infinity();
             f.ray_t[k] = covered ? f.view_z[k] * rays.length_per_depth(x, y) : 0.0;
         }
-    // The pixels as the software rasterizer filters them: coverage the covered fraction, depth
-    // the samples' mean ray distance (0 for those that see nothing).
-    if (o.pixel_layers)
-        for (int y = 0; y < f.height; ++y)
-            for (int x = 0; x < f.width; ++x) {
-                int covered = 0;
-                double sum_t = 0;
-                for (int j = 0; j < ss; ++j)
-                    for (int i = 0; i < ss; ++i) {
-                        const size_t k = f.sample_index(x * ss + i, y * ss + j);
-                        covered += f.shape[k] >= 0;
-                        sum_t += f.ray_t[k];
-                    }
-                const size_t p = f.pixel_index(x, y);
-                f.coverage[p] = static_cast<double>(covered) / (ss * ss);
-                f.depth[p] = sum_t / (ss * ss);
-            }
+    // The pixels as the software rasterizer filters them.
+    if (o.pixel_layers) {
+        resolve_pixel_layers(f);
+    } else {
+        f.coverage.clear();
+        f.depth.clear();
+    }
     if (times) {
         times->gpu_ms = m.timer->gpu_ms();
         times->draw_ms = m.timer->wall_ms();
