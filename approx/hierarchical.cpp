@@ -1,5 +1,8 @@
 #include "approx/hierarchical.h"
 
+#include "approx/diffusion.h"
+#include "approx/option_list.h"
+
 #include "core/rng.h"
 
 #include <tbb/blocked_range.h>
@@ -10,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <queue>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -345,6 +349,50 @@ std::array<double, 3> PointOctree::brute_force(const RadialFunction& rd, const V
     std::array<double, 3> m{};
     for (const SurfacePoint& p : points_) add_point(rd, x_mm, p.position_mm, point_power(p), m);
     return m;
+}
+
+JensenBuhlerOptions parse_jensen_buhler(const std::string& text) {
+    JensenBuhlerOptions o;
+    const OptionList list("jensen_buhler", text);
+    for (const auto& [key, v] : list.items()) {
+        if (key == "density") {
+            o.points_per_mm2 = list.number(key, v);
+            if (!(o.points_per_mm2 > 0 && o.points_per_mm2 <= 1e4))
+                list.fail("density must be in (0, 1e4] points per mm^2, got " + v);
+        } else if (key == "threshold") {
+            o.max_solid_angle = list.number(key, v);
+            if (!(o.max_solid_angle >= 0))
+                list.fail("threshold must be >= 0 sr (0: every point), got " + v);
+        } else if (key == "bound" && (v == "centre" || v == "box")) {
+            o.conservative = v == "box";
+        } else if (key == "profile") {
+            const auto& names = diffusion_model_names();
+            if (v != "mc" && std::find(names.begin(), names.end(), v) == names.end()) {
+                std::string known = "mc";
+                for (const std::string& n : names) known += ", " + n;
+                list.fail("profile \"" + v + "\" is unknown (known: " + known + ")");
+            }
+            o.profile = v;
+        } else if (key == "candidates") {
+            o.candidates_per_point = list.whole(key, v);
+            if (o.candidates_per_point < 1 || o.candidates_per_point > 64)
+                list.fail("candidates must be in 1..64, got " + v);
+        } else if (key == "bound") {
+            list.fail("bound \"" + v + "\" is unknown (known: centre, box)");
+        } else {
+            list.fail("unknown key \"" + key +
+                      "\" (known: density, threshold, bound, profile, candidates)");
+        }
+    }
+    return o;
+}
+
+std::string jensen_buhler_label(const JensenBuhlerOptions& o) {
+    std::ostringstream s;
+    s << "density=" << o.points_per_mm2 << ",threshold=" << o.max_solid_angle
+      << ",bound=" << (o.conservative ? "box" : "centre") << ",profile=" << o.profile
+      << ",candidates=" << o.candidates_per_point;
+    return s.str();
 }
 
 }  // namespace ssslab::approx

@@ -41,6 +41,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace ssslab::approx {
@@ -136,5 +137,25 @@ class PointOctree {
     std::vector<Node> nodes_;
     int leaf_size_ = 8, max_depth_ = 32, depth_ = 0;
 };
+
+/// A Jensen-Buhler variant as experiment configs name it (experiments/runner renders it into a
+/// frame): "density=4,threshold=0.05", "threshold=0.01,bound=box", "profile=dipole".
+struct JensenBuhlerOptions {
+    double points_per_mm2 = 4;      ///< density: > 0, at most 1e4
+    double max_solid_angle = 0.05;  ///< threshold [sr]: >= 0 (0: the brute-force sum), finite
+    bool conservative = false;      ///< bound = centre (false) | box (the conservative variant)
+    /// The radial profile integrated: "mc" (the material's MC profile, the one the separable
+    /// models are built from) or an analytic model of approx/diffusion.h by its factory name
+    /// (dipole, better-dipole, pbd, ...) for the material's coefficients.
+    std::string profile = "mc";
+    int candidates_per_point = 5;  ///< candidates: 1..64 (PointCloudOptions)
+};
+
+/// Parse a variant (keys density, threshold, bound = centre | box, profile, candidates; unset
+/// keys keep JensenBuhlerOptions' defaults). Throws std::invalid_argument naming the key: not
+/// key=value, a key twice, an unknown key or value, a threshold below 0, a density not above 0.
+JensenBuhlerOptions parse_jensen_buhler(const std::string& text);
+/// The canonical text of a variant (every key), e.g. for listing each variant once.
+std::string jensen_buhler_label(const JensenBuhlerOptions& o);
 
 }  // namespace ssslab::approx

@@ -1,5 +1,7 @@
 #include "approx/munoz.h"
 
+#include "approx/option_list.h"
+
 #include "approx/fft.h"
 
 #include <tbb/blocked_range.h>
@@ -85,40 +87,14 @@ LayerPos layer_of(double z, double z_min, double dz, int layers) {
 
 MunozOptions parse_munoz(const std::string& spec) {
     MunozOptions o;
-    std::set<std::string> seen;
-    std::stringstream in(spec);
-    std::string item;
-    auto number = [](const std::string& key, const std::string& v) {
-        size_t used = 0;
-        double x = 0;
-        try {
-            x = std::stod(v, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used != v.size() || v.empty() || !std::isfinite(x))
-            throw std::invalid_argument("munoz \"" + key + "\": \"" + v + "\" is not a number");
-        return x;
-    };
-    auto whole = [&](const std::string& key, const std::string& v) {
-        const double x = number(key, v);
-        if (x != std::floor(x))
-            throw std::invalid_argument("munoz \"" + key + "\": " + v + " is not a whole number");
-        return static_cast<int>(std::clamp(x, -1e9, 1e9));
-    };
-    while (std::getline(in, item, ',')) {
-        const size_t eq = item.find('=');
-        if (eq == std::string::npos)
-            throw std::invalid_argument("munoz: \"" + item + "\" is not key=value");
-        const std::string key = item.substr(0, eq), v = item.substr(eq + 1);
-        if (!seen.insert(key).second)
-            throw std::invalid_argument("munoz: \"" + key + "\" is given twice");
+    const OptionList list("munoz", spec);
+    for (const auto& [key, v] : list.items()) {
         if (key == "layers")
-            o.layers = whole(key, v);
+            o.layers = list.whole(key, v);
         else if (key == "t")
-            o.threshold = number(key, v);
+            o.threshold = list.number(key, v);
         else if (key == "downsample")
-            o.downsample = whole(key, v);
+            o.downsample = list.whole(key, v);
         else if (key == "split" && (v == "equal" || v == "linear"))
             o.split = v == "equal" ? MunozSplit::equal : MunozSplit::linear;
         else if (key == "visible" && (v == "skip" || v == "all"))

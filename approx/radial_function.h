@@ -25,6 +25,13 @@ class RadialFunction {
     /// R_d is per unit power entering (approx/diffusion.h's convention).
     static RadialFunction from_diffusion(
         const std::array<std::shared_ptr<const DiffusionProfile>, 3>& channels);
+    /// f tabulated at n radii spaced geometrically from r_min to r_max [mm] (0 < r_min < r_max,
+    /// n >= 2) and interpolated log-log between them (linearly where either value is 0); f(r_min)
+    /// below r_min, 0 beyond r_max. For analytic profiles whose every evaluation integrates (pbd)
+    /// where millions of evaluations are needed; a profile ~ 1/r at 0 loses only its integral
+    /// inside r_min beyond the constant.
+    static RadialFunction tabulated(const RadialFunction& f, double r_min_mm, double r_max_mm,
+                                    int n);
     /// Any function of r [mm] returning R_d per channel [1/mm^2].
     explicit RadialFunction(std::function<std::array<double, 3>(double)> f) : f_(std::move(f)) {}
 

@@ -64,6 +64,88 @@ struct Receiver {
     int shape = -1, material = -1;
 };
 
+// What a light sample gives a receiver at p: the direction towards the light and the irradiance
+// at normal incidence (false where its lobe faces away or p is at the light).
+bool incident_light(const LightSample& s, const Vec3& p, Vec3& wi, RGB& E) {
+    if (s.directional) {
+        wi = s.w;
+        E = s.value;
+        return true;
+    }
+    const Vec3 d = s.pos - p;
+    const double d2 = dot(d, d);
+    if (!(d2 > 0)) return false;
+    wi = d * (1 / std::sqrt(d2));
+    double k = 1 / d2;
+    if (s.lobe) k *= std::max(0.0, -dot(s.lobe_n, wi));
+    if (!(k > 0)) return false;
+    for (std::size_t c = 0; c < 3; ++c) E[c] = s.value[c] * k;
+    return true;
+}
+
+// Sphere lights are not in the shadow maps (as they are not in volpath's BVH), but they occlude
+// what lies behind them: whether one of `spheres` (indices into scene.lights) other than the
+// sample's own lies between p and the sample along wi.
+bool behind_sphere(const Scene& scene, const std::vector<int>& spheres, const LightSample& s,
+                   const Vec3& p, const Vec3& wi) {
+    const double dist = s.directional ? kInf : length(s.pos - p);
+    for (int k : spheres) {
+        if (k == s.light) continue;
+        const SceneLight& l = scene.lights[static_cast<std::size_t>(k)];
+        if (ray_sphere_hit(p, wi, l.position, l.radius) < dist) return true;
+    }
+    return false;
+}
+
+std::vector<int> sphere_lights(const Scene& scene) {
+    std::vector<int> spheres;
+    for (std::size_t k = 0; k < scene.lights.size(); ++k)
+        if (scene.lights[k].type == LightType::kSphere) spheres.push_back(static_cast<int>(k));
+    return spheres;
+}
+
+// Boundaries: one transmittance per (eta, alpha) of the scene's media, tabulated once per process
+// (as an engine precomputes its lookup tables at load time, not every frame); nullptr for
+// diffuse materials.
+std::vector<const BoundaryTransmittance*> boundary_tables(const Scene& scene,
+                                                          const LightingOptions& o) {
+    std::vector<const BoundaryTransmittance*> mat_T(scene.materials.size(), nullptr);
+    for (std::size_t m = 0; m < scene.materials.size(); ++m) {
+        const SceneMaterial& sm = scene.materials[m];
+        if (sm.kind != SceneMaterial::Kind::kMedium) continue;
+        const double eta = sm.medium.eta, alpha = eta == 1.0 ? 0.0 : sm.roughness;
+        mat_T[m] =
+            &tabulated_boundary(eta, alpha, o.transmittance_cosines, o.transmittance_quadrature);
+    }
+    return mat_T;
+}
+
+// The first of a light sample's views that p projects into (an orthographic view takes every
+// point); views.size() if none.
+std::size_t first_view(const std::vector<ShadowView>& views, const Vec3& p) {
+    for (std::size_t k = 0; k < views.size(); ++k) {
+        const ClipVertex c = views[k].to_clip(p);
+        if (views[k].orthographic || (c.w > 0 && std::abs(c.x) <= c.w && std::abs(c.y) <= c.w))
+            return k;
+    }
+    return views.size();
+}
+
+// The shadow test of a receiver with facet normal n, lit from wi, whose map coordinates are pc:
+// looked up at p + nl * normal_offset (nl = n on the light's side; by linearity of the
+// projection), lit where that lies outside the map or within the bias of the texel's first
+// surface. The texel's size at the point's depth (pc.w).
+bool lit_in_map(const ShadowMap& sm, const ShadowView& view, const ShadowView::Projection& proj,
+                const ClipVertex& pc, const Vec3& n, const Vec3& wi, const LightingOptions& o) {
+    const double texel = view.texel_size(view.orthographic ? 0.0 : pc.w);
+    const Vec3 nl = dot(n, wi) >= 0 ? n : -n;
+    const double off = o.normal_offset_texels * texel;
+    const ClipVertex dn = proj.along(nl);
+    const ClipVertex qc{pc.x + dn.x * off, pc.y + dn.y * off, pc.w + dn.w * off};
+    std::size_t ti = 0;
+    return !sm.texel_of(qc, ti) || qc.w <= sm.depth[ti] + o.depth_bias_texels * texel;
+}
+
 // A directional light sample's shadow test, one orthographic map, per sample of a row: what
 // shade()'s light pass computes per receiver up to the lit/unlit decision, the same
 // expressions in the same order (so the same bits), over plain arrays in one branch-free loop
@@ -436,6 +518,13 @@ std::vector<ShadowView> LightPlan::views(const LightSample& s, const LightingOpt
     return fit_point(s.pos, receivers, near, o.shadow_map_size);
 }
 
+void check_lighting_options(const LightingOptions& o) {
+    if (o.light_samples < 1 || o.environment_samples < 1 || o.shadow_map_size < 1 ||
+        o.shadow_map_size > 16384 || o.environment_map_size < 1 || o.environment_map_size > 16384 ||
+        o.transmittance_cosines < 2 || o.transmittance_quadrature < 1)
+        throw std::invalid_argument("lighting: options out of range");
+}
+
 void check_lighting_inputs(const RasterCamera& camera, const RasterFrame& frame,
                            const LightingOptions& o) {
     const int ss = frame.supersample;
@@ -445,10 +534,7 @@ void check_lighting_inputs(const RasterCamera& camera, const RasterFrame& frame,
         frame.view_z.size() != N || frame.shape.size() != N || frame.triangle.size() != N ||
         frame.ray_t.size() != N)
         throw std::invalid_argument("lighting: the frame does not match the camera");
-    if (o.light_samples < 1 || o.environment_samples < 1 || o.shadow_map_size < 1 ||
-        o.shadow_map_size > 16384 || o.environment_map_size < 1 || o.environment_map_size > 16384 ||
-        o.transmittance_cosines < 2 || o.transmittance_quadrature < 1)
-        throw std::invalid_argument("lighting: options out of range");
+    check_lighting_options(o);
 }
 
 GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& frame,
@@ -474,16 +560,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     // the same size keeps its storage and is not cleared twice).
     g.resize(W, H);
 
-    // Boundaries: one transmittance per (eta, alpha) of the scene's media, tabulated once per
-    // process (as an engine precomputes its lookup tables at load time, not every frame).
-    std::vector<const BoundaryTransmittance*> mat_T(scene.materials.size(), nullptr);
-    for (std::size_t m = 0; m < scene.materials.size(); ++m) {
-        const SceneMaterial& sm = scene.materials[m];
-        if (sm.kind != SceneMaterial::Kind::kMedium) continue;
-        const double eta = sm.medium.eta, alpha = eta == 1.0 ? 0.0 : sm.roughness;
-        mat_T[m] =
-            &tabulated_boundary(eta, alpha, o.transmittance_cosines, o.transmittance_quadrature);
-    }
+    const std::vector<const BoundaryTransmittance*> mat_T = boundary_tables(scene, o);
     // Lambert's albedo / pi per diffuse material.
     std::vector<RGB> albedo_pi(scene.materials.size());
     for (std::size_t m = 0; m < scene.materials.size(); ++m)
@@ -686,45 +763,13 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
 
     const LightPlan plan = plan_lights(scene, receivers, o);
     const std::vector<LightSample>& samples = plan.samples;
-    // Sphere lights are not in the shadow maps (as they are not in volpath's BVH), but they
-    // occlude what lies behind them: the environment, suns and other lights.
-    std::vector<int> spheres;
-    for (std::size_t k = 0; k < scene.lights.size(); ++k)
-        if (scene.lights[k].type == LightType::kSphere) spheres.push_back(static_cast<int>(k));
-    auto behind_sphere = [&](const LightSample& s, const Vec3& p, const Vec3& wi) {
-        const double dist = s.directional ? kInf : length(s.pos - p);
-        for (int k : spheres) {
-            if (k == s.light) continue;
-            const SceneLight& l = scene.lights[static_cast<std::size_t>(k)];
-            if (ray_sphere_hit(p, wi, l.position, l.radius) < dist) return true;
-        }
-        return false;
-    };
-
-    // What a sample gives receiver r: direction towards the light and irradiance at normal
-    // incidence (0 where its lobe faces away).
-    auto incident = [](const LightSample& s, const Vec3& p, Vec3& wi, RGB& E) {
-        if (s.directional) {
-            wi = s.w;
-            E = s.value;
-            return true;
-        }
-        const Vec3 d = s.pos - p;
-        const double d2 = dot(d, d);
-        if (!(d2 > 0)) return false;
-        wi = d * (1 / std::sqrt(d2));
-        double k = 1 / d2;
-        if (s.lobe) k *= std::max(0.0, -dot(s.lobe_n, wi));
-        if (!(k > 0)) return false;
-        for (std::size_t c = 0; c < 3; ++c) E[c] = s.value[c] * k;
-        return true;
-    };
+    const std::vector<int> spheres = sphere_lights(scene);
     // Whether the sample can light r at all (before shadows), or give it translucency.
     auto reaches = [&](const LightSample& s, const Receiver& r) {
         if (r.kind == Kind::kNone) return false;
         Vec3 wi;
         RGB E;
-        if (!incident(s, r.p, wi, E)) return false;
+        if (!incident_light(s, r.p, wi, E)) return false;
         const double c = dot(r.ns, wi);
         if (c > 0) return true;
         return r.kind == Kind::kMedium && (s.thickness_view || slab_of(r.material) != nullptr);
@@ -793,15 +838,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                             const std::size_t i = frame.sample_index(sx, sy);
                             face[i] = kNoFace;
                             if (kind[i] == Kind::kNone) continue;
-                            const Vec3 p = receiver_at(i, sx, sy).p;
-                            for (std::size_t k = 0; k < views.size(); ++k) {
-                                const ClipVertex c = views[k].to_clip(p);
-                                if (views[k].orthographic ||
-                                    (c.w > 0 && std::abs(c.x) <= c.w && std::abs(c.y) <= c.w)) {
-                                    face[i] = static_cast<std::uint8_t>(k);
-                                    break;
-                                }
-                            }
+                            const std::size_t k = first_view(views, receiver_at(i, sx, sy).p);
+                            if (k < views.size()) face[i] = static_cast<std::uint8_t>(k);
                         }
                 });
         }
@@ -870,7 +908,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                             const Receiver r = receiver_at(i, sx, sy);
                             Vec3 wi;
                             RGB E;
-                            if (!incident(s, r.p, wi, E)) continue;
+                            if (!incident_light(s, r.p, wi, E)) continue;
                             const double cs = dot(r.ns, wi);
                             // The point's map coordinates, once for both lookups below.
                             const ClipVertex pc = need_map ? proj.at(r.p) : ClipVertex{};
@@ -889,22 +927,10 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                             if (!s.lights) continue;
                             if (cs > 0) {
                                 bool lit = true;
-                                if (o.shadows) {
-                                    // The texel's size at the point's depth (pc.w).
-                                    const double texel = views[vi].texel_size(ortho ? 0.0 : pc.w);
-                                    const Vec3 nl = dot(r.n, wi) >= 0 ? r.n : -r.n;
-                                    // The normal-offset point p + nl * offset, by linearity; lit
-                                    // where it lies outside the map or within the bias of the
-                                    // texel's first surface.
-                                    const double off = o.normal_offset_texels * texel;
-                                    const ClipVertex dn = proj.along(nl);
-                                    const ClipVertex qc{pc.x + dn.x * off, pc.y + dn.y * off,
-                                                        pc.w + dn.w * off};
-                                    std::size_t ti = 0;
-                                    lit = !sm.texel_of(qc, ti) ||
-                                          qc.w <= sm.depth[ti] + o.depth_bias_texels * texel;
-                                }
-                                if (!lit || (!spheres.empty() && behind_sphere(s, r.p, wi)))
+                                if (o.shadows)
+                                    lit = lit_in_map(sm, views[vi], proj, pc, r.n, wi, o);
+                                if (!lit ||
+                                    (!spheres.empty() && behind_sphere(scene, spheres, s, r.p, wi)))
                                     continue;
                                 if (r.kind == Kind::kDiffuse) {
                                     add_diffuse(r.material, E, cs, i);
@@ -931,6 +957,86 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         stats->shading_ms =
             std::chrono::duration<double, std::milli>(clock::now() - t_start).count() - shadow_ms;
     }
+}
+
+std::vector<std::array<double, 3>> boundary_irradiance(const Scene& scene,
+                                                       const std::vector<BoundaryPoint>& points,
+                                                       const LightingOptions& o,
+                                                       const Box& receivers, LightingStats* stats) {
+    using clock = std::chrono::steady_clock;
+    const auto t_start = clock::now();
+    const std::size_t n = points.size();
+    std::vector<std::array<double, 3>> E(n, RGB{});
+    check_lighting_options(o);
+    Box box;
+    for (std::size_t i = 0; i < n; ++i) {
+        const BoundaryPoint& q = points[i];
+        if (q.material < 0 || static_cast<std::size_t>(q.material) >= scene.materials.size() ||
+            scene.materials[static_cast<std::size_t>(q.material)].kind !=
+                SceneMaterial::Kind::kMedium)
+            throw std::invalid_argument("boundary_irradiance: point " + std::to_string(i) +
+                                        " is not on a medium");
+        for (int c = 0; c < 3; ++c)
+            if (!std::isfinite(q.p[c]) || !std::isfinite(q.n[c]))
+                throw std::invalid_argument("boundary_irradiance: point " + std::to_string(i) +
+                                            " is not finite");
+        box.add(q.p);
+    }
+    if (n == 0) return E;
+    const std::vector<const BoundaryTransmittance*> mat_T = boundary_tables(scene, o);
+    const std::vector<int> spheres = sphere_lights(scene);
+    const LightPlan plan = plan_lights(scene, receivers.empty() ? box : receivers, o);
+    static thread_local ShadowMap scratch_map;
+    ShadowMap& sm = scratch_map;
+    std::vector<std::uint8_t> face(n, 0);
+    double shadow_ms = 0;
+    int maps = 0;
+    for (const LightSample& s : plan.samples) {
+        if (!s.lights) continue;
+        const std::vector<ShadowView> views = plan.views(s, o);
+        if (views.size() > 1)
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  for (std::size_t i = r.begin(); i != r.end(); ++i)
+                                      face[i] = static_cast<std::uint8_t>(std::min<std::size_t>(
+                                          first_view(views, points[i].p), 255));
+                              });
+        for (std::size_t vi = 0; vi < views.size(); ++vi) {
+            if (o.shadows) {
+                const auto t0 = clock::now();
+                render_shadow_map(scene, views[vi], sm);
+                shadow_ms += std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+                ++maps;
+            }
+            const ShadowView::Projection proj = views[vi].projection();
+            tbb::parallel_for(
+                tbb::blocked_range<std::size_t>(0, n, 1024),
+                [&](const tbb::blocked_range<std::size_t>& r) {
+                    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        if (views.size() > 1 && face[i] != vi) continue;
+                        const BoundaryPoint& q = points[i];
+                        Vec3 wi;
+                        RGB Ei;
+                        if (!incident_light(s, q.p, wi, Ei)) continue;
+                        const double cs = dot(q.n, wi);
+                        if (!(cs > 0)) continue;
+                        if (o.shadows && !lit_in_map(sm, views[vi], proj, proj.at(q.p), q.n, wi, o))
+                            continue;
+                        if (!spheres.empty() && behind_sphere(scene, spheres, s, q.p, wi)) continue;
+                        const double t = (*mat_T[static_cast<std::size_t>(q.material)])(cs);
+                        for (std::size_t c = 0; c < 3; ++c) E[i][c] += t * Ei[c] * cs;
+                    }
+                });
+        }
+    }
+    if (stats) {
+        stats->shadow_maps = maps;
+        stats->light_samples = static_cast<int>(plan.samples.size());
+        stats->shadow_ms = shadow_ms;
+        stats->shading_ms =
+            std::chrono::duration<double, std::milli>(clock::now() - t_start).count() - shadow_ms;
+    }
+    return E;
 }
 
 }  // namespace ssslab::realtime

@@ -194,6 +194,9 @@ struct LightingStats {
     int light_samples = 0;  ///< point and directional samples of all lights (with or without map)
 };
 
+/// The options' ranges (std::invalid_argument "lighting: options out of range").
+void check_lighting_options(const LightingOptions& o);
+
 /// What shade() checks of its inputs (every backend of pass 1 calls it): std::invalid_argument
 /// for a frame that does not match the camera or options out of range.
 void check_lighting_inputs(const RasterCamera& camera, const RasterFrame& frame,
@@ -212,5 +215,27 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
 void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& frame,
            const LightingOptions& o, const std::vector<SlabTransmittance>& slabs,
            LightingStats* stats, GBuffer& out);
+
+/// A point on a medium's boundary for boundary_irradiance: position [world units], the outward
+/// facet normal (unit) and the scene material (a medium).
+struct BoundaryPoint {
+    Vec3 p, n;
+    int material = -1;
+};
+
+/// The irradiance transmitted into the medium at each point as pass 1 computes it for a medium
+/// sample of the G-buffer (GBuffer::irradiance): the sum over the light samples of
+/// T(cos) E cos where cos = n . w_i > 0, shadowed through the same shadow maps and normal-offset
+/// test, behind-sphere occlusion included; lights planned (and shadow maps fitted) for
+/// `receivers`, or for the points' bounding box where it is empty. Points
+/// the camera does not see are lit as those it does: what a point cloud on the media's surfaces
+/// needs (Jensen-Buhler [Bitterli13 §2.6.4], experiments/runner). No translucency (a point cloud
+/// has the far sides' own points). Throws std::invalid_argument for a point whose material is not
+/// a medium or whose normal or position is not finite, or options out of range.
+std::vector<std::array<double, 3>> boundary_irradiance(const Scene& scene,
+                                                       const std::vector<BoundaryPoint>& points,
+                                                       const LightingOptions& o,
+                                                       const Box& receivers = {},
+                                                       LightingStats* stats = nullptr);
 
 }  // namespace ssslab::realtime

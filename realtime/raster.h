@@ -78,7 +78,7 @@ struct RasterMesh {
     /// wrong for open ones (a plane seen from below would vanish).
     bool cull_back_faces = false;
     /// Skip triangles facing the camera instead: a closed mesh's far side (the back samples of
-    /// layered methods such as Munoz11's, experiments/runner/munoz_frame.h).
+    /// layered methods such as Munoz11's, experiments/runner/surface_frames.h).
     bool cull_front_faces = false;
 };
 /// A world-space mesh through the camera (the triangles are referenced, not copied).

@@ -610,6 +610,74 @@ def error_vs_time_plot(root, p):
     save(fig, root, p["out"], {"notes": notes, "x": xkey, "series": [q[0] for q in series]})
 
 
+def sweep_plot(root, p):
+    """Panels of one table's rows of p["scene"]: p["y"] (+-1 SE from the column y + "_se")
+    against each panel's "x" column. A panel draws a line per combination of its "series"
+    columns (the variant's other parameters), in order of x; "min_points" leaves out series with
+    fewer points (single variants); "xscale" linear, log or symlog (for a sweep that includes 0);
+    "markers_only" draws points without lines (an error against time cloud). Rows whose y is 0
+    (within the path tracer's noise) cannot sit on the log y axis and are counted in a note."""
+    rows = [x for x in read_csv(os.path.join(root, p["csv"])) if x["scene"] == p["scene"]]
+    ykey = p["y"]
+
+    def f(x, k):
+        v = x.get(k, "")
+        return float(v) if v not in ("", None) else 0.0
+
+    panels = p["panels"]
+    fig, ax = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 4.4),
+                           constrained_layout=True, squeeze=False)
+    cmap = plt.get_cmap("tab10")
+    notes = []
+    drawn = []
+    for a, q in zip(ax[0], panels):
+        xkey = q["x"]
+        groups = {}
+        for x in rows:
+            key = ", ".join("%s %s" % (c, x[c]) for c in q.get("series", []))
+            groups.setdefault(key, []).append(x)
+        dropped, k, ys = 0, 0, []
+        for label, g in groups.items():
+            if len(g) < q.get("min_points", 1):
+                continue
+            g = sorted(g, key=lambda x: f(x, xkey))
+            keep = [x for x in g if f(x, ykey) > 0]
+            dropped += len(g) - len(keep)
+            if not keep:
+                continue
+            yv = [f(x, ykey) for x in keep]
+            se = [f(x, ykey + "_se") for x in keep]
+            lo = [min(e, 0.999 * y) for e, y in zip(se, yv)]
+            bars = a.errorbar([f(x, xkey) for x in keep], yv, yerr=[lo, se],
+                              color=cmap(k % 10), ls="none" if q.get("markers_only") else "-",
+                              marker="os^Dv<>ph*"[k % 10], ms=4, lw=1.2, capsize=2,
+                              elinewidth=0.7, label=label or ykey)
+            for b in bars[1] + bars[2]:
+                b.set_alpha(0.35)
+            ys += yv
+            k += 1
+        drawn.append(k)
+        a.set_yscale("log")
+        xs = q.get("xscale", "linear")
+        if xs == "symlog":
+            a.set_xscale("symlog", linthresh=q.get("linthresh", 1e-3))
+        else:
+            a.set_xscale(xs)
+        if ys:
+            a.set_ylim(min(ys) / 2, max(ys) * 2)
+        a.set_xlabel(q.get("xlabel", xkey))
+        a.set_title(q.get("title", ""), fontsize=10)
+        a.grid(alpha=0.3, which="both")
+        if k:
+            a.legend(fontsize=6, loc="best")
+        if dropped:
+            notes.append("%s: %d of its variants score zero (within the path tracer's noise; not "
+                         "drawn on the log axis)." % (q.get("title", xkey), dropped))
+    ax[0][0].set_ylabel(p.get("ylabel", ykey))
+    fig.suptitle(p.get("title", p["scene"]))
+    save(fig, root, p["out"], {"notes": notes, "series_per_panel": drawn})
+
+
 def main():
     with open(sys.argv[1]) as f:
         spec = json.load(f)
@@ -620,7 +688,7 @@ def main():
          "singular_values": singular_values_plot,
          "kernel_slices": kernel_slices_plot, "z_histogram": z_histogram_plot,
          "pencil": pencil_plot, "efficiency": efficiency_plot,
-         "error_vs_time": error_vs_time_plot}[p["kind"]](root, p)
+         "error_vs_time": error_vs_time_plot, "sweep": sweep_plot}[p["kind"]](root, p)
 
 
 if __name__ == "__main__":

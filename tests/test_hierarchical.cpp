@@ -324,5 +324,65 @@ TEST(PointOctree, CoincidentPointsMakeOneLeaf) {
               tree.brute_force(three_dipoles(), Vec3{1, 0, 0}));
 }
 
+// An analytic profile tabulated for millions of queries (RadialFunction::tabulated, what the
+// frames use for dipole and pbd, 4096 radii from 1e-3 of a mean free path to a scene's
+// diagonal): log-log interpolation within 1e-4 of the exact profile wherever it is above 1e-12
+// of its peak (further out an exponential tail bends between the radii: 3e-3 at 1 m), f(r_min)
+// below the range, 0 beyond it.
+TEST(RadialFunction, TabulatedProfilesFollowTheExactOnes) {
+    DiffusionMedium m;
+    m.sigma_a = 0.05;
+    m.sigma_s = 2.0;
+    m.eta = 1.3;
+    const std::shared_ptr<const DiffusionProfile> pbd = make_diffusion_profile("pbd", m);
+    const RadialFunction exact =
+        RadialFunction::from_diffusion({dipole(0.05, 2.0, 1.3), pbd, dipole(0.02, 1.5, 1.5)});
+    const RadialFunction t = RadialFunction::tabulated(exact, 1e-3, 1e3, 4096);
+    const auto peak = exact(1e-3);
+    double worst = 0;
+    RngStream rng(3, rng_domain::kTest + 301, 0);
+    for (int i = 0; i < 4000; ++i) {
+        const double r = 1e-3 * std::pow(1e6, rng.uniform());
+        const auto a = exact(r), b = t(r);
+        for (int c = 0; c < 3; ++c)
+            if (a[c] > 1e-12 * peak[c]) worst = std::max(worst, std::abs(b[c] - a[c]) / a[c]);
+    }
+    std::printf("  [measured] worst relative error of the table: %.2e\n", worst);
+    EXPECT_LT(worst, 1e-4);
+    EXPECT_EQ(t(1e-6), exact(1e-3));
+    EXPECT_EQ(t(2e3)[0], 0.0);
+    EXPECT_THROW(RadialFunction::tabulated(exact, 0, 1, 10), std::invalid_argument);
+    EXPECT_THROW(RadialFunction::tabulated(exact, 1, 1, 10), std::invalid_argument);
+    EXPECT_THROW(RadialFunction::tabulated(exact, 1, 2, 1), std::invalid_argument);
+    const RadialFunction negative([](double) { return std::array<double, 3>{1, -1, 1}; });
+    EXPECT_THROW(RadialFunction::tabulated(negative, 1, 2, 10), std::invalid_argument);
+}
+
+TEST(JensenBuhlerSpec, NamesVariantsAndRefusesBadOnes) {
+    const JensenBuhlerOptions o =
+        parse_jensen_buhler("density=16,threshold=0.01,bound=box,profile=pbd,candidates=3");
+    EXPECT_EQ(o.points_per_mm2, 16);
+    EXPECT_EQ(o.max_solid_angle, 0.01);
+    EXPECT_TRUE(o.conservative);
+    EXPECT_EQ(o.profile, "pbd");
+    EXPECT_EQ(o.candidates_per_point, 3);
+    EXPECT_EQ(jensen_buhler_label(parse_jensen_buhler(jensen_buhler_label(o))),
+              jensen_buhler_label(o));
+    EXPECT_EQ(jensen_buhler_label(parse_jensen_buhler("")),
+              "density=4,threshold=0.05,bound=centre,profile=mc,candidates=5");
+    EXPECT_EQ(parse_jensen_buhler("threshold=0").max_solid_angle, 0.0);
+    for (const char* bad :
+         {"threshold=-0.01", "threshold=x", "threshold=inf", "density=0", "density=-1",
+          "density=1e5", "bound=sphere", "profile=dipol", "candidates=0", "candidates=1.5",
+          "colour=red", "density", "density=1,density=2"}) {
+        EXPECT_THROW(parse_jensen_buhler(bad), std::invalid_argument) << bad;
+        try {
+            parse_jensen_buhler(bad);
+        } catch (const std::invalid_argument& e) {
+            EXPECT_EQ(std::string(e.what()).rfind("jensen_buhler", 0), 0u) << e.what();
+        }
+    }
+}
+
 }  // namespace
 }  // namespace ssslab::approx

@@ -431,6 +431,94 @@ TEST(Lighting, IrradianceThroughTheBoundary) {
     }
 }
 
+// Points off the G-buffer (a point cloud on the media, Jensen-Buhler) are lit as pass 1 lights
+// its medium samples: at the G-buffer's own medium samples, without shadows, the same irradiance
+// to float rounding, and with shadows too where the lights are planned for the frame's
+// receivers (ketchup: a sun and the environment, whose samples do not depend on the receivers'
+// box as a sphere light's do); with the maps fitted to the points' own box instead, the same
+// on most of them (the maps' texels differ at shadow edges); a smooth boundary's top face under a
+// delta light gets (1 - F(cos, eta)) E cos and its bottom face nothing.
+TEST(Lighting, BoundaryPointsAreLitAsPassOneLightsMediumSamples) {
+    const Scene scene = read_scene(testing::source_path("experiments/scenes/ketchup.toml"));
+    for (bool shadows : {false, true}) {
+        LightingOptions o;
+        o.light_samples = 4;
+        o.environment_samples = 8;
+        o.shadow_map_size = 1024;
+        o.environment_map_size = 512;
+        o.shadows = shadows;
+        const Rendered r = render_rt(scene, 64, 48, 1, o);
+        const RasterCamera cam = RasterCamera::from_scene(scene.camera, 64, 48);
+        std::vector<BoundaryPoint> pts;
+        std::vector<std::size_t> at;
+        Box receivers;  // as shade() gathers it: diffuse samples and media seen from outside
+        const RasterCamera::SampleRays rays = cam.sample_rays(1);
+        for (std::size_t i = 0; i < r.g.samples(); ++i) {
+            if (r.g.shape[i] < 0) continue;
+            const int sx = static_cast<int>(i % 64), sy = static_cast<int>(i / 64);
+            const Vec3 p = cam.position + rays.unnormalized(sx, sy) * r.frame.view_z[i];
+            const bool medium = scene.materials[static_cast<std::size_t>(r.g.material[i])].kind ==
+                                SceneMaterial::Kind::kMedium;
+            if (medium && !(r.g.exit_weight[i] > 0)) continue;  // seen from inside
+            receivers.add(p);
+            if (!medium) continue;
+            pts.push_back({p,
+                           {r.g.normal[3 * i], r.g.normal[3 * i + 1], r.g.normal[3 * i + 2]},
+                           r.g.material[i]});
+            at.push_back(i);
+        }
+        ASSERT_GT(pts.size(), 300u);
+        for (bool own_box : {false, true}) {
+            const std::vector<std::array<double, 3>> E =
+                boundary_irradiance(scene, pts, o, own_box ? Box{} : receivers);
+            std::size_t agree = 0, lit = 0;
+            double worst = 0;
+            for (std::size_t k = 0; k < pts.size(); ++k) {
+                bool same = true;
+                for (int c = 0; c < 3; ++c) {
+                    const double g = r.g.irradiance[3 * at[k] + c];
+                    const double d = std::abs(E[k][c] - g) / std::max(g, 1e-3);
+                    worst = std::max(worst, d);
+                    same = same && d < 1e-5;
+                }
+                agree += same;
+                lit += E[k][1] > 0;
+            }
+            std::printf(
+                "  [measured] shadows %d, %s box: %zu points, %zu lit, %.4f agree, worst %.2e\n",
+                shadows, own_box ? "points'" : "frame's", pts.size(), lit,
+                static_cast<double>(agree) / pts.size(), worst);
+            EXPECT_GT(lit, pts.size() / 2);
+            if (shadows && own_box)
+                EXPECT_GT(static_cast<double>(agree), 0.85 * static_cast<double>(pts.size()));
+            else
+                EXPECT_EQ(agree, pts.size());
+        }
+    }
+    // The closed form on a box's top and bottom faces.
+    const char* light =
+        "[[lights]]\ntype = \"directional\"\ndirection = [0.5, 1, 0.3]\n"
+        "irradiance = [1, 2, 3]\n";
+    const Scene box = parse_scene(medium_box("0", light), "m.toml", ".");
+    const Vec3 w = normalize(Vec3{0.5, 1, 0.3});
+    std::vector<BoundaryPoint> faces;
+    for (int k = 0; k < 20; ++k) {
+        const double x = -0.9 + 0.09 * k, z = 0.8 - 0.08 * k;
+        faces.push_back({{x, box.shapes[0].mesh.bounds()[1].y, z}, {0, 1, 0}, 0});
+        faces.push_back({{x, box.shapes[0].mesh.bounds()[0].y, z}, {0, -1, 0}, 0});
+    }
+    const std::vector<std::array<double, 3>> E = boundary_irradiance(box, faces, LightingOptions{});
+    const double t = 1 - dielectric::fresnel_dielectric(w.y, 1.4);
+    for (std::size_t k = 0; k < faces.size(); ++k)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(E[k][c], k % 2 ? 0.0 : t * (c + 1) * w.y, 1e-9) << k << " " << c;
+    // Bad points: not on a medium, not finite.
+    EXPECT_THROW(boundary_irradiance(box, {{{0, 0, 0}, {0, 1, 0}, -1}}, LightingOptions{}),
+                 std::invalid_argument);
+    EXPECT_THROW(boundary_irradiance(box, {{{0, NAN, 0}, {0, 1, 0}, 0}}, LightingOptions{}),
+                 std::invalid_argument);
+}
+
 TEST(Lighting, ExitWeightIntegratesToOne) {
     for (double eta : {1.0, 1.3, 1.5}) {
         for (double alpha : {0.0, 0.1, 0.5}) {

@@ -10,7 +10,7 @@
 #include "approx/munoz.h"
 #include "core/rng.h"
 #include "core/scene.h"
-#include "experiments/runner/munoz_frame.h"
+#include "experiments/runner/surface_frames.h"
 #include "realtime/frame.h"
 #include "testing.h"
 
@@ -329,7 +329,7 @@ TEST(Munoz, BadInputIsRefusedNamingTheOption) {
     EXPECT_EQ(none.exitance[0], std::vector<float>(9, 0.0f));
 }
 
-// In a real-time frame (experiments/runner/munoz_frame.h): the far sides seen behind the near
+// In a real-time frame (experiments/runner/surface_frames.h): the far sides seen behind the near
 // ones, and the subsurface layer equal to the exit weight times the layered exitance of the
 // G-buffer's near samples and the back frame's far ones, computed here from the two G-buffers
 // (the units: R_d per entered irradiance, the albedo the composite applies cancelled).
@@ -393,6 +393,98 @@ TEST(MunozFrame, TheSubsurfaceLayerIsTheExitWeightTimesTheLayeredExitance) {
         }
     EXPECT_GT(peak, 0);
     EXPECT_LT(worst, 1e-5 * peak);
+}
+
+// Jensen-Buhler in a real-time frame (experiments/runner/surface_frames.h): at a threshold of 0
+// the subsurface layer is the exit weight times the brute-force sum over the cloud's points at
+// each medium pixel's surface point (the camera ray at its view depth), with the points lit as
+// pass 1 lights (realtime::boundary_irradiance, tested in test_lighting); a positive threshold
+// stays within a few per cent of it; an analytic profile is integrated in the same frame.
+TEST(JensenBuhlerFrame, TheSubsurfaceLayerIsTheExitWeightTimesTheBruteForceSum) {
+    const Scene scene = read_scene(testing::source_path("experiments/scenes/wholemilk.toml"));
+    realtime::FrameOptions fo;
+    fo.width = 48;
+    fo.height = 36;
+    fo.lighting.light_samples = 1;
+    fo.lighting.environment_samples = 4;
+    fo.lighting.shadow_map_size = 256;
+    const realtime::RasterizedFrame frame = realtime::rasterize_frame(scene, fo);
+    const realtime::LitFrame lit = realtime::light_frame(scene, frame, fo);
+    ASSERT_EQ(frame.media_in_view.size(), 1u);
+    const int m = frame.media_in_view[0];
+    RadialProfile prof = testing::analytic_profile(0.02, 400, 4.0);
+    prof.rsp = {0.02, 0.03, 0.04};
+    const std::map<int, RadialProfile> profiles = {{m, prof}};
+    const std::map<int, realtime::FrameMaterial> materials = {
+        {m, realtime::make_frame_material(prof, approx::parse_model("svd:rank=1"), 17, false)}};
+    JensenBuhlerOptions jo = parse_jensen_buhler("density=1,threshold=0");
+    const runner::JensenBuhlerCloud cloud =
+        runner::build_jensen_buhler_cloud(scene, frame.media_in_view, jo, fo, 1);
+    ASSERT_EQ(cloud.trees.size(), 1u);
+    const PointOctree& tree = cloud.trees.at(m);
+    EXPECT_EQ(cloud.points, tree.points().size());
+    size_t lit_points = 0;
+    for (const SurfacePoint& p : tree.points()) lit_points += p.irradiance[0] > 0;
+    // Lit from above and around: more than a third of the sphere's points, not all of them.
+    EXPECT_GT(3 * lit_points, tree.points().size());
+    EXPECT_LT(lit_points, tree.points().size());
+
+    const runner::JensenBuhlerFrame f0 =
+        runner::render_jensen_buhler_frame(scene, frame, lit, materials, profiles, cloud, jo, fo);
+    jo.max_solid_angle = 0.05;
+    const runner::JensenBuhlerFrame f1 =
+        runner::render_jensen_buhler_frame(scene, frame, lit, materials, profiles, cloud, jo, fo);
+    EXPECT_EQ(f0.stats.clusters, 0u);
+    EXPECT_GT(f1.stats.clusters, 0u);
+    EXPECT_LT(f1.stats.points, f0.stats.points);
+
+    const RadialFunction rd = runner::per_entered(prof);
+    const realtime::GBuffer& g = lit.gbuffer;
+    const realtime::RasterCamera cam =
+        realtime::RasterCamera::from_scene(scene.camera, g.width, g.height);
+    const auto rays = cam.sample_rays(1);
+    const ImageLayer& s0 = f0.frame.image.layer("subsurface");
+    const ImageLayer& s1 = f1.frame.image.layer("subsurface");
+    double worst = 0, worst1 = 0, peak = 0;
+    size_t medium = 0;
+    for (int y = 0; y < g.height; ++y)
+        for (int x = 0; x < g.width; ++x) {
+            const size_t i = static_cast<size_t>(y * g.width + x);
+            std::array<double, 3> want{};
+            if (g.material[i] == m) {
+                ++medium;
+                const Vec3 p =
+                    (cam.position + rays.unnormalized(x, y) *
+                                        static_cast<double>(static_cast<float>(g.view_z[i]))) *
+                    scene.unit_mm;
+                want = tree.brute_force(rd, p);
+                for (double& v : want) v *= g.exit_weight[i];
+            }
+            for (int c = 0; c < 3; ++c) {
+                peak = std::max(peak, want[c]);
+                worst = std::max(worst, std::fabs(s0.pixels()[3 * i + c] - want[c]));
+                worst1 = std::max(worst1, std::fabs(s1.pixels()[3 * i + c] - want[c]));
+            }
+        }
+    std::printf(
+        "  [measured] %zu points (%zu lit), %zu medium pixels: threshold 0 within %.2e of "
+        "the peak, threshold 0.05 within %.2e\n",
+        tree.points().size(), lit_points, medium, worst / peak, worst1 / peak);
+    EXPECT_GT(medium, 200u);
+    EXPECT_GT(peak, 0);
+    EXPECT_LT(worst, 1e-5 * peak);
+    EXPECT_LT(worst1, 0.05 * peak);
+
+    // The dipole for the material's coefficients through the same cloud: finite, positive.
+    jo.profile = "dipole";
+    const runner::JensenBuhlerFrame fd =
+        runner::render_jensen_buhler_frame(scene, frame, lit, materials, profiles, cloud, jo, fo);
+    double sum = 0;
+    for (float v : fd.frame.image.layer("subsurface").pixels()) {
+        ASSERT_TRUE(std::isfinite(v));
+        sum += v;
+    }
+    EXPECT_GT(sum, 0);
 }
 
 TEST(MunozSpec, NamesVariantsAndRefusesBadOnes) {

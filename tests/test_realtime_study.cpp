@@ -46,6 +46,8 @@ environment_samples = 4
 shadow_map_size = 128
 reference_samples = 16
 munoz = ["layers=1", "layers=3,t=0.001,downsample=2,kernel=average"]
+jensen_buhler = ["density=2,threshold=0.1", "density=2,threshold=0,bound=box",
+                 "density=2,threshold=0.1,profile=dipole"]
 )";
 }
 
@@ -78,9 +80,20 @@ std::vector<std::vector<std::string>> csv_rows(const std::string& text) {
     std::vector<std::vector<std::string>> rows;
     std::istringstream in(text);
     for (std::string line; std::getline(in, line);) {
-        std::vector<std::string> cells;
-        std::istringstream l(line);
-        for (std::string c; std::getline(l, c, ',');) cells.push_back(c);
+        // RFC 4180 fields: quoted where they hold a comma or a quote ("" inside).
+        std::vector<std::string> cells(1);
+        bool quoted = false;
+        for (size_t i = 0; i < line.size(); ++i) {
+            const char ch = line[i];
+            if (quoted && ch == '"' && i + 1 < line.size() && line[i + 1] == '"')
+                cells.back() += '"', ++i;
+            else if (ch == '"')
+                quoted = !quoted;
+            else if (ch == ',' && !quoted)
+                cells.emplace_back();
+            else
+                cells.back() += ch;
+        }
         rows.push_back(cells);
     }
     return rows;
@@ -150,6 +163,56 @@ TEST_F(RealtimeStudy, MunozVariantsAreScoredLikeTheModels) {
         EXPECT_GT(std::stod(t[i][column(h, "rms_vs_reference")]), 0);
         EXPECT_GT(std::stoll(t[i][column(h, "convolutions")]), 0);
     }
+}
+
+// Jensen-Buhler's variants (jensen_buhler = [...]): a row per scene and variant in
+// jensen_buhler.csv (the threshold, the cloud's points, errors, seconds); variants of one density
+// share the cloud; and approximations.csv lists every method of the scene once: the screen-space
+// reference, the models, the Munoz and Jensen-Buhler variants.
+TEST_F(RealtimeStudy, JensenBuhlerVariantsAndTheTableOfEveryApproximation) {
+    const auto t = csv_rows(testing::read_text(out() / "realtime" / "jensen_buhler.csv"));
+    ASSERT_EQ(t.size(), 1u + 3);
+    const auto& h = t[0];
+    for (const char* c :
+         {"scene", "threshold", "points", "rms_vs_volpath", "rms_vs_volpath_se", "seconds"})
+        EXPECT_LT(column(h, c), 6u) << c;
+    EXPECT_EQ(t[1][column(h, "threshold")], "0.1");
+    EXPECT_EQ(t[2][column(h, "threshold")], "0");
+    EXPECT_EQ(t[2][column(h, "bound")], "box");
+    EXPECT_EQ(t[3][column(h, "profile")], "dipole");
+    for (size_t i = 1; i < t.size(); ++i) {
+        EXPECT_EQ(t[i][0], "ball");
+        EXPECT_EQ(t[i][column(h, "points")], t[1][column(h, "points")]);
+        EXPECT_GT(std::stoll(t[i][column(h, "points")]), 100);
+        for (const char* c : {"rms_vs_volpath", "rms_vs_volpath_se", "seconds", "query_seconds"})
+            EXPECT_GE(std::stod(t[i][column(h, c)]), 0) << c;
+        EXPECT_GT(std::stod(t[i][column(h, "rms_vs_reference")]), 0);
+        EXPECT_GT(std::stoll(t[i][column(h, "nodes_visited")]), 0);
+    }
+    // Threshold 0: every point summed, no cluster.
+    EXPECT_EQ(t[2][column(h, "clusters")], "0");
+    EXPECT_GT(std::stoll(t[1][column(h, "clusters")]), 0);
+
+    const auto a = csv_rows(testing::read_text(out() / "realtime" / "approximations.csv"));
+    const auto& ah = a[0];
+    for (const char* c : {"scene", "method", "rms_vs_volpath", "rms_vs_volpath_se", "seconds"})
+        EXPECT_LT(column(ah, c), 5u) << c;
+    std::vector<std::string> methods;
+    for (size_t i = 1; i < a.size(); ++i) {
+        methods.push_back(a[i][column(ah, "method")]);
+        EXPECT_GT(std::stod(a[i][column(ah, "seconds")]), 0) << methods.back();
+        EXPECT_GE(std::stod(a[i][column(ah, "rms_vs_volpath_se")]), 0) << methods.back();
+    }
+    const std::vector<std::string> want = {
+        "reference:2d",
+        "svd:rank=1",
+        "preintegration",
+        "munoz:layers=1,t=0,downsample=1,split=equal,visible=skip,kernel=point",
+        "munoz:layers=3,t=0.001,downsample=2,split=equal,visible=skip,kernel=average",
+        "jensen_buhler:density=2,threshold=0.1,bound=centre,profile=mc,candidates=5",
+        "jensen_buhler:density=2,threshold=0,bound=box,profile=mc,candidates=5",
+        "jensen_buhler:density=2,threshold=0.1,bound=centre,profile=dipole,candidates=5"};
+    EXPECT_EQ(methods, want);
 }
 
 // Error against the SSS pass time as a figure per scene (scripts/plot.py, "error_vs_time"), in
@@ -306,6 +369,17 @@ TEST(RealtimeStudyConfig, BadModelsAndMaterialsAreLocated) {
         r = run_ssslab({"run", "e.toml"}, dir.path());
         EXPECT_EQ(r.exit_code, 2) << bad;
         EXPECT_NE(r.err.find("outputs.realtime.munoz"), std::string::npos) << r.err;
+    }
+    for (const char* bad : {"\"threshold=-0.1\"", "\"density=0\"", "\"profile=dipol\"",
+                            "\"density=2,threshold=0.1\""}) {
+        cfg = config(R"(["svd:rank=1"])");
+        cfg.replace(cfg.find("jensen_buhler = ["), 17,
+                    std::string("jensen_buhler = [") + bad + ", ");
+        dir.write("e.toml", cfg);
+        r = run_ssslab({"run", "e.toml"}, dir.path());
+        EXPECT_EQ(r.exit_code, 2) << bad;
+        EXPECT_NE(r.err.find("outputs.realtime.jensen_buhler"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("e.toml:"), std::string::npos) << r.err;
     }
     EXPECT_FALSE(fs::exists(dir / "results"));
 }

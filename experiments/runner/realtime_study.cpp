@@ -10,11 +10,11 @@
 #include "core/png.h"
 #include "core/scene.h"
 #include "experiments/runner/engines.h"
-#include "experiments/runner/munoz_frame.h"
 #include "experiments/runner/plots.h"
 #include "experiments/runner/realtime_inputs.h"
 #include "experiments/runner/report.h"
 #include "experiments/runner/runner.h"
+#include "experiments/runner/surface_frames.h"
 #include "realtime/frame.h"
 #if SSSLAB_HAVE_GL
 #include "realtime/gl/sss_pass_gl.h"
@@ -259,6 +259,20 @@ RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_
         }
         s.munoz = *v;
     }
+    if (auto v = t.optional_string_list("jensen_buhler")) {
+        std::set<std::string> labels;
+        for (size_t i = 0; i < v->size(); ++i) {
+            try {
+                if (!labels
+                         .insert(approx::jensen_buhler_label(approx::parse_jensen_buhler((*v)[i])))
+                         .second)
+                    t.fail_item("jensen_buhler", i, "variant \"" + (*v)[i] + "\" is listed twice");
+            } catch (const std::invalid_argument& e) {
+                t.fail_item("jensen_buhler", i, e.what());
+            }
+        }
+        s.jensen_buhler = *v;
+    }
     return s;
 }
 
@@ -269,7 +283,7 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
     const fs::path dir = stage / "realtime";
     fs::create_directories(dir);
     tbb::task_arena arena(ctx.threads > 0 ? ctx.threads : tbb::task_arena::automatic);
-    std::ostringstream table, sweep, decomposition, html, munoz;
+    std::ostringstream table, sweep, decomposition, html, munoz, jb, approximations;
     table << "scene,model,label,taps,channel,pixels,rms_vs_reference,rms_vs_reference_se,"
              "norm_table,norm_scene,rel_rms_vs_reference,rms_vs_volpath,rms_vs_volpath_se,"
              "raw_rms_vs_volpath,volpath_noise_rms,sss_ms,frame_ms,kernel_build_s\n";
@@ -277,7 +291,12 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
              "rms_vs_volpath_rgb,rms_vs_volpath_rgb_se,sss_ms,frame_ms\n";
     munoz << "scene,variant,layers,threshold,downsample,split,rms_vs_reference,"
              "rms_vs_reference_se,rms_vs_volpath,rms_vs_volpath_se,seconds,convolutions,"
-             "skipped_threshold,skipped_invisible\n";
+             "skipped_threshold,skipped_invisible,kernel,visible\n";
+    jb << "scene,threshold,points,rms_vs_volpath,rms_vs_volpath_se,seconds,variant,density,bound,"
+          "profile,rms_vs_reference,rms_vs_reference_se,query_seconds,cloud_seconds,"
+          "light_seconds,nodes_visited,clusters,point_terms\n";
+    approximations << "scene,method,rms_vs_volpath,rms_vs_volpath_se,seconds,family,"
+                      "rms_vs_reference,rms_vs_reference_se\n";
     decomposition << "scene,channel,pixels,reference_signal_rms,separability_model,separability,"
                      "screen_space,screen_space_se,specular,specular_se,surfaces,surfaces_se,total,"
                      "total_se\n";
@@ -463,11 +482,10 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
             ss.scores.push_back(sc);
             frames.emplace(sc.label, std::move(f));
         }
-        // Error against frame time: the sweep models over tap counts, with and without jitter;
-        // and every table model at its taps (ranks, d'Eon counts). The RGB error is the root of
-        // the channels' mean squared error; its standard error by the delta method as
-        // noise_corrected_rms's, from the mean of the channels' standard errors of D^2 (their
-        // errors are correlated, the same paths carry all three: the mean bounds the sum's).
+        // The RGB error is the root of the channels' mean squared error; its standard error by the
+        // delta method as noise_corrected_rms's, from the mean of the channels' standard errors of
+        // D^2 (their errors are correlated, the same paths carry all three: the mean bounds the
+        // sum's).
         struct Rgb {
             double rms, rms_se;
         };
@@ -478,6 +496,25 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
             return Rgb{
                 rms, rms > 0 ? std::min(ms_se / (2.0 * rms), std::sqrt(ms_se)) : std::sqrt(ms_se)};
         };
+        // The table of every approximation (approximations.csv): the RGB errors and the
+        // seconds of the pass that replaces the SSS pass (kernels built before the frame).
+        auto approximation_row = [&](const std::string& method, const std::string& family,
+                                     const Score& sc, double seconds) {
+            const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
+            approximations << scene.name << "," << csv_field(method) << "," << fmt(vp_rgb.rms)
+                           << "," << fmt(vp_rgb.rms_se) << "," << fmt(seconds) << "," << family
+                           << "," << fmt(ref_rgb.rms) << "," << fmt(ref_rgb.rms_se) << "\n";
+        };
+        {
+            Score sc;
+            score_frame(ref, sc);
+            approximation_row("reference:2d", "screen-space reference", sc, sc.sss_ms / 1000);
+        }
+        for (const Score& sc : ss.scores)
+            approximation_row(sc.model, "separable", sc, sc.sss_ms / 1000);
+
+        // Error against frame time: the sweep models over tap counts, with and without jitter;
+        // and every table model at its taps (ranks, d'Eon counts).
         auto sweep_row = [&](const Score& sc) {
             const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
             sweep << scene.name << "," << csv_field(sc.model) << "," << sc.label << "," << sc.taps
@@ -532,7 +569,9 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                       << fmt(ref_rgb.rms) << "," << fmt(ref_rgb.rms_se) << "," << fmt(vp_rgb.rms)
                       << "," << fmt(vp_rgb.rms_se) << "," << fmt(mf.stats.seconds) << ","
                       << mf.stats.convolutions << "," << mf.stats.skipped_threshold << ","
-                      << mf.stats.skipped_invisible << "\n";
+                      << mf.stats.skipped_invisible << ","
+                      << (mo.kernel == approx::MunozKernel::point ? "point" : "average") << ","
+                      << (mo.skip_invisible ? "skip" : "all") << "\n";
                 // Under regression like the models: scene.munoz_l<layers>_t<t>_d<downsample>
                 // [_linear][_all][_avg].rms_vs_volpath, the RGB error.
                 const std::string id = "munoz_l" + std::to_string(mo.layers) + "_t" +
@@ -542,12 +581,69 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                                        (mo.kernel == approx::MunozKernel::point ? "" : "_avg");
                 metrics.push_back({scene.name + "." + metric_label(id) + ".rms_vs_volpath", "1",
                                    vp_rgb.rms, vp_rgb.rms_se, true, 0});
+                approximation_row("munoz:" + approx::munoz_label(mo), "Munoz11", sc,
+                                  mf.stats.seconds);
                 if (!ctx.quiet)
                     std::printf(
                         "  realtime %s: munoz %s: RGB error %.4g +- %.2g against the path "
                         "tracer, %.3g s\n",
                         scene.name.c_str(), approx::munoz_label(mo).c_str(), vp_rgb.rms,
                         vp_rgb.rms_se, mf.stats.seconds);
+            }
+        }
+
+        // Jensen-Buhler's hierarchical integration in place of the SSS pass: one lit point
+        // cloud per (density, candidates), shared by the variants that differ only in their
+        // threshold, bound or profile; each variant's seconds are its cloud's and its queries'.
+        if (!spec.jensen_buhler.empty()) {
+            const auto& k = kernels_of(spec.models[0], spec.taps, true);
+            std::map<std::pair<double, int>, JensenBuhlerCloud> clouds;
+            for (const std::string& text : spec.jensen_buhler) {
+                const approx::JensenBuhlerOptions jo = approx::parse_jensen_buhler(text);
+                const std::pair<double, int> key{jo.points_per_mm2, jo.candidates_per_point};
+                if (!clouds.count(key))
+                    arena.execute([&] {
+                        clouds.emplace(
+                            key, build_jensen_buhler_cloud(scene, frame.media_in_view, jo, fo,
+                                                           static_cast<std::uint64_t>(ctx.seed)));
+                    });
+                const JensenBuhlerCloud& cloud = clouds.at(key);
+                JensenBuhlerFrame jf;
+                arena.execute([&] {
+                    jf = render_jensen_buhler_frame(scene, frame, lit, k, in.profiles, cloud, jo,
+                                                    fo);
+                });
+                Score sc;
+                score_frame(jf.frame, sc);
+                const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
+                const double seconds = cloud.seconds() + jf.query_seconds;
+                std::string variant = approx::jensen_buhler_label(jo);
+                std::replace(variant.begin(), variant.end(), ',', ' ');
+                jb << scene.name << "," << fmt(jo.max_solid_angle) << "," << cloud.points << ","
+                   << fmt(vp_rgb.rms) << "," << fmt(vp_rgb.rms_se) << "," << fmt(seconds) << ","
+                   << variant << "," << fmt(jo.points_per_mm2) << ","
+                   << (jo.conservative ? "box" : "centre") << "," << jo.profile << ","
+                   << fmt(ref_rgb.rms) << "," << fmt(ref_rgb.rms_se) << "," << fmt(jf.query_seconds)
+                   << "," << fmt(cloud.seconds()) << "," << fmt(cloud.light_seconds) << ","
+                   << jf.stats.nodes_visited << "," << jf.stats.clusters << "," << jf.stats.points
+                   << "\n";
+                // Under regression: scene.jb_d<density>_t<threshold>[_box][_<profile>]
+                // [_c<candidates>].rms_vs_volpath, the RGB error.
+                const std::string id =
+                    "jb_d" + fmt(jo.points_per_mm2) + "_t" + fmt(jo.max_solid_angle) +
+                    (jo.conservative ? "_box" : "") + (jo.profile == "mc" ? "" : "_" + jo.profile) +
+                    (jo.candidates_per_point == 5 ? ""
+                                                  : "_c" + std::to_string(jo.candidates_per_point));
+                metrics.push_back({scene.name + "." + metric_label(id) + ".rms_vs_volpath", "1",
+                                   vp_rgb.rms, vp_rgb.rms_se, true, 0});
+                approximation_row("jensen_buhler:" + approx::jensen_buhler_label(jo),
+                                  "Jensen-Buhler", sc, seconds);
+                if (!ctx.quiet)
+                    std::printf(
+                        "  realtime %s: jensen_buhler %s: %zu points, RGB error %.4g +- %.2g "
+                        "against the path tracer, %.3g s (queries %.3g s)\n",
+                        scene.name.c_str(), approx::jensen_buhler_label(jo).c_str(), cloud.points,
+                        vp_rgb.rms, vp_rgb.rms_se, seconds, jf.query_seconds);
             }
         }
 
@@ -726,6 +822,8 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
     write_file_atomic(dir / "decomposition.csv", decomposition.str());
     write_file_atomic(dir / "thesis_table_6_4.csv", thesis.str());
     if (!spec.munoz.empty()) write_file_atomic(dir / "munoz11.csv", munoz.str());
+    if (!spec.jensen_buhler.empty()) write_file_atomic(dir / "jensen_buhler.csv", jb.str());
+    write_file_atomic(dir / "approximations.csv", approximations.str());
 
     // Error against time, a figure per scene (scripts/plot.py "error_vs_time"), drawn here:
     // this section is written before the report's other plots are. Against the SSS pass's time:
@@ -757,6 +855,68 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
             {js.str(),
              {"realtime/error_vs_time.csv"},
              {"realtime", ss.scene + ": error against SSS pass time", stem, caption.str()}});
+    }
+    // The integrations over the surfaces, per scene: Munoz11's error against its parameters
+    // (the paper's Figs. 5, 2 and 3 as errors) and time, Jensen-Buhler's against the octree
+    // threshold, the number of points and time, and every approximation against time.
+    const bool integrations = !spec.munoz.empty() || !spec.jensen_buhler.empty();
+    for (const SceneScores& ss : all) {
+        if (!integrations) break;
+        auto request = [&](const std::string& what, const std::string& csv,
+                           const std::string& title, const std::string& panels,
+                           const std::string& caption) {
+            const std::string stem = "plots/realtime_" + what + "_" + ss.scene;
+            std::ostringstream js;
+            js << "{\"kind\": \"sweep\", \"csv\": \"realtime/" << csv
+               << "\", \"scene\": " << json_string(ss.scene)
+               << ", \"y\": \"rms_vs_volpath\", \"ylabel\": \"RMS error against the path "
+                  "tracer (RGB)\", \"title\": "
+               << json_string(ss.scene + ": " + title) << ", \"out\": " << json_string(stem)
+               << ", \"panels\": [" << panels << "]}";
+            plot_requests.push_back({js.str(),
+                                     {"realtime/" + csv},
+                                     {"realtime-integrations", ss.scene + ": " + title, stem,
+                                      ss.scene + ": " + caption}});
+        };
+        const std::string time_panel =
+            "{\"x\": \"seconds\", \"xscale\": \"log\", \"markers_only\": true, "
+            "\"xlabel\": \"seconds (two cores)\", \"title\": \"against time\"";
+        if (!spec.munoz.empty())
+            request("munoz11", "munoz11.csv", "Munoz11's layered convolution",
+                    "{\"x\": \"layers\", \"xscale\": \"log\", \"min_points\": 2, \"series\": "
+                    "[\"threshold\", \"downsample\", \"split\", \"kernel\"], \"title\": "
+                    "\"against layers (Fig. 5)\"}, {\"x\": \"threshold\", \"xscale\": "
+                    "\"symlog\", \"min_points\": 2, \"series\": [\"layers\", \"downsample\", "
+                    "\"split\", \"kernel\"], \"xlabel\": \"t of Eq. 8\", \"title\": \"against "
+                    "the threshold (Fig. 2)\"}, {\"x\": \"downsample\", \"xscale\": \"log\", "
+                    "\"min_points\": 2, \"series\": [\"layers\", \"threshold\", \"split\", "
+                    "\"kernel\"], \"xlabel\": \"down-sampling factor\", \"title\": \"against "
+                    "layer resolution (Fig. 3)\"}, " +
+                        time_panel + ", \"series\": [\"kernel\"]}",
+                    "the RGB RMS error of Munoz11's variants against the path tracer "
+                    "(noise-corrected, +-1 SE) against the number of layers, the threshold t of "
+                    "Eq. 8 and the down-sampling of the layers (a line per combination of the "
+                    "other parameters that varies), and every variant against its time "
+                    "(realtime/munoz11.csv). The paper shows these as images and times only.");
+        if (!spec.jensen_buhler.empty())
+            request("jensen_buhler", "jensen_buhler.csv",
+                    "Jensen-Buhler's hierarchical integration",
+                    "{\"x\": \"threshold\", \"xscale\": \"log\", \"min_points\": 2, "
+                    "\"series\": [\"points\", \"bound\", \"profile\"], \"xlabel\": \"octree "
+                    "threshold [sr]\", \"title\": \"against the threshold\"}, {\"x\": "
+                    "\"points\", \"xscale\": \"log\", \"min_points\": 2, \"series\": "
+                    "[\"threshold\", \"bound\", \"profile\"], \"xlabel\": \"points in the "
+                    "cloud\", \"title\": \"against the point density\"}, " +
+                        time_panel + ", \"series\": [\"profile\"]}",
+                    "the RGB RMS error of Jensen-Buhler's variants against the path tracer "
+                    "(noise-corrected, +-1 SE) against the octree's solid-angle threshold, the "
+                    "number of points and the time (cloud, lighting and queries; "
+                    "realtime/jensen_buhler.csv).");
+        request("approximations", "approximations.csv", "every approximation against time",
+                time_panel + ", \"series\": [\"family\"]}",
+                "the RGB RMS error of every approximation against the path tracer "
+                "(noise-corrected, +-1 SE) against the seconds of the pass that replaces the SSS "
+                "pass, a colour per family (realtime/approximations.csv).");
     }
     const PlotResult plots = draw_plots(plot_requests, stage, cache, ctx.quiet);
 
@@ -816,6 +976,21 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         html << "<p class=\"note\">No plots: " << esc(plots.problem) << "</p>\n";
     figures(html, plots, "realtime");
     csv_table(html, sweep.str(), "Error against frame time (realtime/error_vs_time.csv)");
+    if (integrations) {
+        html << "<h3 id=\"realtime-integrations\">Integrations over the surfaces: Munoz11, "
+                "Jensen-Buhler, and every approximation</h3>\n<p>The SSS pass replaced by "
+                "Munoz11's layered convolution (the media's far sides from a second raster) and "
+                "by Jensen-Buhler's hierarchical integration (a Poisson-disk point cloud on every "
+                "surface of the media, lit by pass 1's lights and shadow maps), scored like the "
+                "models. Seconds: Munoz11's layered convolution; Jensen-Buhler's point cloud, its "
+                "lighting and octree, and the queries; the separable models' and the reference's "
+                "SSS pass. Tables: <a href=\"realtime/approximations.csv\">approximations.csv"
+                "</a>, <a href=\"realtime/munoz11.csv\">munoz11.csv</a>, <a "
+                "href=\"realtime/jensen_buhler.csv\">jensen_buhler.csv</a>.</p>\n";
+        figures(html, plots, "realtime-integrations");
+        csv_table(html, approximations.str(),
+                  "Every approximation against the path tracer (realtime/approximations.csv)");
+    }
     html << viewers.str();
     html << "<script>\n(function () {\n"
             "  document.querySelectorAll('div.flip').forEach(function (v) {\n"

@@ -28,7 +28,7 @@
 //   images = true                 # PNG panels, difference images, cut-outs, the flip viewer
 //   munoz = ["layers=4", "layers=8,t=0.001,downsample=2"]   # Munoz11's layered convolution
 //                                 # (approx::parse_munoz) in place of the SSS pass, with the
-//                                 # media's far sides as back samples (munoz_frame.h)
+//                                 # media's far sides as back samples (surface_frames.h)
 //
 // The scored pixels of a scene are those whose samples all see a medium (material layer); per
 // model and channel: the RMS against the screen-space reference (exact where the reference
@@ -83,6 +83,8 @@ struct RealtimeStudySpec {
     int quick_size = 64;
     bool images = true;
     std::vector<std::string> munoz;  ///< Munoz11 variants (approx::parse_munoz texts)
+    /// Jensen-Buhler variants (approx::parse_jensen_buhler texts)
+    std::vector<std::string> jensen_buhler;
 };
 
 /// Parse [outputs.realtime]; every scene is read and validated here.
