@@ -193,6 +193,28 @@ TEST(Cli, BenchRealtimeWithTheGlTwin) {
         EXPECT_NE(csv.find(row), std::string::npos) << row << "\n" << csv;
 }
 
+// --integrations: Munoz11 and Jensen-Buhler timed in place of the SSS pass, the scene with its
+// lights only, at all threads; refused without --realtime.
+TEST(Cli, BenchRealtimeTimesTheSurfaceIntegrations) {
+    testing::TempDir dir;
+    const std::string scenes = testing::source_path("experiments/scenes");
+    auto r =
+        run_ssslab({"bench", "--realtime", "--quick", "--threads", "2", "--scenes", scenes,
+                    "--case", "ketchup", "--size", "96x72", "--integrations", "--csv", "b.csv"},
+                   dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string csv = testing::read_text(dir / "b.csv");
+    for (const char* row :
+         {"ketchup,96,72,software,2,munoz l4,", "ketchup,96,72,software,2,munoz l4 t.001 d2,",
+          "ketchup,96,72,software,2,jb d4 cloud,", "ketchup,96,72,software,2,jb d4 t.03 queries,"})
+        EXPECT_NE(csv.find(row), std::string::npos) << row << "\n" << csv;
+    EXPECT_EQ(csv.find("ketchup/1-light,96,72,software,2,munoz"), std::string::npos) << csv;
+    EXPECT_NE(r.out.find("points in the cloud"), std::string::npos) << r.out;
+    r = run_ssslab({"bench", "--integrations"}, dir.path());
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("--realtime"), std::string::npos) << r.err;
+}
+
 TEST(Cli, BenchRealtimeWritesPassTimesPerSceneAndThreadCount) {
     testing::TempDir dir;
     const std::string scenes = testing::source_path("experiments/scenes");

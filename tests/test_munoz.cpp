@@ -329,57 +329,74 @@ TEST(Munoz, BadInputIsRefusedNamingTheOption) {
     EXPECT_EQ(none.exitance[0], std::vector<float>(9, 0.0f));
 }
 
+// The wholemilk scene's frame at w x h with a cheap pass 1, its one medium material m, an
+// analytic profile for it (R_sp per channel set) and the FrameMaterial the composite reads.
+struct SmallFrame {
+    Scene scene;
+    realtime::FrameOptions fo;
+    realtime::RasterizedFrame frame;
+    realtime::LitFrame lit;
+    int m = -1;
+    RadialProfile prof;
+    std::map<int, RadialProfile> profiles;
+    std::map<int, realtime::FrameMaterial> materials;
+
+    SmallFrame(int w, int h)
+        : scene(read_scene(testing::source_path("experiments/scenes/wholemilk.toml"))) {
+        fo.width = w;
+        fo.height = h;
+        fo.lighting.light_samples = 1;
+        fo.lighting.environment_samples = 4;
+        fo.lighting.shadow_map_size = 256;
+        frame = realtime::rasterize_frame(scene, fo);
+        lit = realtime::light_frame(scene, frame, fo);
+        if (frame.media_in_view.size() != 1u) return;
+        m = frame.media_in_view[0];
+        prof = testing::analytic_profile(0.02, 400, 4.0);
+        prof.rsp = {0.02, 0.03, 0.04};
+        profiles = {{m, prof}};
+        materials = {
+            {m, realtime::make_frame_material(prof, approx::parse_model("svd:rank=1"), 17, false)}};
+    }
+};
+
 // In a real-time frame (experiments/runner/surface_frames.h): the far sides seen behind the near
 // ones, and the subsurface layer equal to the exit weight times the layered exitance of the
 // G-buffer's near samples and the back frame's far ones, computed here from the two G-buffers
 // (the units: R_d per entered irradiance, the albedo the composite applies cancelled).
 TEST(MunozFrame, TheSubsurfaceLayerIsTheExitWeightTimesTheLayeredExitance) {
-    const Scene scene = read_scene(testing::source_path("experiments/scenes/wholemilk.toml"));
-    realtime::FrameOptions fo;
-    fo.width = 64;
-    fo.height = 48;
-    fo.lighting.light_samples = 1;
-    fo.lighting.environment_samples = 4;
-    fo.lighting.shadow_map_size = 256;
-    const realtime::RasterizedFrame frame = realtime::rasterize_frame(scene, fo);
-    const realtime::LitFrame lit = realtime::light_frame(scene, frame, fo);
-    const realtime::LitFrame back = runner::light_back_frame(scene, fo);
-    ASSERT_EQ(frame.media_in_view.size(), 1u);
-    const int m = frame.media_in_view[0];
-    RadialProfile prof = testing::analytic_profile(0.02, 400, 4.0);
-    prof.rsp = {0.02, 0.03, 0.04};
-    const std::map<int, RadialProfile> profiles = {{m, prof}};
-    const std::map<int, realtime::FrameMaterial> materials = {
-        {m, realtime::make_frame_material(prof, approx::parse_model("svd:rank=1"), 17, false)}};
+    const SmallFrame sf(64, 48);
+    ASSERT_EQ(sf.frame.media_in_view.size(), 1u);
+    const realtime::LitFrame back = runner::light_back_frame(sf.scene, sf.fo);
     MunozOptions mo;
     mo.layers = 4;
-    const runner::MunozFrame mf =
-        runner::render_munoz_frame(scene, frame, lit, back, materials, profiles, mo, fo);
+    const runner::MunozFrame mf = runner::render_munoz_frame(sf.scene, sf.frame, sf.lit, back,
+                                                             sf.materials, sf.profiles, mo, sf.fo);
     EXPECT_GT(mf.stats.convolutions, 0);
 
-    const realtime::GBuffer& fg = lit.gbuffer;
+    const realtime::GBuffer& fg = sf.lit.gbuffer;
     const realtime::GBuffer& bg = back.gbuffer;
     const size_t n = fg.view_z.size();
-    MunozView v = empty_view(fg.width, fg.height, 0, 2 * frame.camera.tan_half / fg.height);
+    MunozView v = empty_view(fg.width, fg.height, 0, 2 * sf.frame.camera.tan_half / fg.height);
     size_t medium = 0, with_back = 0;
     for (size_t i = 0; i < n; ++i) {
-        if (fg.material[i] != m) continue;
+        if (fg.material[i] != sf.m) continue;
         ++medium;
-        v.front_z[i] = static_cast<float>(fg.view_z[i] * scene.unit_mm);
+        v.front_z[i] = static_cast<float>(fg.view_z[i] * sf.scene.unit_mm);
         for (int c = 0; c < 3; ++c) v.front_irradiance[c][i] = fg.irradiance[3 * i + c];
-        if (bg.material[i] != m) continue;
+        if (bg.material[i] != sf.m) continue;
         ++with_back;
         EXPECT_GT(bg.view_z[i], fg.view_z[i]) << i;
-        v.back_z[i] = static_cast<float>(bg.view_z[i] * scene.unit_mm);
+        v.back_z[i] = static_cast<float>(bg.view_z[i] * sf.scene.unit_mm);
         for (int c = 0; c < 3; ++c) v.back_irradiance[c][i] = bg.irradiance[3 * i + c];
     }
     // A closed medium: every ray that enters it leaves it.
     EXPECT_GT(medium, 300u);
     EXPECT_GT(static_cast<double>(with_back), 0.98 * static_cast<double>(medium));
-    const RadialFunction per_incident = RadialFunction::from_profile(prof);
+    const RadialFunction per_incident = RadialFunction::from_profile(sf.prof);
     const RadialFunction rd([&](double r) {
         auto x = per_incident(r);
-        for (int c = 0; c < 3; ++c) x[c] /= 1 - prof.rsp[c];
+        for (int c = 0; c < 3; ++c) x[c] /= 1 - sf.prof.rsp[c];
         return x;
     });
     const MunozResult r = munoz_exitance(v, rd, mo);
@@ -387,7 +404,7 @@ TEST(MunozFrame, TheSubsurfaceLayerIsTheExitWeightTimesTheLayeredExitance) {
     double worst = 0, peak = 0;
     for (size_t i = 0; i < n; ++i)
         for (int c = 0; c < 3; ++c) {
-            const double want = fg.material[i] == m ? fg.exit_weight[i] * r.exitance[c][i] : 0.0;
+            const double want = fg.material[i] == sf.m ? fg.exit_weight[i] * r.exitance[c][i] : 0.0;
             peak = std::max(peak, want);
             worst = std::max(worst, std::fabs(sub.pixels()[3 * i + c] - want));
         }
@@ -401,27 +418,13 @@ TEST(MunozFrame, TheSubsurfaceLayerIsTheExitWeightTimesTheLayeredExitance) {
 // pass 1 lights (realtime::boundary_irradiance, tested in test_lighting); a positive threshold
 // stays within a few per cent of it; an analytic profile is integrated in the same frame.
 TEST(JensenBuhlerFrame, TheSubsurfaceLayerIsTheExitWeightTimesTheBruteForceSum) {
-    const Scene scene = read_scene(testing::source_path("experiments/scenes/wholemilk.toml"));
-    realtime::FrameOptions fo;
-    fo.width = 48;
-    fo.height = 36;
-    fo.lighting.light_samples = 1;
-    fo.lighting.environment_samples = 4;
-    fo.lighting.shadow_map_size = 256;
-    const realtime::RasterizedFrame frame = realtime::rasterize_frame(scene, fo);
-    const realtime::LitFrame lit = realtime::light_frame(scene, frame, fo);
-    ASSERT_EQ(frame.media_in_view.size(), 1u);
-    const int m = frame.media_in_view[0];
-    RadialProfile prof = testing::analytic_profile(0.02, 400, 4.0);
-    prof.rsp = {0.02, 0.03, 0.04};
-    const std::map<int, RadialProfile> profiles = {{m, prof}};
-    const std::map<int, realtime::FrameMaterial> materials = {
-        {m, realtime::make_frame_material(prof, approx::parse_model("svd:rank=1"), 17, false)}};
+    const SmallFrame sf(48, 36);
+    ASSERT_EQ(sf.frame.media_in_view.size(), 1u);
     JensenBuhlerOptions jo = parse_jensen_buhler("density=1,threshold=0");
     const runner::JensenBuhlerCloud cloud =
-        runner::build_jensen_buhler_cloud(scene, frame.media_in_view, jo, fo, 1);
+        runner::build_jensen_buhler_cloud(sf.scene, sf.frame.media_in_view, jo, sf.fo, 1);
     ASSERT_EQ(cloud.trees.size(), 1u);
-    const PointOctree& tree = cloud.trees.at(m);
+    const PointOctree& tree = cloud.trees.at(sf.m);
     EXPECT_EQ(cloud.points, tree.points().size());
     size_t lit_points = 0;
     for (const SurfacePoint& p : tree.points()) lit_points += p.irradiance[0] > 0;
@@ -429,19 +432,19 @@ TEST(JensenBuhlerFrame, TheSubsurfaceLayerIsTheExitWeightTimesTheBruteForceSum) 
     EXPECT_GT(3 * lit_points, tree.points().size());
     EXPECT_LT(lit_points, tree.points().size());
 
-    const runner::JensenBuhlerFrame f0 =
-        runner::render_jensen_buhler_frame(scene, frame, lit, materials, profiles, cloud, jo, fo);
+    const runner::JensenBuhlerFrame f0 = runner::render_jensen_buhler_frame(
+        sf.scene, sf.frame, sf.lit, sf.materials, sf.profiles, cloud, jo, sf.fo);
     jo.max_solid_angle = 0.05;
-    const runner::JensenBuhlerFrame f1 =
-        runner::render_jensen_buhler_frame(scene, frame, lit, materials, profiles, cloud, jo, fo);
+    const runner::JensenBuhlerFrame f1 = runner::render_jensen_buhler_frame(
+        sf.scene, sf.frame, sf.lit, sf.materials, sf.profiles, cloud, jo, sf.fo);
     EXPECT_EQ(f0.stats.clusters, 0u);
     EXPECT_GT(f1.stats.clusters, 0u);
     EXPECT_LT(f1.stats.points, f0.stats.points);
 
-    const RadialFunction rd = runner::per_entered(prof);
-    const realtime::GBuffer& g = lit.gbuffer;
+    const RadialFunction rd = runner::per_entered(sf.prof);
+    const realtime::GBuffer& g = sf.lit.gbuffer;
     const realtime::RasterCamera cam =
-        realtime::RasterCamera::from_scene(scene.camera, g.width, g.height);
+        realtime::RasterCamera::from_scene(sf.scene.camera, g.width, g.height);
     const auto rays = cam.sample_rays(1);
     const ImageLayer& s0 = f0.frame.image.layer("subsurface");
     const ImageLayer& s1 = f1.frame.image.layer("subsurface");
@@ -451,12 +454,12 @@ TEST(JensenBuhlerFrame, TheSubsurfaceLayerIsTheExitWeightTimesTheBruteForceSum) 
         for (int x = 0; x < g.width; ++x) {
             const size_t i = static_cast<size_t>(y * g.width + x);
             std::array<double, 3> want{};
-            if (g.material[i] == m) {
+            if (g.material[i] == sf.m) {
                 ++medium;
                 const Vec3 p =
                     (cam.position + rays.unnormalized(x, y) *
                                         static_cast<double>(static_cast<float>(g.view_z[i]))) *
-                    scene.unit_mm;
+                    sf.scene.unit_mm;
                 want = tree.brute_force(rd, p);
                 for (double& v : want) v *= g.exit_weight[i];
             }
@@ -467,7 +470,7 @@ TEST(JensenBuhlerFrame, TheSubsurfaceLayerIsTheExitWeightTimesTheBruteForceSum) 
             }
         }
     std::printf(
-        "  [measured] %zu points (%zu lit), %zu medium pixels: threshold 0 within %.2e of "
+        "  [measured] %zu points (%zu sf.lit), %zu medium pixels: threshold 0 within %.2e of "
         "the peak, threshold 0.05 within %.2e\n",
         tree.points().size(), lit_points, medium, worst / peak, worst1 / peak);
     EXPECT_GT(medium, 200u);
@@ -477,8 +480,8 @@ TEST(JensenBuhlerFrame, TheSubsurfaceLayerIsTheExitWeightTimesTheBruteForceSum) 
 
     // The dipole for the material's coefficients through the same cloud: finite, positive.
     jo.profile = "dipole";
-    const runner::JensenBuhlerFrame fd =
-        runner::render_jensen_buhler_frame(scene, frame, lit, materials, profiles, cloud, jo, fo);
+    const runner::JensenBuhlerFrame fd = runner::render_jensen_buhler_frame(
+        sf.scene, sf.frame, sf.lit, sf.materials, sf.profiles, cloud, jo, sf.fo);
     double sum = 0;
     for (float v : fd.frame.image.layer("subsurface").pixels()) {
         ASSERT_TRUE(std::isfinite(v));

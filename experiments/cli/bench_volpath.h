@@ -52,10 +52,13 @@ namespace ssslab::cli {
 /// (those whose name contains `only`) at width x height, 1 thread and `threads`, fastest of
 /// `repeat`, against a streaming floor; the table on stdout, and a CSV (+ .toml) when `csv`.
 /// backend "gl": also the passes the GL twin has, on `platform` (auto, osmesa, egl), timed in the
-/// same run and checked against the CPU's results.
+/// same run and checked against the CPU's results. integrations: also Munoz11's layered
+/// convolution (4 layers; 4 layers with t = 0.1 % and layers at 50 %, the paper's optimised
+/// setting) and Jensen-Buhler (4 points per mm^2, threshold 0.03 sr: the lit cloud and the
+/// queries) in place of the SSS pass, all threads, each scene with its lights.
 int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, int width,
                        int height, int repeat, const std::string& only, const std::string& csv,
                        const std::string& backend = "software",
-                       const std::string& platform = "auto");
+                       const std::string& platform = "auto", bool integrations = false);
 
 }  // namespace ssslab::cli

@@ -11,7 +11,9 @@
 // frame's own inputs: their draws timed glFinish to glFinish and by GL_TIME_ELAPSED, the whole
 // call (uploads, read-back) by the wall clock, and their result compared with the CPU pass's;
 // then the whole frame through the GL backend hooks.
+#include "approx/hierarchical.h"
 #include "approx/model_spec.h"
+#include "approx/munoz.h"
 #include "core/atomic_file.h"
 #include "core/build_info.h"
 #include "core/config.h"
@@ -22,6 +24,7 @@
 #include "experiments/cli/bench_volpath.h"
 #include "experiments/cli/common.h"
 #include "experiments/runner/realtime_inputs.h"
+#include "experiments/runner/surface_frames.h"
 #include "realtime/frame.h"
 #include "realtime/sss_pass.h"
 #if SSSLAB_HAVE_GL
@@ -228,9 +231,47 @@ void bench_gl(realtime::gl::GlFrameBackend& gl, const Scene& s, const realtime::
 
 }  // namespace
 
+// Munoz11 and Jensen-Buhler in place of the SSS pass (experiments/runner/surface_frames.h), on
+// the frame's inputs, in the calling arena: the pass's own seconds (Munoz11's layered
+// convolution; Jensen-Buhler's cloud with its lighting and octree, and its queries apart).
+size_t bench_integrations(const Scene& s, const realtime::RasterizedFrame& f,
+                          const realtime::LitFrame& lit,
+                          const std::map<int, realtime::FrameMaterial>& materials,
+                          const std::map<int, RadialProfile>& profiles,
+                          const realtime::FrameOptions& fo, int repeat, int threads,
+                          const std::string& label, std::vector<Row>& rows) {
+    const realtime::LitFrame back = runner::light_back_frame(s, fo);
+    const std::pair<const char*, const char*> variants[] = {
+        {"layers=4", "munoz l4"}, {"layers=4,t=0.001,downsample=2", "munoz l4 t.001 d2"}};
+    for (const auto& [text, name] : variants) {
+        const approx::MunozOptions mo = approx::parse_munoz(text);
+        double best = 1e300;
+        for (int k = 0; k < repeat; ++k)
+            best = std::min(best,
+                            runner::render_munoz_frame(s, f, lit, back, materials, profiles, mo, fo)
+                                .stats.seconds);
+        rows.push_back({label, threads, name, best * 1e3, -1});
+    }
+    const approx::JensenBuhlerOptions jo = approx::parse_jensen_buhler("density=4,threshold=0.03");
+    double cloud = 1e300, queries = 1e300;
+    size_t points = 0;
+    for (int k = 0; k < repeat; ++k) {
+        const runner::JensenBuhlerCloud c =
+            runner::build_jensen_buhler_cloud(s, f.media_in_view, jo, fo, 1);
+        cloud = std::min(cloud, c.seconds());
+        points = c.points;
+        queries = std::min(
+            queries, runner::render_jensen_buhler_frame(s, f, lit, materials, profiles, c, jo, fo)
+                         .query_seconds);
+    }
+    rows.push_back({label, threads, "jb d4 cloud", cloud * 1e3, -1});
+    rows.push_back({label, threads, "jb d4 t.03 queries", queries * 1e3, -1});
+    return points;
+}
+
 int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, int width,
                        int height, int repeat, const std::string& only, const std::string& csv,
-                       const std::string& backend, const std::string& platform) {
+                       const std::string& backend, const std::string& platform, bool integrations) {
     const std::vector<std::filesystem::path> files = list_scenes(scenes_dir, only);
 #if SSSLAB_HAVE_GL
     std::unique_ptr<realtime::gl::GlContext> gl_context;
@@ -284,6 +325,7 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
             for (const auto& [m, p] : in.profiles)
                 materials[m] = realtime::make_frame_material(p, model, kTaps, false);
             int maps = 0;
+            size_t jb_points = 0;
             for (int t : counts) {
                 const size_t first = rows.size();
                 tbb::task_arena arena(t);
@@ -332,6 +374,9 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
                     rows.push_back({label, t, "sss", sss, floor * 1e3});
                     rows.push_back({label, t, "composite", composite, -1});
                     rows.push_back({label, t, "frame", frame * 1e3, -1});
+                    if (integrations && variant == 0 && t == counts.back())
+                        jb_points = bench_integrations(s, f, lit, materials, in.profiles, fo,
+                                                       repeat, t, label, rows);
 #if SSSLAB_HAVE_GL
                     if (gl && t == counts.back())
                         bench_gl(*gl, s, f, lit, materials, fo, repeat, floor * 1e3, label, rows);
@@ -356,6 +401,7 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
                 "map%s\n",
                 "", triangles, materials.size(), materials.size() == 1 ? "" : "s", s.lights.size(),
                 s.lights.size() == 1 ? "" : "s", maps, maps == 1 ? "" : "s");
+            if (jb_points > 0) std::printf("%-18s jb: %zu points in the cloud\n", "", jb_points);
         }
     }
     std::printf(
@@ -364,6 +410,15 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
         "(the radiance layer only); frame: all of them in sequence. floor_ms: a parallel loop "
         "streaming the bytes the SSS "
         "pass reads and writes (2 x (20 B in, 12 B out) per pixel); ratio = ms / floor_ms.\n");
+    if (integrations)
+        std::printf(
+            "munoz l4: Munoz11's layered convolution (approx/munoz.h) of the media's front and "
+            "back samples in place of the sss pass, 4 layers; munoz l4 t.001 d2: with Eq. 8's "
+            "t = 0.1 %% and layers at 50 %% (the paper: 7 s and about 2 s on average at 800 x 600, "
+            "an Intel i7 at 2.66 GHz, 2011); jb d4 cloud: Jensen-Buhler's Poisson-disk points "
+            "(4 per mm^2) on the media, lit by pass 1's lights and shadow maps, and their "
+            "octree; jb d4 t.03 queries: the hierarchical sum at every medium pixel, threshold "
+            "0.03 sr. All threads, each scene with its lights only.\n");
     if (backend == "gl")
         std::printf(
             "threads gl: the GL twin (its platform's own threads; llvmpipe: LP_NUM_THREADS, "
