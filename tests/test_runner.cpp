@@ -995,6 +995,26 @@ TEST(RunnerRender, ScenesAreRenderedCachedAndReportedWithTheirSpeed) {
     const std::string conv = testing::read_text(out / "tiny_convergence.csv");
     EXPECT_NE(conv.find("\n12,"), std::string::npos) << conv;
     EXPECT_NE(conv.find("\n24,"), std::string::npos) << conv;
+    // The final image against the reference (volpath::measured_error): the image RMS, the one
+    // the convergence table ends with, and the measured median pixel with its time to 1 %.
+    auto cells = [](const std::string& line) {
+        std::vector<std::string> c;
+        std::istringstream in(line);
+        for (std::string x; std::getline(in, x, ',');) c.push_back(x);
+        return c;
+    };
+    const auto h = cells(header), v = cells(row);
+    ASSERT_EQ(h.size(), v.size()) << header << "\n" << row;
+    auto at = [&](const char* name) {
+        const auto i = std::find(h.begin(), h.end(), name);
+        EXPECT_NE(i, h.end()) << name;
+        return i == h.end() ? std::string() : v[static_cast<size_t>(i - h.begin())];
+    };
+    const std::string last = conv.substr(conv.find("\n24,") + 1);
+    EXPECT_EQ(cells(last.substr(0, last.find('\n')))[2], at("rel_rmse_vs_reference")) << conv;
+    EXPECT_GT(std::stod(at("median_pixel_measured")), 0);
+    EXPECT_GT(std::stod(at("z2_median_ratio")), 0);
+    EXPECT_GT(std::stod(at("t_1pct_median_pixel_from_reference_s")), 0);
     const std::string metrics = testing::read_text(dir / "results" / "renders" / "metrics.csv");
     EXPECT_NE(metrics.find("tiny.G.radiance_mean"), std::string::npos) << metrics;
     EXPECT_NE(metrics.find("tiny.B.subsurface_mean"), std::string::npos) << metrics;

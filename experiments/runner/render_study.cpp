@@ -258,7 +258,8 @@ RenderStudyResult run_render_study(const RenderStudySpec& spec, const RenderStud
     summary << "scene,width,height,spp,seconds,threads,rays,mrays_per_s,paths_per_s,mean_R,se_R,"
                "mean_G,se_G,mean_B,se_B,image_rel_se,median_pixel_rel_se,t_1pct_image_s,"
                "t_1pct_median_pixel_s,reference_spp,rel_rmse_vs_reference,reference_rel_se,"
-               "rel_rmse_corrected,t_1pct_from_reference_s\n";
+               "rel_rmse_corrected,t_1pct_from_reference_s,median_pixel_measured,"
+               "z2_median_ratio,t_1pct_median_pixel_from_reference_s\n";
     html << "<h2 id=\"render\">Ground-truth images</h2>\n<p>The volumetric path tracer "
          << esc(volpath::render_engine_version())
          << " on each scene. Times to 1 % are extrapolations t (e / 0.01)<sup>2</sup> from the "
@@ -359,9 +360,12 @@ RenderStudyResult run_render_study(const RenderStudySpec& spec, const RenderStud
             << fmt(t_1pct(R.seconds, image_rel_se)) << "," << fmt(t_1pct(R.seconds, median_rel_se));
         std::string conv = "spp,seconds,rel_rmse,rel_rmse_corrected\n";
         if (done.size() > 1) {
+            // The final image against the reference: volpath::measured_error (the image RMS
+            // and the median pixel, the reference's noise taken out); the snapshots, which
+            // hold no standard errors, by their RMS difference with the same correction.
             const Rendered& F = done[1];
-            double ref_rel_se = 0, ref_med = 0;
-            own_error(F.image, ref_rel_se, ref_med);
+            const volpath::MeasuredError me = volpath::measured_error(R.image, F.image);
+            const double ref_rel_se = me.reference.rms;
             const ImageLayer& RL = F.image.layer("radiance");
             auto corrected = [&](double e) {
                 return std::sqrt(std::max(0.0, e * e - ref_rel_se * ref_rel_se));
@@ -371,14 +375,15 @@ RenderStudyResult run_render_study(const RenderStudySpec& spec, const RenderStud
                 conv += std::to_string(spp) + "," + fmt(secs) + "," + fmt(e) + "," +
                         fmt(corrected(e)) + "\n";
             }
-            const double e = rel_rms(L, RL);
-            conv += std::to_string(R.spp) + "," + fmt(R.seconds) + "," + fmt(e) + "," +
-                    fmt(corrected(e)) + "\n";
-            row << "," << F.spp << "," << fmt(e) << "," << fmt(ref_rel_se) << ","
-                << fmt(corrected(e)) << "," << fmt(t_1pct(R.seconds, corrected(e)));
+            conv += std::to_string(R.spp) + "," + fmt(R.seconds) + "," + fmt(me.rel_rmse) + "," +
+                    fmt(me.rel_rmse_corrected) + "\n";
+            row << "," << F.spp << "," << fmt(me.rel_rmse) << "," << fmt(ref_rel_se) << ","
+                << fmt(me.rel_rmse_corrected) << ","
+                << fmt(t_1pct(R.seconds, me.rel_rmse_corrected)) << "," << fmt(me.median_pixel)
+                << "," << fmt(me.z2_median_ratio) << "," << fmt(t_1pct(R.seconds, me.median_pixel));
             write_file_atomic(stage / "render" / (scene.name + "_convergence.csv"), conv);
         } else {
-            row << ",,,,,";
+            row << ",,,,,,,,";
         }
         summary << row.str() << "\n";
         table_rows += "<tr><td>" + esc(scene.name) + "</td><td>" + std::to_string(w) + " x " +
