@@ -233,6 +233,47 @@ TEST(Munoz, AConstantIrradianceOnALargeFlatMediumConvergesToTheTotalDiffuseRefle
     }
 }
 
+// What the paper's split costs [Munoz11 §4.2: "equally distributed between the corresponding
+// pixels of the two closest layers (half of the irradiance to each of them)"]: a flat medium
+// under constant light with two layers 60 mm apart (two dark patches set the depth range) keeps
+// half its light wherever it lies, the other half reaching it only through the kernel across
+// 60 mm (nothing); split=linear keeps it all on a layer and (1 - s)^2 + s^2 of it at s between
+// them. Where the layers are far apart against the mean free path, the equal split halves the
+// exitance; the point-sampled kernels' overestimate at coarse pixels can hide that.
+TEST(Munoz, TheEqualSplitHalvesTheLightOfAMediumBetweenFarLayers) {
+    const auto m = media();
+    const RadialFunction rd = RadialFunction::from_diffusion(m);
+    const int size = 201;
+    const double pixel = 100.0 / size;
+    const size_t centre = static_cast<size_t>(size / 2) * size + size / 2;
+    for (const double z : {20.0, 35.0, 50.0}) {
+        MunozView v = empty_view(size, size, pixel, 0);
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x) {
+                const size_t i = static_cast<size_t>(y) * size + x;
+                const bool patch = x < 2 && y < 2;  // dark, at depth 20 and 80
+                v.front_z[i] = static_cast<float>(patch ? (x == 0 ? 20.0 : 80.0) : z);
+                for (int c = 0; c < 3; ++c) v.front_irradiance[c][i] = patch ? 0.0f : 1.0f;
+            }
+        for (const MunozSplit split : {MunozSplit::equal, MunozSplit::linear}) {
+            MunozOptions o;
+            o.layers = 2;
+            o.kernel = MunozKernel::pixel_average;
+            o.split = split;
+            const MunozResult r = munoz_exitance(v, rd, o);
+            const double s = (z - 20.0) / 60.0;
+            const double kept = split == MunozSplit::equal ? 0.5 : (1 - s) * (1 - s) + s * s;
+            for (int c = 0; c < 3; ++c) {
+                const double ratio = r.exitance[c][centre] / m[c]->total_rd();
+                std::printf(
+                    "  z %.0f mm, %s split, channel %d: M / (E R_dr) %.4f (expected %.4f)\n", z,
+                    split == MunozSplit::equal ? "equal" : "linear", c, ratio, kept);
+                EXPECT_NEAR(ratio, kept, 5e-3) << z << " " << c;
+            }
+        }
+    }
+}
+
 TEST(Munoz, TheThresholdDropsFarLayersAndDownsamplingKeepsThePower) {
     const RadialFunction rd = RadialFunction::from_diffusion(media());
     MunozView v = empty_view(40, 40, 0.25, 0);

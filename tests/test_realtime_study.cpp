@@ -213,6 +213,13 @@ TEST_F(RealtimeStudy, JensenBuhlerVariantsAndTheTableOfEveryApproximation) {
         "jensen_buhler:density=2,threshold=0,bound=box,profile=mc,candidates=5",
         "jensen_buhler:density=2,threshold=0.1,bound=centre,profile=dipole,candidates=5"};
     EXPECT_EQ(methods, want);
+    // The relative bias of the total light: 0 for the reference against itself; against the
+    // path tracer with a positive standard error.
+    EXPECT_EQ(std::stod(a[1][column(ah, "bias_vs_reference")]), 0.0);
+    for (size_t i = 1; i < a.size(); ++i) {
+        EXPECT_TRUE(std::isfinite(std::stod(a[i][column(ah, "bias_vs_volpath")])));
+        EXPECT_GT(std::stod(a[i][column(ah, "bias_vs_volpath_se")]), 0) << methods[i - 1];
+    }
 }
 
 // Error against the SSS pass time as a figure per scene (scripts/plot.py, "error_vs_time"), in

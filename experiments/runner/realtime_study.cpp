@@ -99,12 +99,19 @@ const std::vector<ThesisRow>& thesis_table_6_4() {
 }
 
 /// One frame's scores against the references, per channel.
+/// The relative bias of a's layer against b's over the mask, RGB together: sum (a - b) / sum b
+/// (how much light a has too much or too little), with its standard error from b's noise by the
+/// delta method (a is taken as exact: a frame of the real-time renderer).
+struct RelativeBias {
+    double value = 0, se = 0;
+};
 struct Score {
     std::string model, label;
     int taps = 0;
     double jitter = 0;
     bool rotate = false;
     std::array<NoiseCorrectedRms, 3> vs_reference{}, vs_volpath{};
+    RelativeBias bias_vs_reference, bias_vs_volpath;  ///< computed for approximations.csv
     double sss_ms = 0, frame_ms = 0, build_s = 0;
 };
 
@@ -133,6 +140,24 @@ NoiseCorrectedRms score(const LayeredImage& a, const std::string& la, const Laye
     masked(a, la, mask, c, x, vx);
     masked(b, lb, mask, c, y, vy);
     return noise_corrected_rms(x, vx, y, vy, dof_b);
+}
+
+/// RelativeBias of a's layer against b's over the mask.
+RelativeBias relative_bias(const LayeredImage& a, const std::string& la, const LayeredImage& b,
+                           const std::string& lb, const std::vector<size_t>& mask) {
+    double sa = 0, sb = 0, vb = 0;
+    std::vector<double> x, vx, y, vy;
+    for (int c = 0; c < 3; ++c) {
+        masked(a, la, mask, c, x, vx);
+        masked(b, lb, mask, c, y, vy);
+        for (size_t k = 0; k < x.size(); ++k) {
+            sa += x[k];
+            sb += y[k];
+            if (!vy.empty()) vb += vy[k];
+        }
+    }
+    if (!(sb > 0)) return {};
+    return {sa / sb - 1, sa / (sb * sb) * std::sqrt(vb)};
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -296,7 +321,8 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
           "profile,rms_vs_reference,rms_vs_reference_se,query_seconds,cloud_seconds,"
           "light_seconds,nodes_visited,clusters,point_terms\n";
     approximations << "scene,method,rms_vs_volpath,rms_vs_volpath_se,seconds,family,"
-                      "rms_vs_reference,rms_vs_reference_se\n";
+                      "rms_vs_reference,rms_vs_reference_se,bias_vs_volpath,bias_vs_volpath_se,"
+                      "bias_vs_reference\n";
     decomposition << "scene,channel,pixels,reference_signal_rms,separability_model,separability,"
                      "screen_space,screen_space_se,specular,specular_se,surfaces,surfaces_se,total,"
                      "total_se\n";
@@ -465,6 +491,10 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                 sc.vs_volpath[static_cast<size_t>(c)] =
                     score(f.image, "subsurface", vp->image, "subsurface", mask, c, vp_dof);
             }
+            sc.bias_vs_reference =
+                relative_bias(f.image, "subsurface", ref.image, "subsurface", mask);
+            sc.bias_vs_volpath =
+                relative_bias(f.image, "subsurface", vp->image, "subsurface", mask);
             for (const auto& p : f.times)
                 if (p.pass == "sss") sc.sss_ms = p.ms;
             sc.frame_ms = f.total_ms();
@@ -503,7 +533,9 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
             const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
             approximations << scene.name << "," << csv_field(method) << "," << fmt(vp_rgb.rms)
                            << "," << fmt(vp_rgb.rms_se) << "," << fmt(seconds) << "," << family
-                           << "," << fmt(ref_rgb.rms) << "," << fmt(ref_rgb.rms_se) << "\n";
+                           << "," << fmt(ref_rgb.rms) << "," << fmt(ref_rgb.rms_se) << ","
+                           << fmt(sc.bias_vs_volpath.value) << "," << fmt(sc.bias_vs_volpath.se)
+                           << "," << fmt(sc.bias_vs_reference.value) << "\n";
         };
         {
             Score sc;
