@@ -85,6 +85,10 @@ LayerPos layer_of(double z, double z_min, double dz, int layers) {
 
 }  // namespace
 
+const char* split_name(MunozSplit s) {
+    return s == MunozSplit::equal ? "equal" : s == MunozSplit::linear ? "linear" : "nearest";
+}
+
 MunozOptions parse_munoz(const std::string& spec) {
     MunozOptions o;
     const OptionList list("munoz", spec);
@@ -95,8 +99,10 @@ MunozOptions parse_munoz(const std::string& spec) {
             o.threshold = list.number(key, v);
         else if (key == "downsample")
             o.downsample = list.whole(key, v);
-        else if (key == "split" && (v == "equal" || v == "linear"))
-            o.split = v == "equal" ? MunozSplit::equal : MunozSplit::linear;
+        else if (key == "split" && (v == "equal" || v == "linear" || v == "nearest"))
+            o.split = v == "equal"    ? MunozSplit::equal
+                      : v == "linear" ? MunozSplit::linear
+                                      : MunozSplit::nearest;
         else if (key == "visible" && (v == "skip" || v == "all"))
             o.skip_invisible = v == "skip";
         else if (key == "kernel" && (v == "point" || v == "average"))
@@ -115,8 +121,7 @@ MunozOptions parse_munoz(const std::string& spec) {
 std::string munoz_label(const MunozOptions& o) {
     std::ostringstream s;
     s << "layers=" << o.layers << ",t=" << o.threshold << ",downsample=" << o.downsample
-      << ",split=" << (o.split == MunozSplit::equal ? "equal" : "linear")
-      << ",visible=" << (o.skip_invisible ? "skip" : "all")
+      << ",split=" << split_name(o.split) << ",visible=" << (o.skip_invisible ? "skip" : "all")
       << ",kernel=" << (o.kernel == MunozKernel::point ? "point" : "average");
     return s.str();
 }
@@ -155,7 +160,9 @@ MunozResult munoz_exitance(const MunozView& v, const RadialFunction& rd, const M
         const LayerPos p = layer_of(z, z_min, dz, nl);
         double w0 = 1, w1 = 0;
         if (nl > 1 && dz > 0) {
-            w1 = o.split == MunozSplit::equal ? 0.5 : p.s;
+            w1 = o.split == MunozSplit::equal    ? 0.5
+                 : o.split == MunozSplit::linear ? p.s
+                                                 : (p.s >= 0.5 ? 1.0 : 0.0);
             w0 = 1 - w1;
         }
         const size_t x = i % static_cast<size_t>(w), y = i / static_cast<size_t>(w);
@@ -305,7 +312,9 @@ MunozResult munoz_exitance(const MunozView& v, const RadialFunction& rd, const M
         if (!std::isfinite(v.front_z[i])) continue;
         const int x = static_cast<int>(i % static_cast<size_t>(w));
         const int y = static_cast<int>(i / static_cast<size_t>(w));
-        const LayerPos p = layer_of(v.front_z[i], z_min, dz, nl);
+        LayerPos p = layer_of(v.front_z[i], z_min, dz, nl);
+        if (o.split == MunozSplit::nearest && p.s > 0)
+            p = p.s >= 0.5 ? LayerPos{p.l0 + 1, 0.0} : LayerPos{p.l0, 0.0};
         for (int c = 0; c < 3; ++c) {
             double val = (1 - p.s) * coarse(m[p.l0][c], x, y);
             if (p.s > 0) val += p.s * coarse(m[p.l0 + 1][c], x, y);

@@ -59,6 +59,10 @@ struct MunozView {
 enum class MunozSplit {
     equal,   ///< half to each of the two nearest layers [Munoz11 §4.2]
     linear,  ///< in proportion to the distance to each (the layers' linear interpolation)
+    /// all to the nearest layer, and Eq. 7 reads the nearest layer only: a medium between far
+    /// layers keeps its light (equal keeps half, linear (1 - s)^2 + s^2), at the price of depth
+    /// steps where the visible depth crosses a layer midpoint (not in the paper)
+    nearest,
 };
 
 enum class MunozKernel {
@@ -102,6 +106,8 @@ struct MunozResult {
 MunozOptions parse_munoz(const std::string& spec);
 /// The canonical text of a variant (every key), as parse_munoz reads it.
 std::string munoz_label(const MunozOptions& o);
+/// "equal", "linear", "nearest".
+const char* split_name(MunozSplit s);
 
 /// Throws std::invalid_argument naming the option or field for layers outside 1..16, a
 /// threshold outside [0, 1), downsample outside 1..8, layer maps of mismatched sizes, a

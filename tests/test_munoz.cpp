@@ -174,8 +174,7 @@ TEST(Munoz, LayersFrontAndBackAndPerspectiveFollowTheEquations) {
             std::printf(
                 "%s split, %d layers: worst difference %.2g of the peak, %lld "
                 "convolutions\n",
-                split == MunozSplit::equal ? "equal" : "linear", layers, err,
-                static_cast<long long>(r.stats.convolutions));
+                split_name(split), layers, err, static_cast<long long>(r.stats.convolutions));
             EXPECT_LT(err, 1e-6) << layers;
             EXPECT_EQ(r.stats.convolutions, 3 * layers * layers);
             // Skipping the layers no visible sample reads changes nothing.
@@ -238,8 +237,9 @@ TEST(Munoz, AConstantIrradianceOnALargeFlatMediumConvergesToTheTotalDiffuseRefle
 // under constant light with two layers 60 mm apart (two dark patches set the depth range) keeps
 // half its light wherever it lies, the other half reaching it only through the kernel across
 // 60 mm (nothing); split=linear keeps it all on a layer and (1 - s)^2 + s^2 of it at s between
-// them. Where the layers are far apart against the mean free path, the equal split halves the
-// exitance; the point-sampled kernels' overestimate at coarse pixels can hide that.
+// them; split=nearest (ours) keeps it all. Where the layers are far apart against the mean free
+// path, the equal split halves the exitance; the point-sampled kernels' overestimate at coarse
+// pixels can hide that.
 TEST(Munoz, TheEqualSplitHalvesTheLightOfAMediumBetweenFarLayers) {
     const auto m = media();
     const RadialFunction rd = RadialFunction::from_diffusion(m);
@@ -255,19 +255,22 @@ TEST(Munoz, TheEqualSplitHalvesTheLightOfAMediumBetweenFarLayers) {
                 v.front_z[i] = static_cast<float>(patch ? (x == 0 ? 20.0 : 80.0) : z);
                 for (int c = 0; c < 3; ++c) v.front_irradiance[c][i] = patch ? 0.0f : 1.0f;
             }
-        for (const MunozSplit split : {MunozSplit::equal, MunozSplit::linear}) {
+        for (const MunozSplit split :
+             {MunozSplit::equal, MunozSplit::linear, MunozSplit::nearest}) {
             MunozOptions o;
             o.layers = 2;
             o.kernel = MunozKernel::pixel_average;
             o.split = split;
             const MunozResult r = munoz_exitance(v, rd, o);
             const double s = (z - 20.0) / 60.0;
-            const double kept = split == MunozSplit::equal ? 0.5 : (1 - s) * (1 - s) + s * s;
+            const double kept = split == MunozSplit::equal    ? 0.5
+                                : split == MunozSplit::linear ? (1 - s) * (1 - s) + s * s
+                                                              : 1.0;
             for (int c = 0; c < 3; ++c) {
                 const double ratio = r.exitance[c][centre] / m[c]->total_rd();
                 std::printf(
                     "  z %.0f mm, %s split, channel %d: M / (E R_dr) %.4f (expected %.4f)\n", z,
-                    split == MunozSplit::equal ? "equal" : "linear", c, ratio, kept);
+                    split_name(split), c, ratio, kept);
                 EXPECT_NEAR(ratio, kept, 5e-3) << z << " " << c;
             }
         }
@@ -542,6 +545,9 @@ TEST(MunozSpec, NamesVariantsAndRefusesBadOnes) {
     EXPECT_EQ(munoz_label(parse_munoz("layers=4")),
               "layers=4,t=0,downsample=1,split=equal,visible=skip,kernel=point");
     EXPECT_EQ(parse_munoz("kernel=average").kernel, MunozKernel::pixel_average);
+    EXPECT_EQ(parse_munoz("split=nearest").split, MunozSplit::nearest);
+    EXPECT_EQ(munoz_label(parse_munoz("split=nearest")),
+              "layers=4,t=0,downsample=1,split=nearest,visible=skip,kernel=point");
     for (const char* bad :
          {"layers=0", "layers=17", "layers=2.5", "t=-1", "t=1", "t=x", "downsample=9", "split=odd",
           "kernel=cell", "colour=red", "layers", "layers=4,layers=5"})

@@ -597,18 +597,19 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                 std::replace(variant.begin(), variant.end(), ',', ' ');
                 munoz << scene.name << "," << variant << "," << mo.layers << ","
                       << fmt(mo.threshold) << "," << mo.downsample << ","
-                      << (mo.split == approx::MunozSplit::equal ? "equal" : "linear") << ","
-                      << fmt(ref_rgb.rms) << "," << fmt(ref_rgb.rms_se) << "," << fmt(vp_rgb.rms)
-                      << "," << fmt(vp_rgb.rms_se) << "," << fmt(mf.stats.seconds) << ","
-                      << mf.stats.convolutions << "," << mf.stats.skipped_threshold << ","
-                      << mf.stats.skipped_invisible << ","
+                      << approx::split_name(mo.split) << "," << fmt(ref_rgb.rms) << ","
+                      << fmt(ref_rgb.rms_se) << "," << fmt(vp_rgb.rms) << "," << fmt(vp_rgb.rms_se)
+                      << "," << fmt(mf.stats.seconds) << "," << mf.stats.convolutions << ","
+                      << mf.stats.skipped_threshold << "," << mf.stats.skipped_invisible << ","
                       << (mo.kernel == approx::MunozKernel::point ? "point" : "average") << ","
                       << (mo.skip_invisible ? "skip" : "all") << "\n";
                 // Under regression like the models: scene.munoz_l<layers>_t<t>_d<downsample>
                 // [_linear][_all][_avg].rms_vs_volpath, the RGB error.
                 const std::string id = "munoz_l" + std::to_string(mo.layers) + "_t" +
                                        fmt(mo.threshold) + "_d" + std::to_string(mo.downsample) +
-                                       (mo.split == approx::MunozSplit::linear ? "_linear" : "") +
+                                       (mo.split == approx::MunozSplit::equal
+                                            ? std::string()
+                                            : std::string("_") + approx::split_name(mo.split)) +
                                        (mo.skip_invisible ? "" : "_all") +
                                        (mo.kernel == approx::MunozKernel::point ? "" : "_avg");
                 metrics.push_back({scene.name + "." + metric_label(id) + ".rms_vs_volpath", "1",
