@@ -9,13 +9,23 @@
 
 namespace ssslab {
 
-/// Write `content` to `path` through a temporary file and an atomic rename. Creates the parent
-/// directory if needed. Throws IoError.
+/// Write `content` to `path` through a temporary file (<path>.tmp.<pid>) and an atomic rename.
+/// Creates the parent directory if needed; removes temporaries of `path` left by killed
+/// processes. Throws IoError.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
+
+/// Whether the process that made `temporary` (a name ending in its pid: <file>.tmp.<pid>,
+/// <dir>.tmp-<pid>, <dir>.old-<pid>) is gone from this machine, so the temporary is litter of a
+/// killed run. False for the calling process's own and for names without a pid.
+bool owner_is_gone(const std::filesystem::path& temporary);
 
 /// Several files that appear together or not at all: each is staged under a temporary name and
 /// all are renamed by commit(). If the transaction is destroyed without commit() (an exception,
-/// an error found late), the staged files are removed and no output is left behind.
+/// an error found late), the staged files are removed and no output is left behind. A SIGKILL
+/// between two of commit()'s renames (no process can rename several files as one) leaves the
+/// first files complete and the rest absent (or as they were): the commands remove their
+/// checkpoint only after commit(), so running the same command again writes the whole set
+/// (tests/test_kill.cpp).
 class OutputTransaction {
   public:
     OutputTransaction() = default;

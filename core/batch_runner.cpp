@@ -129,6 +129,17 @@ const char* to_string(BatchStop s, const char* samples_word) {
     return "?";
 }
 
+std::string run_checkpoint_path(const std::string& prefix, const std::string& run) {
+    return prefix + "." + run + ".ckpt";
+}
+
+void remove_checkpoints(const std::string& prefix) {
+    std::error_code ec;
+    std::filesystem::remove(prefix + ".ckpt", ec);
+    for (const char* run : {"R", "G", "B", "hero"})
+        std::filesystem::remove(run_checkpoint_path(prefix, run), ec);
+}
+
 std::optional<std::string> batch_checkpoint_fingerprint(const std::string& path) {
     if (auto ck = load_checkpoint(path)) return std::move(ck->fingerprint);
     return std::nullopt;
@@ -200,8 +211,34 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
     const auto t0 = Clock::now();
     auto last_checkpoint = t0;
     std::uint64_t next = acc.batches();
-    std::atomic<bool> stop_flag{next >= max_batches};
+    const std::uint64_t batches_at_start = next;
+    std::atomic<bool> stop_flag{false};
     res.reason = BatchStop::kSamples;
+
+    // Whether the budget is met after `nb` batches with progress `p`: sets the reason.
+    auto budget_met = [&](std::uint64_t nb, const BatchProgress& p) {
+        if (nb >= max_batches) {
+            res.reason = BatchStop::kSamples;
+            return true;
+        }
+        if (b.seconds && p.seconds >= *b.seconds) {
+            res.reason = BatchStop::kTime;
+            return true;
+        }
+        if (b.rel_error && nb >= static_cast<std::uint64_t>(opt.min_batches_for_error) &&
+            p.value != 0 && p.se <= *b.rel_error * std::abs(p.value)) {
+            res.reason = BatchStop::kRelError;
+            return true;
+        }
+        return false;
+    };
+    // A checkpoint of a run that had finished (kept until its caller stored the result) or
+    // that already holds the budget: nothing more to run, the result is the checkpoint's.
+    if (res.resumed) {
+        BatchProgress at{acc.samples(), resumed_seconds, 0.0, 0.0};
+        if (opt.quantity && acc.batches() > 0) opt.quantity(acc, at.value, at.se);
+        stop_flag = budget_met(acc.batches(), at);
+    }
 
     auto write_checkpoint = [&]() {
         Checkpoint ck;
@@ -228,15 +265,7 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
         if (opt.snapshots && nb >= 4 && (nb & (nb - 1)) == 0)
             res.snapshots.push_back({acc.samples(), nb, p.seconds, acc.means()});
         if (opt.on_batch) opt.on_batch(p);
-        if (nb >= max_batches) {
-            res.reason = BatchStop::kSamples;
-            stop_flag = true;
-        } else if (b.seconds && p.seconds >= *b.seconds) {
-            res.reason = BatchStop::kTime;
-            stop_flag = true;
-        } else if (b.rel_error && nb >= static_cast<std::uint64_t>(opt.min_batches_for_error) &&
-                   p.value != 0 && p.se <= *b.rel_error * std::abs(p.value)) {
-            res.reason = BatchStop::kRelError;
+        if (budget_met(nb, p)) {
             stop_flag = true;
         } else if (b.rel_error && !b.seconds && !b.samples && nb >= 10000 && p.value == 0) {
             throw InfeasibleError("a relative-error budget cannot be met: " + opt.quantity_name +
@@ -290,14 +319,11 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
     res.seconds = resumed_seconds + seconds_since(t0);
     const bool finished = stop_flag.load();
     if (!finished) res.reason = BatchStop::kInterrupted;
-    if (!opt.checkpoint_path.empty()) {
-        if (finished) {
-            std::error_code ec;
-            std::filesystem::remove(opt.checkpoint_path, ec);
-        } else {
-            write_checkpoint();
-        }
-    }
+    // Finished or not, the state is kept: a kill before the caller has stored the result must
+    // not lose the run. The caller removes the checkpoint after storing (remove_checkpoints).
+    if (!opt.checkpoint_path.empty() &&
+        !(res.resumed && finished && acc.batches() == batches_at_start))
+        write_checkpoint();
     res.samples = acc.samples();
     res.batches = acc.batches();
     res.mean = acc.means();

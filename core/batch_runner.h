@@ -74,7 +74,11 @@ struct BatchRunOptions {
     /// input, seed, batch size), best a ContentKey's text: a checkpoint is resumed only if its
     /// fingerprint matches, and a refusal names the items that differ (key_difference).
     std::string fingerprint;
-    std::string checkpoint_path;  ///< empty: no checkpoints
+    /// Empty: no checkpoints. A finished run leaves its checkpoint (the whole state, written at
+    /// the end): the caller removes it with remove_checkpoints once it has stored the result, so
+    /// that a kill between the two loses nothing; a rerun from a checkpoint that already holds
+    /// the budget runs no batch and returns the same result.
+    std::string checkpoint_path;
     /// Ignore (and in time overwrite) a checkpoint found at checkpoint_path: start afresh.
     bool fresh = false;
     /// Called once, before any batch runs, when the run continues from a checkpoint: the samples
@@ -133,6 +137,14 @@ struct BatchRunResult {
 /// checkpoint of another run (checkpoint_refusal's message), InfeasibleError when a relative-error
 /// budget alone cannot be met (the quantity stays 0 for 10000 batches).
 BatchRunResult run_batches(const BatchRunOptions& options, const BatchFunction& simulate);
+
+/// The checkpoint of run `run` ("R", "G", "B", "hero") of an engine that runs several under one
+/// prefix: "<prefix>.<run>.ckpt".
+std::string run_checkpoint_path(const std::string& prefix, const std::string& run);
+
+/// Remove the checkpoints of a stored result: "<prefix>.ckpt" and the runs'
+/// "<prefix>.<R|G|B|hero>.ckpt" (run_checkpoint_path). Call after the outputs are in place.
+void remove_checkpoints(const std::string& prefix);
 
 /// The fingerprint of the driver's checkpoint at `path`, nullopt if there is none (InputError if
 /// the file is not a checkpoint): for an engine that adapts to the run it resumes (e.g. its

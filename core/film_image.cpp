@@ -280,7 +280,7 @@ const ImageLayer& LayeredImage::layer(const std::string& name) const {
 
 // --- OpenEXR ---------------------------------------------------------------------------------
 
-void write_exr(const LayeredImage& image, const std::string& path) {
+std::string encode_exr(const LayeredImage& image, const std::string& path) {
     if (image.layers().empty())
         throw std::invalid_argument("write_exr: '" + path + "': the image has no layers");
     Imf::Header header(image.width(), image.height());
@@ -306,7 +306,6 @@ void write_exr(const LayeredImage& image, const std::string& path) {
         }
     }
 
-    check_parent_directory(path, "write_exr");
     std::string bytes;
     try {
         Imf::StdOSStream os;
@@ -320,6 +319,12 @@ void write_exr(const LayeredImage& image, const std::string& path) {
     } catch (const std::exception& e) {
         throw IoError("write_exr: cannot encode '" + path + "': " + e.what());
     }
+    return bytes;
+}
+
+void write_exr(const LayeredImage& image, const std::string& path) {
+    std::string bytes = encode_exr(image, path);  // checks the image first, as before
+    check_parent_directory(path, "write_exr");
     write_file_atomic(path, bytes);
 }
 
@@ -473,8 +478,8 @@ LayeredImage read_exr(const std::string& path) {
 
 // --- PNG preview -----------------------------------------------------------------------------
 
-void write_png_preview(const LayeredImage& image, const std::string& layer, const std::string& path,
-                       double exposure) {
+std::string encode_png_preview(const LayeredImage& image, const std::string& layer,
+                               double exposure) {
     if (!std::isfinite(exposure))
         throw std::invalid_argument("write_png_preview: exposure must be finite");
     const ImageLayer& l = image.layer(layer);
@@ -500,8 +505,14 @@ void write_png_preview(const LayeredImage& image, const std::string& layer, cons
         for (int x = 0; x < l.width(); ++x)
             for (int k = 0; k < 3; ++k)
                 rgb[o++] = srgb8(scale * l.at(x, y, src[static_cast<size_t>(k)]));
+    return encode_png_rgb8(l.width(), l.height(), rgb);
+}
+
+void write_png_preview(const LayeredImage& image, const std::string& layer, const std::string& path,
+                       double exposure) {
+    std::string bytes = encode_png_preview(image, layer, exposure);
     check_parent_directory(path, "write_png_preview");
-    write_file_atomic(path, encode_png_rgb8(l.width(), l.height(), rgb));
+    write_file_atomic(path, bytes);
 }
 
 }  // namespace ssslab

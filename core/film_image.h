@@ -110,6 +110,8 @@ class LayeredImage {
 /// is empty or a standard EXR attribute, IoError if the file cannot be written (no partial or
 /// temporary file is left behind).
 void write_exr(const LayeredImage& image, const std::string& path);
+/// The bytes write_exr writes (for an OutputTransaction); `path` only names the file in errors.
+std::string encode_exr(const LayeredImage& image, const std::string& path);
 
 /// Read an OpenEXR file: scanline or tiled (level 0 of a mip/rip-mapped file), HALF, FLOAT or
 /// UINT channels (converted to float), single- or multi-part (the channels of all parts are
@@ -141,5 +143,8 @@ unsigned char srgb8(double linear);
 /// written.
 void write_png_preview(const LayeredImage& image, const std::string& layer, const std::string& path,
                        double exposure = 0);
+/// The bytes write_png_preview writes (for an OutputTransaction).
+std::string encode_png_preview(const LayeredImage& image, const std::string& layer,
+                               double exposure = 0);
 
 }  // namespace ssslab

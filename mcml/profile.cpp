@@ -79,7 +79,7 @@ ProfileRun simulate_profile(const Medium& m, const ProfileGrid& grid, const Prof
         eo.batch_photons = o.batch_photons;
         eo.mode = TallyMode::kProfile;
         if (!o.checkpoint_prefix.empty())
-            eo.checkpoint_path = o.checkpoint_prefix + "." + kChannelNames[c] + ".ckpt";
+            eo.checkpoint_path = run_checkpoint_path(o.checkpoint_prefix, kChannelNames[c]);
         if (o.on_batch) eo.on_batch = [&o, c](const BatchProgress& p) { o.on_batch(c, p); };
         if (o.on_resume)
             eo.on_resume = [&o, c, path = eo.checkpoint_path](const BatchProgress& p) {

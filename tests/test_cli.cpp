@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <cstdlib>
 #include <filesystem>
 #include <set>
 #include <sstream>
@@ -327,6 +328,18 @@ TEST(Cli, InterruptedRunResumesToTheUninterruptedResult) {
         testing::read_text(parts / "b_giov_n15.mco.toml").find("resumed_from_checkpoint = 'yes'"),
         std::string::npos);
     EXPECT_FALSE(fs::exists(parts / "b_giov_n15.mco.ckpt"));
+}
+
+TEST(Cli, ABadCheckpointIntervalInTheEnvironmentIsRefusedByName) {
+    testing::TempDir dir;
+    fs::copy_file(data_path("mcml-1.2.2/b_giov_n15.mci"), dir / "b.mci");
+    ::setenv("SSSLAB_CHECKPOINT_SECONDS", "soon", 1);
+    const auto r = run_ssslab({"mcml", "b.mci", "--photons", "1000"}, dir.path());
+    ::unsetenv("SSSLAB_CHECKPOINT_SECONDS");
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("SSSLAB_CHECKPOINT_SECONDS"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("'soon'"), std::string::npos) << r.err;
+    EXPECT_EQ(dir.files(), std::vector<std::string>{"b.mci"});
 }
 
 TEST(Cli, RunWithoutArgumentsIsTheDefaultExperiment) {

@@ -313,7 +313,20 @@ TEST(McmlCheckpoint, InterruptedRunResumesToTheSameResult) {
     EXPECT_EQ(0, std::memcmp(whole.values.data(), resumed.values.data(),
                              whole.values.size() * sizeof(double)));
     EXPECT_EQ(whole.se, resumed.se);
-    EXPECT_FALSE(std::filesystem::exists(ckpt)) << "a finished run removes its checkpoint";
+    // A finished run keeps its checkpoint until its caller has stored the result (a kill in
+    // between must not lose the run): run again, it runs no batch and returns the same result.
+    ASSERT_TRUE(std::filesystem::exists(ckpt)) << "a finished run keeps its checkpoint";
+    int batches = 0;
+    orr.on_batch = [&](const BatchProgress&) { ++batches; };
+    const RunResult again = run_default(f.runs[0], orr);
+    EXPECT_EQ(batches, 0);
+    EXPECT_TRUE(again.resumed);
+    EXPECT_EQ(again.reason, BatchStop::kSamples);
+    EXPECT_EQ(again.photons, 200000u);
+    EXPECT_EQ(0, std::memcmp(whole.values.data(), again.values.data(),
+                             whole.values.size() * sizeof(double)));
+    remove_checkpoints((dir / "run").string());
+    EXPECT_FALSE(std::filesystem::exists(ckpt));
 
     // A checkpoint of another run is refused, not silently mixed in.
     oi.seed = 4;

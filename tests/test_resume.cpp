@@ -189,7 +189,10 @@ TEST(ResumeRender, AnEditedSceneIsRefusedNamingWhatChangedAndFreshStartsAfresh) 
         const volpath::RenderResult whole = volpath::render(edited, plain);
         EXPECT_EQ(afresh.run.mean, whole.run.mean);
         EXPECT_EQ(afresh.run.se, whole.run.se);
-        EXPECT_FALSE(fs::exists(ckpt));
+        // The finished run's checkpoint is now the edited scene's (its caller removes it once
+        // the image is stored): the edited scene resumes from it without a refusal.
+        ASSERT_TRUE(fs::exists(ckpt));
+        EXPECT_EQ(volpath::render(edited, render_options(ckpt)).run.mean, whole.run.mean);
     }
 }
 

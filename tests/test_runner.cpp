@@ -18,40 +18,13 @@
 #include <sstream>
 #include <thread>
 
-#include <spawn.h>
-#include <sys/wait.h>
-
-extern char** environ;
-
 namespace ssslab {
 namespace {
 
 namespace fs = std::filesystem;
 using testing::run_ssslab;
 
-const char* kSmall = R"(
-[experiment]
-name = "small"
-title = "A small experiment"
-description = "Skin1 and a custom medium."
-seed = 7
-
-[materials]
-presets = ["Skin1"]
-
-[[materials.custom]]
-name = "Slab"
-sigma_a_per_mm = [0.1, 0.2, 0.3]
-sigma_s_per_mm = [5.0, 6.0, 7.0]
-g = 0.5
-eta = 1.4
-
-[mcml]
-photons = 20000
-quick_factor = 0.1
-
-[outputs.profiles]
-)";
+const char* const kSmall = testing::kSmallExperiment;
 
 std::vector<std::string> keys(const std::string& text, bool quick = false) {
     const runner::Experiment e = runner::parse_experiment(text, "k.toml");
@@ -265,25 +238,6 @@ materials = ["Skin1"]
 }
 
 // Start ssslab in the background, kill it after `ms` milliseconds with `sig`, return its status.
-int run_and_kill(const std::vector<std::string>& args, const fs::path& cwd, int ms, int sig) {
-    const std::string bin = testing::ssslab_binary();
-    std::vector<std::string> argv_s = {bin};
-    argv_s.insert(argv_s.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& s : argv_s) argv.push_back(s.data());
-    argv.push_back(nullptr);
-    const fs::path here = fs::current_path();
-    fs::current_path(cwd);
-    pid_t pid = 0;
-    const int rc = posix_spawn(&pid, bin.c_str(), nullptr, nullptr, argv.data(), environ);
-    fs::current_path(here);
-    if (rc != 0) return -1;
-    std::this_thread::sleep_for(std::chrono::milliseconds(ms));
-    ::kill(pid, sig);
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
 
 void expect_no_partial_cache_entries(const fs::path& cache) {
     if (!fs::exists(cache)) return;
@@ -306,12 +260,13 @@ TEST(Runner, KilledRunResumesToTheUninterruptedResultBitForBit) {
 
     // SIGKILL: no chance to save anything beyond the periodic checkpoints (every 0.1 s here).
     ::setenv("SSSLAB_CHECKPOINT_SECONDS", "0.1", 1);
-    const int killed = run_and_kill({"run", "big.toml", "-q"}, parts.path(), 900, SIGKILL);
+    const int killed = testing::run_and_kill({"run", "big.toml", "-q"}, parts.path(), 900, SIGKILL);
     EXPECT_EQ(killed, 128 + SIGKILL) << "the run finished before it was killed";
     expect_no_partial_cache_entries(parts / "results" / "cache");
     EXPECT_FALSE(fs::exists(parts / "results" / "small" / "summary.csv"));
     // SIGINT: finishes the batches in flight, checkpoints, exits 130 without results.
-    const int interrupted = run_and_kill({"run", "big.toml", "-q"}, parts.path(), 600, SIGINT);
+    const int interrupted =
+        testing::run_and_kill({"run", "big.toml", "-q"}, parts.path(), 600, SIGINT);
     ::unsetenv("SSSLAB_CHECKPOINT_SECONDS");
     if (interrupted != 0) {  // 0 if the resumed run was already done
         EXPECT_EQ(interrupted, 130);
@@ -346,7 +301,8 @@ TEST(Runner, AnEditedConfigAfterAnInterruptNeverResumesTheOldRuns) {
     const auto full = run_ssslab({"run", "big.toml", "-q"}, whole.path());
     ASSERT_EQ(full.exit_code, 0) << full.err;
     ::setenv("SSSLAB_CHECKPOINT_SECONDS", "0.1", 1);
-    const int interrupted = run_and_kill({"run", "big.toml", "-q"}, parts.path(), 700, SIGINT);
+    const int interrupted =
+        testing::run_and_kill({"run", "big.toml", "-q"}, parts.path(), 700, SIGINT);
     ::unsetenv("SSSLAB_CHECKPOINT_SECONDS");
     ASSERT_EQ(interrupted, 130) << "the run finished before the interruption";
     parts.write("big.toml", edited);

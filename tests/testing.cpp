@@ -9,15 +9,22 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
+#include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
+
+extern char** environ;
 
 namespace ssslab::testing {
 
@@ -99,6 +106,50 @@ CommandResult run_ssslab(const std::vector<std::string>& args, const fs::path& c
     r.err = read_text(io / "err");
     return r;
 }
+
+int run_and_kill(const std::vector<std::string>& args, const fs::path& cwd, int ms, int sig) {
+    const std::string bin = ssslab_binary();
+    std::vector<std::string> argv_s = {bin};
+    argv_s.insert(argv_s.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& s : argv_s) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    const fs::path here = fs::current_path();
+    fs::current_path(cwd);
+    pid_t pid = 0;
+    const int rc = posix_spawn(&pid, bin.c_str(), nullptr, nullptr, argv.data(), environ);
+    fs::current_path(here);
+    if (rc != 0) return -1;
+    std::this_thread::sleep_for(std::chrono::milliseconds(ms));
+    ::kill(pid, sig);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+const char* const kSmallExperiment = R"(
+[experiment]
+name = "small"
+title = "A small experiment"
+description = "Skin1 and a custom medium."
+seed = 7
+
+[materials]
+presets = ["Skin1"]
+
+[[materials.custom]]
+name = "Slab"
+sigma_a_per_mm = [0.1, 0.2, 0.3]
+sigma_s_per_mm = [5.0, 6.0, 7.0]
+g = 0.5
+eta = 1.4
+
+[mcml]
+photons = 20000
+quick_factor = 0.1
+
+[outputs.profiles]
+)";
 
 bool have_chromium() {
     return std::system("command -v chromium >/dev/null 2>&1") == 0;

@@ -60,6 +60,16 @@ struct CommandResult {
 /// Run `ssslab` with the given arguments in `cwd` (stdin from /dev/null, progress off).
 CommandResult run_ssslab(const std::vector<std::string>& args, const std::filesystem::path& cwd);
 
+/// Start `ssslab` with the given arguments in `cwd` (output to this process's), send it `sig`
+/// after `ms` milliseconds, and return its exit status (128 + signal if it died of one; -1 if
+/// it could not start).
+int run_and_kill(const std::vector<std::string>& args, const std::filesystem::path& cwd, int ms,
+                 int sig);
+
+/// A small experiment ("small", seed 7): Skin1 and a custom slab medium, MCML at 20,000 photons
+/// a channel (quick_factor 0.1), the profiles output.
+extern const char* const kSmallExperiment;
+
 /// Contents of a gzip file.
 std::string gunzip_file(const std::string& path);
 /// Contents of a file.

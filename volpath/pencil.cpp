@@ -187,7 +187,7 @@ void ChannelRunControl::apply_run(BatchRunOptions& o, int run) const {
     apply(o);
     if (!checkpoint_prefix.empty())
         o.checkpoint_path =
-            checkpoint_prefix + "." + (run == 3 ? "hero" : kChannelNames[run]) + ".ckpt";
+            run_checkpoint_path(checkpoint_prefix, run == 3 ? "hero" : kChannelNames[run]);
     if (on_batch) o.on_batch = [this, run](const BatchProgress& p) { on_batch(run, p); };
     if (on_resume)
         o.on_resume = [this, run, path = o.checkpoint_path](const BatchProgress& p) {

@@ -171,6 +171,7 @@ int run_mcml(McmlArgs& a) {
             o.on_batch = on_batch;
             if (!a.no_checkpoint) o.checkpoint_path = out_path.string() + ".ckpt";
             o.fresh = a.common.fresh;
+            o.checkpoint_seconds = checkpoint_seconds(a.common);
             o.on_resume = [&](const BatchProgress& p) {
                 progress.resume_from(static_cast<double>(p.samples));
                 say_resuming("mcml", run.out_name, static_cast<double>(p.samples), total, "photons",
@@ -195,6 +196,7 @@ int run_mcml(McmlArgs& a) {
         tx.stage(out_dir / se_name(run.out_name), mcml::format_mco(run, se, photons, res.seconds));
         tx.stage(out_path.string() + ".toml", run_record(a, run, i, compat, idum, res, v, se));
         tx.commit();
+        if (!compat && !a.no_checkpoint) remove_checkpoints(out_path.string());
         if (!a.common.quiet) {
             std::printf("%s: %lld photons in %.3g s (%d thread%s, %s), stopped by %s\n",
                         out_path.string().c_str(), static_cast<long long>(photons), res.seconds,
@@ -244,7 +246,7 @@ void register_mcml(CLI::App& app, std::function<int()>& action) {
                        "Worker threads in the default mode (default: all); the results do not "
                        "depend on it (--compat runs on one)");
     add_quiet_flag(*sub, a->common);
-    add_fresh_option(*sub, a->common.fresh);
+    add_resume_options(*sub, a->common);
     sub->callback([a, &action] { action = [a] { return run_mcml(*a); }; });
 }
 

@@ -113,6 +113,7 @@ int run_volpath_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
     po.cancel = cancel;
     po.checkpoint_prefix = out.string();
     po.fresh = c.fresh;
+    po.checkpoint_seconds = checkpoint_seconds(c);
     const double total = job.budget.samples ? static_cast<double>(*job.budget.samples) : 0.0;
     RunsProgress progress(
         "profile",
@@ -168,6 +169,7 @@ int run_volpath_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
              "# ssslab profile: resolved configuration, results per channel, provenance\n" +
                  job.doc->resolved_toml());
     tx.commit();
+    remove_checkpoints(out.string());  // only now: a kill before keeps the runs
     if (!c.quiet) {
         std::printf("%s: %d bins of %.4g %s (%s), volpath %s, %.3g s\n", out.string().c_str(),
                     job.grid.nr, job.grid.dr_cm * (job.unit == LengthUnit::kMm ? 10 : 1),
@@ -194,6 +196,7 @@ int run_profile_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
     po.cancel = cancel;
     po.checkpoint_prefix = out.string();
     po.fresh = c.fresh;
+    po.checkpoint_seconds = checkpoint_seconds(c);
     const double total = job.budget.samples ? static_cast<double>(*job.budget.samples) : 0.0;
     RunsProgress progress(
         "profile", [&](int ch) { return job.medium.name + " " + kChannelNames[ch]; }, total,
@@ -243,6 +246,7 @@ int run_profile_job(ProfileJob& job, const fs::path& out, const CommonOptions& c
              "# ssslab profile: resolved configuration, results per channel, provenance\n" +
                  job.doc->resolved_toml());
     tx.commit();
+    remove_checkpoints(out.string());  // only now: a kill before keeps the runs
     if (!c.quiet) {
         std::printf("%s: %d bins of %.4g %s (%s)\n", out.string().c_str(), job.grid.nr,
                     job.grid.dr_cm * (job.unit == LengthUnit::kMm ? 10 : 1), unit_name(job.unit),
@@ -318,7 +322,7 @@ void register_profile(CLI::App& app, std::function<int()>& action) {
     add_threads_option(*sub, a->common,
                        "Worker threads (default: all); the profile does not depend on it");
     add_quiet_flag(*sub, a->common);
-    add_fresh_option(*sub, a->common.fresh);
+    add_resume_options(*sub, a->common);
     sub->callback([a, &action] { action = [a] { return run_profile(*a); }; });
 }
 

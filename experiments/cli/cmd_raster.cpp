@@ -249,10 +249,8 @@ int run_raster(const RasterArgs& a) {
     md["ssslab.model"] = a.model;
     md["ssslab.provenance"] = toml;
     OutputTransaction tx;
-    tx.stage(out, encode_through_file(out, [&](const std::string& p) { write_exr(r.image, p); }));
-    tx.stage(png, encode_through_file(png, [&](const std::string& p) {
-                 write_png_preview(r.image, "radiance", p, a.exposure);
-             }));
+    tx.stage(out, encode_exr(r.image, out.string()));
+    tx.stage(png, encode_png_preview(r.image, "radiance", a.exposure));
     tx.stage(out.string() + ".toml", toml);
     tx.commit();
     if (!a.common.quiet) {

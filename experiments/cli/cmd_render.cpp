@@ -119,6 +119,7 @@ int run_render(const RenderArgs& a) {
     o.width = a.width;
     o.height = a.height;
     o.fresh = a.common.fresh;
+    o.checkpoint_seconds = checkpoint_seconds(a.common);
     std::optional<LayeredImage> reference;
     if (!a.reference.empty()) {
         reference = read_exr(a.reference);
@@ -187,18 +188,15 @@ int run_render(const RenderArgs& a) {
     md["ssslab.provenance"] = toml;
     // The image, its preview, its provenance (and the convergence table): all or none.
     OutputTransaction tx;
-    tx.stage(out, encode_through_file(out, [&](const std::string& p) { write_exr(r.image, p); }));
-    tx.stage(png, encode_through_file(png, [&](const std::string& p) {
-                 write_png_preview(r.image, "radiance", p, a.exposure);
-             }));
+    tx.stage(out, encode_exr(r.image, out.string()));
+    tx.stage(png, encode_png_preview(r.image, "radiance", a.exposure));
     tx.stage(out.string() + ".toml", toml);
     fs::path conv = out;
     conv.replace_extension("");
     if (reference) tx.stage(conv.string() + "_convergence.csv", csv);
     tx.commit();
     if (reference && !a.common.quiet) std::printf("%s", csv.c_str());
-    std::error_code ec;
-    fs::remove(o.checkpoint_path, ec);
+    remove_checkpoints(out.string());  // only now: a kill before keeps the run
     if (!a.common.quiet) {
         const std::string how =
             resumed_from ? "resumed from " + std::to_string(resumed_from) + " spp" : "fresh";
@@ -249,7 +247,7 @@ void register_render(CLI::App& app, std::function<int()>& action) {
     add_threads_option(*sub, a->common,
                        "Worker threads (default: all); the image does not depend on it");
     add_quiet_flag(*sub, a->common);
-    add_fresh_option(*sub, a->common.fresh);
+    add_resume_options(*sub, a->common);
     sub->add_option("--rel-error-of", a->error_of,
                     "What --rel-error measures: median-pixel (default; the median over the lit "
                     "pixel channels of the radiance's relative standard error) or image-mean (the "

@@ -21,6 +21,7 @@ struct RunArgs {
     bool quick = false, dry_run = false, verbose = false, quiet = false;
     int threads = 0;
     std::string results = "results";
+    CommonOptions resume;  ///< --checkpoint-seconds
     // check only
     bool update = false;
     double alpha = 0.01;
@@ -43,8 +44,7 @@ runner::RunOptions options(const RunArgs& a) {
     o.quiet = a.quiet;
     o.results_root = a.results;
     o.command_line = command_line();
-    if (const char* s = std::getenv("SSSLAB_CHECKPOINT_SECONDS"))
-        o.checkpoint_seconds = std::atof(s);
+    o.checkpoint_seconds = checkpoint_seconds(a.resume);
     return o;
 }
 
@@ -119,6 +119,7 @@ void common(CLI::App& sub, RunArgs& a) {
     sub.add_option("--results", a.results,
                    "Results root: <root>/<experiment>/ and the cache <root>/cache/ (default "
                    "results)");
+    add_checkpoint_seconds_option(sub, a.resume);
     sub.add_flag("-v,--verbose", a.verbose, "More detail");
     sub.add_flag("-q,--quiet", a.quiet, "Print nothing but errors");
 }

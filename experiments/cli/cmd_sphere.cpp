@@ -59,6 +59,7 @@ int run_sphere(const SphereArgs& a) {
     so.cancel = install_interrupt_handler();
     so.checkpoint_prefix = prefix;
     so.fresh = c.fresh;
+    so.checkpoint_seconds = checkpoint_seconds(c);
     const double total = job.budget.samples ? static_cast<double>(*job.budget.samples) : 0.0;
     RunsProgress progress(
         "sphere",
@@ -84,14 +85,12 @@ int run_sphere(const SphereArgs& a) {
 
     OutputTransaction tx;
     const fs::path exr_path = prefix + ".exr", png_path = prefix + ".png";
-    tx.stage(exr_path,
-             encode_through_file(exr_path, [&](const std::string& p) { write_exr(st.image, p); }));
-    tx.stage(png_path, encode_through_file(png_path, [&](const std::string& p) {
-                 write_png_preview(st.preview, "preview", p, st.exposure);
-             }));
+    tx.stage(exr_path, encode_exr(st.image, exr_path.string()));
+    tx.stage(png_path, encode_png_preview(st.preview, "preview", st.exposure));
     tx.stage(prefix + "_beta.csv", st.beta_csv);
     tx.stage(prefix + ".toml", st.resolved_toml);
     tx.commit();
+    remove_checkpoints(prefix);  // only now: a kill before keeps the runs
 
     if (!c.quiet) {
         std::printf(
@@ -177,7 +176,7 @@ void register_sphere(CLI::App& app, std::function<int()>& action) {
     add_threads_option(*sub, a->common,
                        "Worker threads (default: all); the results do not depend on it");
     add_quiet_flag(*sub, a->common);
-    add_fresh_option(*sub, a->common.fresh);
+    add_resume_options(*sub, a->common);
     sub->callback([a, &action] { action = [a] { return run_sphere(*a); }; });
 }
 

@@ -231,11 +231,30 @@ void write_with_provenance(const std::string& path, const std::string& content,
     tx.commit();
 }
 
-void add_fresh_option(CLI::App& app, bool& fresh) {
-    app.add_flag("--fresh", fresh,
+double checkpoint_seconds(const CommonOptions& o) {
+    if (o.checkpoint_seconds) return *o.checkpoint_seconds;
+    if (const char* s = std::getenv("SSSLAB_CHECKPOINT_SECONDS")) {
+        char* end = nullptr;
+        const double v = std::strtod(s, &end);
+        if (end != s && *end == '\0' && std::isfinite(v) && v > 0) return v;
+        throw InputError({"environment", 0, 0}, "SSSLAB_CHECKPOINT_SECONDS",
+                         "must be a positive number of seconds, got '" + std::string(s) + "'");
+    }
+    return 30.0;
+}
+
+void add_resume_options(CLI::App& app, CommonOptions& o) {
+    app.add_flag("--fresh", o.fresh,
                  "Start afresh even if a checkpoint of an earlier run is there (it is replaced). "
                  "Without it a run resumes from a checkpoint of the same input and refuses one of "
                  "other input, saying what differs");
+    add_checkpoint_seconds_option(app, o);
+}
+
+void add_checkpoint_seconds_option(CLI::App& app, CommonOptions& o) {
+    app.add_option("--checkpoint-seconds", o.checkpoint_seconds,
+                   "Seconds between checkpoints (default 30, or SSSLAB_CHECKPOINT_SECONDS)")
+        ->check(positive_number());
 }
 
 SampleBudget budget_from(const CommonOptions& o) {

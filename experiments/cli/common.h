@@ -33,6 +33,8 @@ struct CommonOptions {
     std::int64_t batch = 0;
     bool quiet = false;
     bool fresh = false;  ///< resumable commands: ignore a checkpoint and start afresh
+    /// Resumable commands: --checkpoint-seconds (unset: checkpoint_seconds() below).
+    std::optional<double> checkpoint_seconds;
 };
 
 /// --seed (a non-negative integer).
@@ -72,8 +74,16 @@ CLI::Validator existing_file(const std::string& what);
 void write_with_provenance(const std::string& path, const std::string& content,
                            const std::string& comment, std::shared_ptr<ConfigDocument> doc = {});
 
-/// Add --fresh (resumable commands): ignore a checkpoint of an earlier run and start afresh.
-void add_fresh_option(CLI::App& app, bool& fresh);
+/// Seconds between checkpoints: --checkpoint-seconds, else the environment's
+/// SSSLAB_CHECKPOINT_SECONDS (the kill tests checkpoint every few milliseconds), else 30.
+/// Throws InputError for a bad SSSLAB_CHECKPOINT_SECONDS.
+double checkpoint_seconds(const CommonOptions& o);
+
+/// The options of resumable commands: --fresh (ignore a checkpoint of an earlier run and start
+/// afresh) and --checkpoint-seconds.
+void add_resume_options(CLI::App& app, CommonOptions& o);
+/// --checkpoint-seconds alone (`run`, whose artifacts are keyed and never refused).
+void add_checkpoint_seconds_option(CLI::App& app, CommonOptions& o);
 
 /// Install SIGINT/SIGTERM handlers that set the returned flag (a second signal exits at once).
 const std::atomic<bool>* install_interrupt_handler();
@@ -120,29 +130,6 @@ class RunsProgress {
     int current_ = -1;
     std::unique_ptr<Progress> progress_;
 };
-
-// Bytes of a file written by `write` (write_exr, write_png_preview write to a path): a scratch
-// file beside `target`, removed afterwards, so that the bytes can join an OutputTransaction.
-template <class W>
-std::string encode_through_file(const std::filesystem::path& target, W&& write) {
-    if (!target.parent_path().empty()) {
-        std::error_code ec;
-        std::filesystem::create_directories(target.parent_path(), ec);
-        if (ec)
-            throw IoError("cannot create directory '" + target.parent_path().string() +
-                          "': " + ec.message());
-    }
-    const std::filesystem::path scratch = target.string() + ".encode." + std::to_string(::getpid());
-    struct Remove {
-        std::filesystem::path p;
-        ~Remove() {
-            std::error_code ec;
-            std::filesystem::remove(p, ec);
-        }
-    } guard{scratch};
-    write(scratch.string());
-    return read_file(scratch);
-}
 
 /// Exit status for an interrupted run.
 inline constexpr int kExitInterrupted = 130;

@@ -1,10 +1,11 @@
 #include "experiments/runner/cache.h"
 
 #include "core/atomic_file.h"
+#include "core/batch_runner.h"
+#include "core/crash_point.h"
 #include "core/error.h"
 
 #include <cerrno>
-#include <chrono>
 #include <cstdio>
 #include <cstring>
 
@@ -36,28 +37,40 @@ fs::path ArtifactCache::store(const std::string& kind, const std::string& key,
     fs::create_directories(tmp, ec);
     if (ec) throw IoError("cannot create '" + tmp.string() + "': " + ec.message());
     for (const auto& [name, content] : files) write_file_atomic(tmp / name, content);
+    crash_point("cache.staged");
     if (std::rename(tmp.c_str(), final_dir.c_str()) != 0) {
         const int err = errno;
         fs::remove_all(tmp, ec);
-        if ((err == ENOTEMPTY || err == EEXIST) && fs::exists(final_dir / "manifest.toml", ec))
-            return final_dir;
-        throw IoError("cannot rename '" + tmp.string() + "' to '" + final_dir.string() +
-                      "': " + std::strerror(err));
+        if (!((err == ENOTEMPTY || err == EEXIST) && fs::exists(final_dir / "manifest.toml", ec)))
+            throw IoError("cannot rename '" + tmp.string() + "' to '" + final_dir.string() +
+                          "': " + std::strerror(err));
     }
+    crash_point("cache.stored");
+    // The engines keep their checkpoints until the result is stored (core/batch_runner.h):
+    // checkpoint_prefix(kind, key) = <key>.ckpt, and the runs' files under that prefix.
+    const std::string prefix = (root_ / kind / key).string();
+    remove_checkpoints(prefix);
+    remove_checkpoints(prefix + ".ckpt");
     return final_dir;
 }
 
 void ArtifactCache::remove_stale_temporaries() const {
     std::error_code ec;
     if (!fs::exists(root_, ec)) return;
-    const auto now = fs::file_time_type::clock::now();
     for (const auto& kind : fs::directory_iterator(root_, ec)) {
         if (!kind.is_directory()) continue;
         for (const auto& e : fs::directory_iterator(kind.path(), ec)) {
             const std::string n = e.path().filename().string();
-            if (n.rfind(".tmp-", 0) != 0) continue;
-            if (now - fs::last_write_time(e.path(), ec) > std::chrono::minutes(1))
-                fs::remove_all(e.path(), ec);
+            if (n.rfind(".tmp-", 0) == 0) {
+                if (owner_is_gone(e.path())) fs::remove_all(e.path(), ec);
+                continue;
+            }
+            // A checkpoint of an entry that is stored: its run was killed after the store and
+            // before it removed the checkpoint.
+            const size_t ck = n.find(".ckpt");
+            if (ck != std::string::npos && ck > 0 &&
+                fs::exists(kind.path() / n.substr(0, ck) / "manifest.toml", ec))
+                fs::remove(e.path(), ec);
         }
     }
 }

@@ -25,7 +25,8 @@ class ArtifactCache {
                                 const std::map<std::string, std::string>& files) const;
     /// Path prefix for the checkpoints of an unfinished entry.
     std::filesystem::path checkpoint_prefix(const std::string& kind, const std::string& key) const;
-    /// Remove temporary directories left by runs that were killed (older than a minute).
+    /// Remove what runs that were killed left: temporary directories (their process gone) and
+    /// checkpoints of entries that were stored.
     void remove_stale_temporaries() const;
 
   private:

@@ -118,8 +118,6 @@ Rendered compute(const RenderNode& n, const RenderStudyContext& ctx, const Artif
     }
     r.image.metadata()["ssslab.snapshots"] = snaps;
     r.image.metadata()["ssslab.rays"] = std::to_string(r.rays);
-    const fs::path tmp = cache.checkpoint_prefix(kKind, n.key).string() + ".image.exr";
-    write_exr(r.image, tmp.string());
     std::ostringstream m;
     m << "[artifact]\nkind = \"render\"\nkey = \"" << n.key << "\"\nscene = \"" << n.scene.name
       << "\"\nrole = \"" << n.role << "\"\nengine = \"" << volpath::render_engine_version()
@@ -130,9 +128,9 @@ Rendered compute(const RenderNode& n, const RenderStudyContext& ctx, const Artif
     std::istringstream kt(n.key_text);
     m << "\n# canonical description of the key\n";
     for (std::string line; std::getline(kt, line);) m << "# " << line << "\n";
-    cache.store(kKind, n.key, {{"image.exr", read_file(tmp)}, {"manifest.toml", m.str()}});
-    std::error_code ec;
-    fs::remove(tmp, ec);
+    cache.store(
+        kKind, n.key,
+        {{"image.exr", encode_exr(r.image, n.key + "/image.exr")}, {"manifest.toml", m.str()}});
     out.computed_now = true;
     out.resumed = r.run.resumed;
     return out;

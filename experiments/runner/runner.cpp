@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/config.h"
+#include "core/crash_point.h"
 #include "core/error.h"
 #include "core/hash.h"
 #include "core/provenance.h"
@@ -23,6 +24,8 @@
 #include <optional>
 #include <sstream>
 
+#include <fcntl.h>
+#include <stdio.h>  // renameat2 (glibc >= 2.28, _GNU_SOURCE)
 #include <unistd.h>
 
 namespace ssslab::runner {
@@ -547,6 +550,36 @@ bool compute_nodes(ExperimentRun& r, const RunOptions& o) {
     return true;
 }
 
+namespace {
+
+// The finished results directory replaces the previous one in one step: renameat2's
+// RENAME_EXCHANGE swaps the two names atomically (Linux >= 3.15), so a kill leaves either the
+// old results or the new ones under results/<name>, never neither; the old then sit under the
+// staging name and are removed (by this run, or as a dead run's staging by the next). Where the
+// file system cannot exchange, the old directory is moved aside first.
+void swap_in(const fs::path& stage, const fs::path& out_dir) {
+    std::error_code ec;
+    if (!fs::exists(out_dir, ec)) {
+        fs::rename(stage, out_dir);
+        crash_point("results.swapped");
+        return;
+    }
+    if (::renameat2(AT_FDCWD, stage.c_str(), AT_FDCWD, out_dir.c_str(), RENAME_EXCHANGE) == 0) {
+        crash_point("results.swapped");
+        fs::remove_all(stage, ec);
+        return;
+    }
+    const fs::path old = out_dir.string() + ".old-" + std::to_string(::getpid());
+    fs::remove_all(old, ec);
+    fs::rename(out_dir, old);
+    crash_point("results.moved-aside");
+    fs::rename(stage, out_dir);
+    crash_point("results.swapped");
+    fs::remove_all(old, ec);
+}
+
+}  // namespace
+
 bool execute(ExperimentRun& r, const RunOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     ArtifactCache cache(o.results_root / "cache");
@@ -558,10 +591,9 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
         if (fs::exists(o.results_root, ec))
             for (const auto& d : fs::directory_iterator(o.results_root, ec)) {
                 const std::string n = d.path().filename().string();
-                if (n.rfind(prefix + "tmp-", 0) == 0 || n.rfind(prefix + "old-", 0) == 0)
-                    if (fs::file_time_type::clock::now() - fs::last_write_time(d.path(), ec) >
-                        std::chrono::minutes(1))
-                        fs::remove_all(d.path(), ec);
+                if ((n.rfind(prefix + "tmp-", 0) == 0 || n.rfind(prefix + "old-", 0) == 0) &&
+                    owner_is_gone(d.path()))
+                    fs::remove_all(d.path(), ec);
             }
     }
     if (!compute_nodes(r, o)) return false;
@@ -708,11 +740,7 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
     report.engine_files = &engine_files;
     write_file_atomic(stage / "report.html", render_report(r, report));
 
-    const fs::path old = r.out_dir.string() + ".old-" + std::to_string(::getpid());
-    fs::remove_all(old, ec);
-    if (fs::exists(r.out_dir)) fs::rename(r.out_dir, old);
-    fs::rename(stage, r.out_dir);
-    fs::remove_all(old, ec);
+    swap_in(stage, r.out_dir);
     return true;
 }
 
