@@ -3,6 +3,7 @@
 #include "core/crash_point.h"
 #include "core/error.h"
 
+#include <atomic>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -18,6 +19,8 @@ namespace ssslab {
 namespace fs = std::filesystem;
 
 namespace {
+
+std::atomic<bool> g_discard{false};
 
 const std::string kTempMark = ".tmp.";
 
@@ -87,7 +90,16 @@ bool owner_is_gone(const fs::path& temporary) {
     return ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
 }
 
+void discard_outputs(bool discard) {
+    g_discard = discard;
+}
+
+bool outputs_discarded() {
+    return g_discard;
+}
+
 void write_file_atomic(const fs::path& path, std::string_view content) {
+    if (g_discard) return;
     make_parent(path);
     remove_orphaned_temporaries(path);
     const fs::path tmp = temp_name(path);
@@ -106,6 +118,10 @@ OutputTransaction::~OutputTransaction() {
 }
 
 void OutputTransaction::stage(const fs::path& path, std::string_view content) {
+    if (g_discard) {
+        finals_.push_back(path);
+        return;
+    }
     make_parent(path);
     remove_orphaned_temporaries(path);
     const fs::path tmp = temp_name(path);
@@ -115,6 +131,7 @@ void OutputTransaction::stage(const fs::path& path, std::string_view content) {
 }
 
 void OutputTransaction::commit() {
+    if (g_discard) temps_.clear();
     for (size_t i = 0; i < temps_.size(); ++i) {
         if (std::rename(temps_[i].c_str(), finals_[i].c_str()) != 0)
             throw IoError("cannot rename '" + temps_[i].string() + "' to '" + finals_[i].string() +

@@ -14,6 +14,12 @@ namespace ssslab {
 /// processes. Throws IoError.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
 
+/// From now on, write nothing: write_file_atomic, OutputTransaction and remove_checkpoints
+/// return as if done. The ranks other than 0 of an MPI run (core/distributed.h) compute what
+/// rank 0 computes and discard it; rank 0 writes.
+void discard_outputs(bool discard);
+bool outputs_discarded();
+
 /// Whether the process that made `temporary` (a name ending in its pid: <file>.tmp.<pid>,
 /// <dir>.tmp-<pid>, <dir>.old-<pid>) is gone from this machine, so the temporary is litter of a
 /// killed run. False for the calling process's own and for names without a pid.

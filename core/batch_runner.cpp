@@ -2,6 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/binary_io.h"
+#include "core/distributed.h"
 #include "core/error.h"
 #include "core/hash.h"
 
@@ -12,6 +13,7 @@
 #include <chrono>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <stdexcept>
 
@@ -27,6 +29,11 @@ double seconds_since(Clock::time_point t0) {
 
 constexpr char kCheckpointMagic[8] = {'S', 'S', 'S', 'L', 'B', 'C', 'K', '1'};
 constexpr char kResultMagic[8] = {'S', 'S', 'S', 'L', 'B', 'R', 'S', '1'};
+
+// Messages between the ranks of a distributed run (core/distributed.h): a worker sends each
+// batch it simulated (kBatch: index, samples, work, then the tally) and, when it stops, kDone;
+// rank 0 tells the workers to stop (kStop) once the budget is met or the run is interrupted.
+enum Tag : int { kBatch = 1, kDone = 2, kStop = 3 };
 
 }  // namespace
 
@@ -134,6 +141,7 @@ std::string run_checkpoint_path(const std::string& prefix, const std::string& ru
 }
 
 void remove_checkpoints(const std::string& prefix) {
+    if (outputs_discarded()) return;
     std::error_code ec;
     std::filesystem::remove(prefix + ".ckpt", ec);
     for (const char* run : {"R", "G", "B", "hero"})
@@ -141,8 +149,11 @@ void remove_checkpoints(const std::string& prefix) {
 }
 
 std::optional<std::string> batch_checkpoint_fingerprint(const std::string& path) {
-    if (auto ck = load_checkpoint(path)) return std::move(ck->fingerprint);
-    return std::nullopt;
+    // Rank 0's checkpoint decides for every rank of a distributed run (core/distributed.h).
+    return dist::from_root([&]() -> std::optional<std::string> {
+        if (auto ck = load_checkpoint(path)) return std::move(ck->fingerprint);
+        return std::nullopt;
+    });
 }
 
 InputError checkpoint_refusal(const std::string& path, const std::string& before,
@@ -171,9 +182,19 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
         return static_cast<std::int64_t>(std::min<std::uint64_t>(bs, total - index * bs));
     };
 
+    // Under MPI (core/distributed.h) every rank simulates the batches dealt to it (index %
+    // ranks == rank) and rank 0 folds all of them in batch order: the same statistics as one
+    // process. Rank 0 alone reads and writes the checkpoint and decides when to stop.
+    const bool distributed = dist::active();
+    const int rank = dist::rank(), ranks = dist::size();
+    const bool root = rank == 0;
+    auto owner = [&](std::uint64_t index) {
+        return static_cast<int>(index % static_cast<std::uint64_t>(ranks));
+    };
+
     BatchAccumulator acc(opt.tally_size);
     double resumed_seconds = 0.0;
-    if (!opt.checkpoint_path.empty() && !opt.fresh) {
+    if (root && !opt.checkpoint_path.empty() && !opt.fresh) {
         if (auto ck = load_checkpoint(opt.checkpoint_path)) {
             if (ck->fingerprint != opt.fingerprint || ck->sum.size() != opt.tally_size ||
                 ck->q.size() != opt.tally_size)
@@ -210,8 +231,6 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
 
     const auto t0 = Clock::now();
     auto last_checkpoint = t0;
-    std::uint64_t next = acc.batches();
-    const std::uint64_t batches_at_start = next;
     std::atomic<bool> stop_flag{false};
     res.reason = BatchStop::kSamples;
 
@@ -239,6 +258,19 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
         if (opt.quantity && acc.batches() > 0) opt.quantity(acc, at.value, at.se);
         stop_flag = budget_met(acc.batches(), at);
     }
+    // Where the run starts, and whether it is over already: rank 0's word.
+    std::uint64_t first = acc.batches();
+    if (distributed) {
+        std::string start(sizeof(std::uint64_t) + 1, '\0');
+        std::memcpy(start.data(), &first, sizeof first);
+        start.back() = stop_flag ? 1 : 0;
+        dist::broadcast(start);
+        std::memcpy(&first, start.data(), sizeof first);
+        stop_flag = start.back() != 0;
+    }
+    const std::uint64_t batches_at_start = first;
+    // This rank's batches: first, first + ranks, ... shifted to the ones it owns.
+    std::uint64_t next = first + static_cast<std::uint64_t>((rank - owner(first) + ranks) % ranks);
 
     auto write_checkpoint = [&]() {
         Checkpoint ck;
@@ -277,28 +309,112 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
             last_checkpoint = Clock::now();
         }
     };
+    auto cancelled = [&] { return opt.cancel && opt.cancel->load(std::memory_order_relaxed); };
 
+    // Rank 0 of a distributed run: batches arrive out of order (its own through the pipeline,
+    // the others' as messages) and wait in `pending` until every batch before them is folded.
+    // Only the pipeline's last (serial) stage and the code after the pipeline touch these.
+    std::map<std::uint64_t, Work*> pending;
+    std::vector<std::unique_ptr<Work>> received_pool;  // Works of received batches
+    std::vector<Work*> received_free;
+    std::vector<char> done(static_cast<size_t>(ranks), 0);
+    bool lost = false;  // a worker stopped (interrupted) before sending a batch rank 0 needs
+    auto is_received = [&](Work* w) { return owner(w->index) != rank; };
+    auto release = [&](Work* w) {
+        if (is_received(w))
+            received_free.push_back(w);
+        else
+            free_list.push(w);
+    };
+    auto receive_one = [&] {
+        dist::Message m = dist::receive();
+        if (m.tag == kDone) {
+            done[static_cast<size_t>(m.source)] = 1;
+            return;
+        }
+        constexpr size_t header = 3 * sizeof(std::uint64_t);
+        if (m.tag != kBatch || m.bytes.size() != header + opt.tally_size * sizeof(double))
+            throw std::runtime_error("MPI: an unexpected message from rank " +
+                                     std::to_string(m.source));
+        Work* w = nullptr;
+        if (received_free.empty()) {
+            received_pool.push_back(std::make_unique<Work>());
+            w = received_pool.back().get();
+            w->tally.resize(opt.tally_size);
+        } else {
+            w = received_free.back();
+            received_free.pop_back();
+        }
+        std::uint64_t h[3];
+        std::memcpy(h, m.bytes.data(), header);
+        w->index = h[0];
+        w->samples = static_cast<std::int64_t>(h[1]);
+        w->work = h[2];
+        std::memcpy(w->tally.data(), m.bytes.data() + header, opt.tally_size * sizeof(double));
+        if (owner(w->index) == 0 || w->index < acc.batches() || pending.count(w->index))
+            throw std::runtime_error("MPI: batch " + std::to_string(w->index) + " came from rank " +
+                                     std::to_string(m.source));
+        pending[w->index] = w;
+    };
+    // Fold every batch that is next in order; wait for others' batches while rank 0 needs one
+    // (its own come through the pipeline). Returns when the next batch is rank 0's own, the run
+    // is over, or a worker has stopped without it.
+    auto fold_in_order = [&] {
+        while (!stop_flag.load(std::memory_order_relaxed) && !lost) {
+            const std::uint64_t k = acc.batches();
+            if (auto it = pending.find(k); it != pending.end()) {
+                Work* w = it->second;
+                pending.erase(it);
+                fold(w);
+                release(w);
+                continue;
+            }
+            if (k >= max_batches || owner(k) == rank) return;
+            if (done[static_cast<size_t>(owner(k))]) {
+                lost = true;
+                return;
+            }
+            receive_one();
+        }
+    };
+
+    // Worker ranks: send each batch to rank 0 in order; look for rank 0's "stop" after each.
+    bool stop_received = false;
+    auto send_batch = [&](Work* w) {
+        std::vector<char> msg(3 * sizeof(std::uint64_t) + opt.tally_size * sizeof(double));
+        const std::uint64_t h[3] = {w->index, static_cast<std::uint64_t>(w->samples), w->work};
+        std::memcpy(msg.data(), h, sizeof h);
+        std::memcpy(msg.data() + sizeof h, w->tally.data(), opt.tally_size * sizeof(double));
+        dist::send(0, kBatch, msg.data(), msg.size());
+        if (!stop_received && dist::poll(0, kStop)) {
+            dist::receive(0);
+            stop_received = true;
+            stop_flag = true;
+        }
+    };
+
+    const std::uint64_t stride = static_cast<std::uint64_t>(ranks);
     auto body = [&] {
         tbb::parallel_pipeline(
             tokens,
-            tbb::make_filter<void, Work*>(
-                tbb::filter_mode::serial_in_order,
-                [&](tbb::flow_control& fc) -> Work* {
-                    if (stop_flag.load(std::memory_order_relaxed) || next >= max_batches ||
-                        (opt.cancel && opt.cancel->load(std::memory_order_relaxed))) {
-                        fc.stop();
-                        return nullptr;
-                    }
-                    Work* w = nullptr;
-                    if (!free_list.try_pop(w)) {
-                        pool.push_back(std::make_unique<Work>());
-                        w = pool.back().get();
-                        w->tally.resize(opt.tally_size);
-                    }
-                    w->index = next++;
-                    w->samples = batch_size(w->index);
-                    return w;
-                }) &
+            tbb::make_filter<void, Work*>(tbb::filter_mode::serial_in_order,
+                                          [&](tbb::flow_control& fc) -> Work* {
+                                              if (stop_flag.load(std::memory_order_relaxed) ||
+                                                  next >= max_batches || cancelled()) {
+                                                  fc.stop();
+                                                  return nullptr;
+                                              }
+                                              Work* w = nullptr;
+                                              if (!free_list.try_pop(w)) {
+                                                  pool.push_back(std::make_unique<Work>());
+                                                  w = pool.back().get();
+                                                  w->tally.resize(opt.tally_size);
+                                              }
+                                              w->index = next;
+                                              next += stride;
+                                              w->samples = batch_size(w->index);
+                                              return w;
+                                          }) &
                 tbb::make_filter<Work*, Work*>(tbb::filter_mode::parallel,
                                                [&](Work* w) -> Work* {
                                                    std::fill(w->tally.begin(), w->tally.end(), 0.0);
@@ -307,30 +423,67 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
                                                    return w;
                                                }) &
                 tbb::make_filter<Work*, void>(tbb::filter_mode::serial_in_order, [&](Work* w) {
-                    fold(w);
-                    free_list.push(w);
+                    if (!distributed) {
+                        fold(w);
+                        free_list.push(w);
+                    } else if (!root) {
+                        if (!stop_received) send_batch(w);
+                        free_list.push(w);
+                    } else if (stop_flag.load(std::memory_order_relaxed) || lost) {
+                        free_list.push(w);
+                    } else {
+                        pending[w->index] = w;
+                        fold_in_order();
+                    }
                 }));
     };
-    if (opt.threads > 0)
-        tbb::task_arena(res.threads).execute(body);
-    else
-        body();
+    if (!stop_flag) {
+        if (opt.threads > 0)
+            tbb::task_arena(res.threads).execute(body);
+        else
+            body();
+    }
 
-    res.seconds = resumed_seconds + seconds_since(t0);
-    const bool finished = stop_flag.load();
-    if (!finished) res.reason = BatchStop::kInterrupted;
-    // Finished or not, the state is kept: a kill before the caller has stored the result must
-    // not lose the run. The caller removes the checkpoint after storing (remove_checkpoints).
-    if (!opt.checkpoint_path.empty() &&
-        !(res.resumed && finished && acc.batches() == batches_at_start))
-        write_checkpoint();
-    res.samples = acc.samples();
-    res.batches = acc.batches();
-    res.mean = acc.means();
-    res.se = acc.standard_errors();
-    if (opt.snapshots && finished && res.batches > 0 &&
-        (res.snapshots.empty() || res.snapshots.back().batches != res.batches))
-        res.snapshots.push_back({res.samples, res.batches, res.history.back().seconds, res.mean});
+    if (distributed && root) {
+        // Rank 0's own batches are done; the others' may still be on their way.
+        while (!stop_flag && !lost && !cancelled() && acc.batches() < max_batches &&
+               owner(acc.batches()) != rank)
+            fold_in_order();
+        for (int r = 1; r < ranks; ++r) dist::notify(r, kStop);
+        while (std::count(done.begin() + 1, done.end(), 1) < ranks - 1) receive_one();
+        dist::complete_notifications();
+        for (auto& [index, w] : pending) release(w);
+        pending.clear();
+    } else if (distributed) {
+        dist::send(0, kDone, nullptr, 0);
+        if (!stop_received) dist::receive(0);  // rank 0's kStop
+    }
+
+    if (!distributed || root) {
+        res.seconds = resumed_seconds + seconds_since(t0);
+        const bool finished = stop_flag.load();
+        if (!finished) res.reason = BatchStop::kInterrupted;
+        // Finished or not, the state is kept: a kill before the caller has stored the result
+        // must not lose the run. The caller removes the checkpoint after storing
+        // (remove_checkpoints).
+        if (!opt.checkpoint_path.empty() &&
+            !(res.resumed && finished && acc.batches() == batches_at_start))
+            write_checkpoint();
+        res.samples = acc.samples();
+        res.batches = acc.batches();
+        res.mean = acc.means();
+        res.se = acc.standard_errors();
+        if (opt.snapshots && finished && res.batches > 0 &&
+            (res.snapshots.empty() || res.snapshots.back().batches != res.batches))
+            res.snapshots.push_back(
+                {res.samples, res.batches, res.history.back().seconds, res.mean});
+    }
+    if (distributed) {
+        // Every rank returns rank 0's result.
+        std::string bytes = root ? serialize_batch_result(res) : std::string();
+        dist::broadcast(bytes);
+        if (!root) res = deserialize_batch_result(bytes, "the result from rank 0");
+    }
     return res;
 }
 

@@ -1,6 +1,7 @@
 #include "core/provenance.h"
 
 #include "core/build_info.h"
+#include "core/distributed.h"
 
 #include <fmt/core.h>
 #include <oneapi/tbb/version.h>
@@ -36,6 +37,7 @@ std::vector<std::pair<std::string, std::string>> provenance(const std::string& c
         {"CLI11", CLI11_VERSION},
         {"Random123", "Philox4x64-10"},
         {"host_threads", std::to_string(std::thread::hardware_concurrency())},
+        {"mpi_ranks", std::to_string(dist::size())},  // core/distributed.h
         {"date_utc", utc_now()},
     };
     if (std::string(SSSLAB_SANITIZE_FLAGS).size()) p.push_back({"sanitize", SSSLAB_SANITIZE_FLAGS});

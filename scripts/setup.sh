@@ -26,6 +26,7 @@ packages=(
   libopenvdb-dev libboost-iostreams-dev  # OpenVDB: heterogeneous media (optional part; FindOpenVDB needs Boost iostreams)
   libosmesa6-dev libegl-dev libegl-mesa0 libgl1-mesa-dri  # headless OpenGL (OSMesa, EGL with Mesa as its vendor; llvmpipe): the GL twin
   python3-glad          # glad2: generates the GL twin's loader at build time, offline
+  libopenmpi-dev openmpi-bin  # Open MPI: runs spread over processes and machines (mpirun; optional part)
   python3-matplotlib    # plots of the experiment reports (run by Debian's /usr/bin/python3)
   chromium              # headless check that the HTML reports open and show their plots
 )

@@ -2,6 +2,7 @@
 
 #include "approx/image.h"
 #include "approx/kernel2d.h"
+#include "core/distributed.h"
 #include "core/profile.h"
 #include "core/quadrature.h"
 #include "realtime/sss_pass.h"
@@ -89,10 +90,12 @@ std::string read_text(const fs::path& path) {
     return ss.str();
 }
 
-CommandResult run_ssslab(const std::vector<std::string>& args, const fs::path& cwd) {
+CommandResult run_ssslab(const std::vector<std::string>& args, const fs::path& cwd,
+                         const std::vector<std::string>& launcher) {
     TempDir io;
-    std::string cmd =
-        "cd " + shell_quote(cwd.string()) + " && SSSLAB_PROGRESS=0 " + shell_quote(ssslab_binary());
+    std::string cmd = "cd " + shell_quote(cwd.string()) + " && SSSLAB_PROGRESS=0 ";
+    for (const auto& a : launcher) cmd += shell_quote(a) + " ";
+    cmd += shell_quote(ssslab_binary());
     for (const auto& a : args) cmd += " " + shell_quote(a);
     cmd += " </dev/null >" + shell_quote((io / "out").string()) + " 2>" +
            shell_quote((io / "err").string());
@@ -105,6 +108,12 @@ CommandResult run_ssslab(const std::vector<std::string>& args, const fs::path& c
     r.out = read_text(io / "out");
     r.err = read_text(io / "err");
     return r;
+}
+
+std::vector<std::string> mpi_launcher(int ranks) {
+    if (!dist::built_with_mpi() || std::system("command -v mpirun >/dev/null 2>&1") != 0) return {};
+    return {"mpirun", "--allow-run-as-root", "--oversubscribe", "--bind-to", "none",
+            "-np",    std::to_string(ranks)};
 }
 
 int run_and_kill(const std::vector<std::string>& args, const fs::path& cwd, int ms, int sig) {

@@ -58,7 +58,11 @@ struct CommandResult {
 };
 
 /// Run `ssslab` with the given arguments in `cwd` (stdin from /dev/null, progress off).
-CommandResult run_ssslab(const std::vector<std::string>& args, const std::filesystem::path& cwd);
+CommandResult run_ssslab(const std::vector<std::string>& args, const std::filesystem::path& cwd,
+                         const std::vector<std::string>& launcher = {});
+/// `mpirun` for `ranks` ranks (as root too, oversubscribing the cores), or empty when this
+/// build has no MPI or mpirun is not installed: the launcher for run_ssslab.
+std::vector<std::string> mpi_launcher(int ranks);
 
 /// Start `ssslab` with the given arguments in `cwd` (output to this process's), send it `sig`
 /// after `ms` milliseconds, and return its exit status (128 + signal if it died of one; -1 if

@@ -1,5 +1,6 @@
 // `ssslab run` and `ssslab check`: experiments through the runner.
 #include "core/atomic_file.h"
+#include "core/distributed.h"
 #include "core/error.h"
 #include "experiments/cli/commands.h"
 #include "experiments/cli/common.h"
@@ -9,8 +10,11 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <memory>
+
+#include <unistd.h>
 
 namespace ssslab::cli {
 
@@ -48,6 +52,34 @@ runner::RunOptions options(const RunArgs& a) {
     return o;
 }
 
+// Under MPI (core/distributed.h) the ranks other than 0 run the experiment in a results root of
+// their own, removed when done: they read back what they write on the way (cache entries,
+// tables), while rank 0's cache decides what is computed (ArtifactCache::find) and rank 0 alone
+// writes the real results.
+class RankResults {
+  public:
+    explicit RankResults(runner::RunOptions& o) {
+        if (dist::is_root()) return;
+        root_ = std::filesystem::temp_directory_path() /
+                ("ssslab-rank" + std::to_string(dist::rank()) + "-" + std::to_string(::getpid()));
+        std::error_code ec;
+        std::filesystem::remove_all(root_, ec);
+        o.results_root = root_;
+        discard_outputs(false);
+    }
+    ~RankResults() {
+        if (root_.empty()) return;
+        discard_outputs(true);
+        std::error_code ec;
+        std::filesystem::remove_all(root_, ec);
+    }
+    RankResults(const RankResults&) = delete;
+    RankResults& operator=(const RankResults&) = delete;
+
+  private:
+    std::filesystem::path root_;
+};
+
 int interrupted() {
     std::fprintf(stderr,
                  "ssslab: interrupted. Finished artifacts are cached and unfinished ones "
@@ -60,6 +92,7 @@ int run_experiments(const RunArgs& a) {
     const std::vector<runner::Experiment> exps = load(a);
     runner::RunOptions o = options(a);
     o.cancel = install_interrupt_handler();
+    const RankResults own(o);
     for (const auto& e : exps) {
         runner::ExperimentRun r = runner::plan(e, o);
         if (a.dry_run || !a.quiet) runner::print_plan(r, std::cout, a.verbose);
@@ -77,6 +110,7 @@ int check_experiments(const RunArgs& a) {
     const std::vector<runner::Experiment> exps = load(a);
     runner::RunOptions o = options(a);
     o.cancel = install_interrupt_handler();
+    const RankResults own(o);
     runner::CheckOptions co;
     co.alpha = a.alpha;
     co.verbose = a.verbose;
@@ -89,7 +123,7 @@ int check_experiments(const RunArgs& a) {
         if (!runner::execute(r, o)) return interrupted();
         if (a.update) {
             const auto path = runner::baseline_path(r, co);
-            write_file_atomic(path, runner::baseline_toml(r));
+            if (dist::is_root()) write_file_atomic(path, runner::baseline_toml(r));
             std::printf("%s: baseline of %zu metrics written to %s\n", e.name.c_str(),
                         r.metrics.size(), path.string().c_str());
             continue;

@@ -1,3 +1,5 @@
+#include "core/atomic_file.h"
+#include "core/distributed.h"
 #include "core/error.h"
 #include "core/provenance.h"
 #include "experiments/cli/commands.h"
@@ -5,6 +7,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -51,8 +54,9 @@ int command_line_error(CLI::App& app, const CLI::ParseError& e) {
                      : std::string());
         }
     }
-    std::fprintf(stderr, "%s: error: %s\nRun `%s --help` for the options.\n", command.c_str(),
-                 message.c_str(), command.c_str());
+    if (dist::is_root())  // every rank of an MPI run parses the same command line
+        std::fprintf(stderr, "%s: error: %s\nRun `%s --help` for the options.\n", command.c_str(),
+                     message.c_str(), command.c_str());
     return 2;
 }
 
@@ -95,25 +99,54 @@ int main(int argc, char** argv) {
         return command_line_error(app, e);
     }
     if (!action) return app.exit(CLI::CallForHelp());
+    // Bad input is the same on every rank of an MPI run: rank 0 says it. Any other error may be
+    // one rank's own, so that rank says it.
+    const bool say_input = dist::is_root();
+    const std::string rank_tag =
+        dist::active() ? "[rank " + std::to_string(dist::rank()) + "] " : "";
     try {
         return action();
     } catch (const InputError& e) {
-        std::fprintf(stderr, "%s\n", e.what());
+        if (say_input) std::fprintf(stderr, "%s\n", e.what());
         return 2;
     } catch (const InfeasibleError& e) {
-        std::fprintf(stderr, "error: %s\n", e.what());
+        if (say_input) std::fprintf(stderr, "error: %s\n", e.what());
         return 2;
     } catch (const IoError& e) {
-        std::fprintf(stderr, "error: %s\n", e.what());
+        std::fprintf(stderr, "%serror: %s\n", rank_tag.c_str(), e.what());
         return 3;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "internal error: %s\n", e.what());
+        std::fprintf(stderr, "%sinternal error: %s\n", rank_tag.c_str(), e.what());
         return 1;
     }
+}
+
+/// Under mpirun (core/distributed.h): MPI started, rank 0 writes the outputs and the report on
+/// stdout, the other ranks compute with it and write nothing. A failure on any rank ends all
+/// of them with its exit status (the others would wait for the failed one forever).
+int main_distributed(int argc, char** argv) {
+    std::optional<dist::Session> session;
+    try {
+        session.emplace(argc, argv);
+    } catch (const InputError& e) {
+        std::fprintf(stderr, "ssslab: error: %s\n", e.message().c_str());
+        return 2;
+    }
+    if (!dist::is_root()) {
+        if (!std::freopen("/dev/null", "w", stdout)) std::fclose(stdout);
+        discard_outputs(true);
+    }
+    const int status = main(argc, argv);
+    if (status != 0 && dist::active()) {
+        std::fflush(stdout);
+        std::fflush(stderr);
+        dist::abort_all(status);
+    }
+    return status;
 }
 
 }  // namespace ssslab::cli
 
 int main(int argc, char** argv) {
-    return ssslab::cli::main(argc, argv);
+    return ssslab::cli::main_distributed(argc, argv);
 }

@@ -3,11 +3,13 @@
 #include "core/atomic_file.h"
 #include "core/batch_runner.h"
 #include "core/crash_point.h"
+#include "core/distributed.h"
 #include "core/error.h"
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <stdexcept>
 
 #include <unistd.h>
 
@@ -15,11 +17,63 @@ namespace ssslab::runner {
 
 namespace fs = std::filesystem;
 
-std::optional<fs::path> ArtifactCache::find(const std::string& kind, const std::string& key) const {
+std::optional<fs::path> ArtifactCache::find_here(const std::string& kind,
+                                                 const std::string& key) const {
     const fs::path dir = root_ / kind / key;
     std::error_code ec;
     if (fs::exists(dir / "manifest.toml", ec)) return dir;
     return std::nullopt;
+}
+
+namespace {
+
+// An entry's files as one message: (name length, name, content length, content) per file.
+std::string pack_entry(const fs::path& dir) {
+    std::string out;
+    auto put = [&](const std::string& s) {
+        const std::uint64_t n = s.size();
+        out.append(reinterpret_cast<const char*>(&n), sizeof n);
+        out += s;
+    };
+    for (const auto& e : fs::directory_iterator(dir))
+        if (e.is_regular_file()) {
+            put(e.path().filename().string());
+            put(read_file(e.path()));
+        }
+    return out;
+}
+
+std::map<std::string, std::string> unpack_entry(const std::string& bytes) {
+    std::map<std::string, std::string> files;
+    size_t at = 0;
+    auto get = [&] {
+        std::uint64_t n = 0;
+        if (at + sizeof n > bytes.size()) throw std::runtime_error("MPI: a truncated cache entry");
+        std::memcpy(&n, bytes.data() + at, sizeof n);
+        at += sizeof n;
+        if (n > bytes.size() - at) throw std::runtime_error("MPI: a truncated cache entry");
+        std::string s = bytes.substr(at, n);
+        at += n;
+        return s;
+    };
+    while (at < bytes.size()) {
+        std::string name = get();
+        files[name] = get();
+    }
+    return files;
+}
+
+}  // namespace
+
+std::optional<fs::path> ArtifactCache::find(const std::string& kind, const std::string& key) const {
+    if (!dist::active()) return find_here(kind, key);
+    const auto entry = dist::from_root([&]() -> std::optional<std::string> {
+        if (const auto dir = find_here(kind, key)) return pack_entry(*dir);
+        return std::nullopt;
+    });
+    if (dist::is_root() || !entry) return entry ? find_here(kind, key) : std::nullopt;
+    if (const auto dir = find_here(kind, key)) return dir;
+    return store(kind, key, unpack_entry(*entry));
 }
 
 fs::path ArtifactCache::checkpoint_prefix(const std::string& kind, const std::string& key) const {

@@ -16,9 +16,14 @@ class ArtifactCache {
     explicit ArtifactCache(std::filesystem::path root) : root_(std::move(root)) {}
 
     const std::filesystem::path& root() const { return root_; }
-    /// Directory of a finished entry, if present.
+    /// Directory of a finished entry, if present. Collective under MPI (core/distributed.h):
+    /// rank 0's cache decides, and the other ranks (each with a cache of its own) receive the
+    /// entry's files from it, so that every rank computes what rank 0 computes.
     std::optional<std::filesystem::path> find(const std::string& kind,
                                               const std::string& key) const;
+    /// This process's entry only (not collective).
+    std::optional<std::filesystem::path> find_here(const std::string& kind,
+                                                   const std::string& key) const;
     /// Store an entry of named files atomically; returns its directory. If another run stored it
     /// meanwhile, that entry is kept (it has the same content by construction).
     std::filesystem::path store(const std::string& kind, const std::string& key,

@@ -1,8 +1,11 @@
 #include "experiments/runner/plots.h"
 
+#include "core/distributed.h"
+
 #include "experiments/runner/engines.h"
 
 #include "core/atomic_file.h"
+#include "core/distributed.h"
 #include "core/hash.h"
 #include "experiments/runner/cache.h"
 #include "experiments/runner/nodes.h"
@@ -193,14 +196,15 @@ PlotResult draw_plots(const std::vector<PlotRequest>& requests, const fs::path& 
         items.push_back({q.json, hash_hex(content)});
         out.plots.push_back(q.file);
     }
-    if (out.plots.empty()) return out;
+    // The ranks other than 0 of an MPI run draw nothing (core/distributed.h).
+    if (out.plots.empty() || !dist::is_root()) return out;
 
     // Reuse what was drawn before; draw the rest in one Python process.
     std::error_code ec;
     fs::create_directories(dir / "plots", ec);
     std::vector<size_t> missing;
     for (size_t k = 0; k < items.size(); ++k) {
-        const auto hit = cache.find("plot", items[k].key);
+        const auto hit = cache.find_here("plot", items[k].key);
         if (!hit) {
             missing.push_back(k);
             continue;

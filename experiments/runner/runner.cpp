@@ -3,6 +3,7 @@
 #include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/crash_point.h"
+#include "core/distributed.h"
 #include "core/error.h"
 #include "core/hash.h"
 #include "core/provenance.h"
@@ -515,8 +516,10 @@ bool compute_nodes(ExperimentRun& r, const RunOptions& o) {
         }
     };
     // Runs whose wall time is studied (the convergence materials) run alone, one after the
-    // other with every core; the others run side by side.
+    // other with every core; the others run side by side. Under MPI every run is spread over
+    // the ranks, one after the other (core/distributed.h: the ranks meet in each run in turn).
     auto timed = [&](const ChannelNode& n) {
+        if (dist::active()) return true;
         auto in = [&](const std::vector<std::string>& ms) {
             return std::find(ms.begin(), ms.end(), n.material) != ms.end();
         };
