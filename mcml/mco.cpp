@@ -3,6 +3,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
@@ -128,6 +129,15 @@ McoFile parse_mco(const std::string& text, const std::string& name) {
     auto fail = [&](const std::string& msg) -> void {
         throw InputError({name, lineno, 0}, "", msg, line);
     };
+    // A count in the file: a whole number in [lo, hi], refused otherwise (a cast of an
+    // out-of-range double to an integer is undefined; found by fuzz/fuzz_mco.cpp).
+    auto count = [&](double v, double lo, double hi, const std::string& what) {
+        if (!(v >= lo && v <= hi) || v != std::floor(v))
+            fail(what + " must be a whole number in [" +
+                 std::to_string(static_cast<long long>(lo)) + ", " +
+                 std::to_string(static_cast<long long>(hi)) + "]");
+        return static_cast<std::int64_t>(v);
+    };
     auto next_line = [&]() -> bool {
         if (!std::getline(in, line)) return false;
         ++lineno;
@@ -165,7 +175,7 @@ McoFile parse_mco(const std::string& text, const std::string& name) {
             next_line();
             auto p = numbers(line);
             if (p.size() != 1) fail("expected the number of photons");
-            f.photons = static_cast<std::int64_t>(p[0]);
+            f.photons = count(p[0], 0, 9e15, "the number of photons");
             next_line();
             p = numbers(line);
             if (p.size() != 2) fail("expected dz dr");
@@ -173,13 +183,14 @@ McoFile parse_mco(const std::string& text, const std::string& name) {
             next_line();
             p = numbers(line);
             if (p.size() != 3) fail("expected nz nr na");
-            f.grid.nz = static_cast<int>(p[0]), f.grid.nr = static_cast<int>(p[1]),
-            f.grid.na = static_cast<int>(p[2]);
+            f.grid.nz = static_cast<int>(count(p[0], 1, 1e8, "nz"));
+            f.grid.nr = static_cast<int>(count(p[1], 1, 1e8, "nr"));
+            f.grid.na = static_cast<int>(count(p[2], 1, 1e8, "na"));
             while (next_line() && numbers(line).empty()) {
             }
             p = numbers(line);
             if (p.size() != 1) fail("expected the number of layers");
-            f.num_layers = static_cast<int>(p[0]);
+            f.num_layers = static_cast<int>(count(p[0], 1, 1e6, "the number of layers"));
         } else if (key == "RAT") {
             double* dst[4] = {&f.result.rsp, &f.result.rd, &f.result.a, &f.result.tt};
             for (double* d : dst) {

@@ -7,6 +7,7 @@
 //   [Swinbank and Purser 2006] Fibonacci grids: the stratified directions and points.
 #include "realtime/lighting.h"
 
+#include "core/cpu_dispatch.h"
 #include "core/dielectric.h"
 #include "realtime/shadow_map.h"
 
@@ -166,10 +167,10 @@ typedef std::int32_t I4 __attribute__((vector_size(16)));
 
 // Four samples at a time in GCC's vector extensions (one AVX register, or two SSE2 ones); a
 // row's last samples as a padded quad.
-__attribute__((target_clones("avx2", "default"))) void directional_row(
-    const DirectionalRow& k, int n, const double* ndc_x, double ndc_y, const double* view_z,
-    const float* normal, const Kind* kind, const float* depth, double* cos_out,
-    std::uint8_t* lit_out) {
+SSSLAB_AVX2_CLONES void directional_row(const DirectionalRow& k, int n, const double* ndc_x,
+                                        double ndc_y, const double* view_z, const float* normal,
+                                        const Kind* kind, const float* depth, double* cos_out,
+                                        std::uint8_t* lit_out) {
     const double size = k.size;
     const D4 zero4{}, one4 = zero4 + 1.0, size4 = zero4 + size;
     for (int x = 0; x < n; x += 4) {

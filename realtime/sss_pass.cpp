@@ -1,5 +1,7 @@
 #include "realtime/sss_pass.h"
 
+#include "core/cpu_dispatch.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -258,27 +260,23 @@ __attribute__((always_inline)) inline void fast_pair_body(const F4* tca, int pa,
     }
 }
 
-__attribute__((target_clones("avx2", "default"))) void fast_pair_follow(
-    const F4* tca, int pa, double sa, const F4* tcb, int pb, double sb, const double* off,
-    const F4* wt, size_t count, float follow, F4* out) {
+SSSLAB_AVX2_CLONES void fast_pair_follow(const F4* tca, int pa, double sa, const F4* tcb, int pb,
+                                         double sb, const double* off, const F4* wt, size_t count,
+                                         float follow, F4* out) {
     fast_pair_body<true>(tca, pa, sa, tcb, pb, sb, off, wt, count, follow, out);
 }
-__attribute__((target_clones("avx2", "default"))) void fast_pair_none(
-    const F4* tca, int pa, double sa, const F4* tcb, int pb, double sb, const double* off,
-    const F4* wt, size_t count, float follow, F4* out) {
+SSSLAB_AVX2_CLONES void fast_pair_none(const F4* tca, int pa, double sa, const F4* tcb, int pb,
+                                       double sb, const double* off, const F4* wt, size_t count,
+                                       float follow, F4* out) {
     fast_pair_body<false>(tca, pa, sa, tcb, pb, sb, off, wt, count, follow, out);
 }
 
-__attribute__((target_clones("avx2", "default"))) F4 fast_pixel_follow(const F4* tc, int pos,
-                                                                       const double* off,
-                                                                       const F4* wt, size_t count,
-                                                                       double scale, float follow) {
+SSSLAB_AVX2_CLONES F4 fast_pixel_follow(const F4* tc, int pos, const double* off, const F4* wt,
+                                        size_t count, double scale, float follow) {
     return fast_pixel_body<true>(tc, pos, off, wt, count, scale, follow);
 }
-__attribute__((target_clones("avx2", "default"))) F4 fast_pixel_none(const F4* tc, int pos,
-                                                                     const double* off,
-                                                                     const F4* wt, size_t count,
-                                                                     double scale, float follow) {
+SSSLAB_AVX2_CLONES F4 fast_pixel_none(const F4* tc, int pos, const double* off, const F4* wt,
+                                      size_t count, double scale, float follow) {
     return fast_pixel_body<false>(tc, pos, off, wt, count, scale, follow);
 }
 

@@ -2,6 +2,7 @@
 # Configure and build ssslab in build/<type> (default: release). Extra arguments go to CMake.
 #   scripts/build.sh                    optimised build in build/release
 #   scripts/build.sh asan               AddressSanitizer + UBSan build in build/asan
+#   scripts/build.sh tsan               ThreadSanitizer build in build/tsan (line tables only)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kind="${1:-release}"
@@ -13,9 +14,17 @@ case "$kind" in
   debug)   flags=(-DCMAKE_BUILD_TYPE=Debug) ;;
   # The sanitizer builds leave MPI out: Open MPI's own allocations would read as leaks.
   asan)    flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSSSLAB_SANITIZE=address,undefined -DSSSLAB_BUILD_BENCHMARKS=OFF -DSSSLAB_WITH_MPI=OFF) ;;
-  *) echo "usage: $0 [release|debug|asan] [cmake args...]" >&2; exit 2 ;;
+  # ThreadSanitizer: the threaded engines' races (tests labelled tsan run in it in CI).
+  # Linked with oneTBB built with TSan (scripts/tbb_tsan.sh), found first through the run path.
+  tsan)    bash scripts/tbb_tsan.sh
+           flags=(-DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS=-g1 -DSSSLAB_SANITIZE=thread -DSSSLAB_BUILD_BENCHMARKS=OFF -DSSSLAB_WITH_MPI=OFF
+                  -DTBB_DIR="$PWD/build/tbb-tsan/install/lib/cmake/TBB") ;;
+  *) echo "usage: $0 [release|debug|asan|tsan] [cmake args...]" >&2; exit 2 ;;
 esac
 if [[ ! -f "build/$kind/CMakeCache.txt" ]]; then
   cmake -S . -B "build/$kind" "${generator[@]}" "${flags[@]}" "$@"
 fi
-cmake --build "build/$kind" -j "$(nproc)"
+# SSSLAB_TARGETS="a b": build those targets only (CI's ThreadSanitizer build: the threaded tests).
+targets=()
+for t in ${SSSLAB_TARGETS:-}; do targets+=(--target "$t"); done
+cmake --build "build/$kind" -j "$(nproc)" "${targets[@]}"

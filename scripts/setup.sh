@@ -3,7 +3,7 @@
 # prints the exact apt-get line to run and exits non-zero if anything is missing.
 #
 #   scripts/setup.sh          build and test dependencies
-#   scripts/setup.sh --dev    also the developer tools CI uses (clang-format)
+#   scripts/setup.sh --dev    also the developer tools CI uses (clang-format, Clang and libFuzzer)
 set -euo pipefail
 
 packages=(
@@ -31,7 +31,7 @@ packages=(
   chromium              # headless check that the HTML reports open and show their plots
 )
 if [[ "${1:-}" == "--dev" ]]; then
-  packages+=(clang-format)
+  packages+=(clang-format clang libclang-rt-14-dev)  # formatting; libFuzzer (scripts/fuzz.sh)
 fi
 
 missing=()

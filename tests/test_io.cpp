@@ -105,6 +105,37 @@ TEST(Mci, NegativeGIsAnExtensionOfTheDefaultMode) {
     }
 }
 
+TEST(Mco, CountsOutOfRangeAreRefusedNotCast) {
+    // Found by fuzz/fuzz_mco.cpp (fuzz/regressions/mco/): an infinite or fractional grid size,
+    // photon or layer count was cast to an integer (undefined behaviour).
+    const mcml::MciFile f = mcml::parse_mci(kTemplate, "t.mci");
+    const mcml::RunSpec& run = f.runs[0];
+    const mcml::TallyLayout L = mcml::TallyLayout::make(run, mcml::TallyMode::kFull);
+    std::vector<double> raw(L.size, 1.0);
+    mcml::reduce(run, raw.data(), L);
+    const std::string good =
+        mcml::format_mco(run, mcml::scale_full(run, raw, L, 1000.0, mcml::kPi, 0.05), 1000, 1.0);
+    const std::string grid = std::to_string(run.grid.nz) + "\t" + std::to_string(run.grid.nr);
+    const size_t at = good.find(grid);
+    ASSERT_NE(at, std::string::npos);
+    for (const char* bad : {"inf", "1e300", "2.5", "-3", "0"}) {
+        std::string text = good;
+        text.replace(at, std::to_string(run.grid.nz).size(), bad);
+        try {
+            (void)mcml::parse_mco(text, "t.mco");
+            ADD_FAILURE() << "nz = " << bad << " was accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("nz must be a whole number"), std::string::npos)
+                << e.what();
+            EXPECT_GT(e.where().line, 0);
+        }
+    }
+    EXPECT_THROW((void)mcml::parse_mco(
+                     testing::read_text(testing::source_path("fuzz/regressions/mco/nz-inf.mco")),
+                     "nz-inf.mco"),
+                 InputError);
+}
+
 TEST(Mco, WriterAndReaderAgree) {
     const mcml::MciFile f = mcml::parse_mci(kTemplate, "t.mci");
     const mcml::RunSpec& run = f.runs[0];

@@ -327,7 +327,10 @@ std::map<std::string, std::string> run_kernel_study(
 
         if (!spec.signals.empty()) {
             for (approx::Signal sig : spec.signals) {
-                const auto& [e, exact] = images_of(sig);
+                // Not a structured binding: lambdas below capture them (Clang 14 cannot).
+                const auto& images = images_of(sig);
+                const auto& e = std::get<0>(images);
+                const auto& exact = std::get<1>(images);
                 const std::string dir = "images/" + material + "/" + approx::signal_name(sig) + "/";
                 std::vector<std::pair<std::string, approx::ImageRGB>> outs;
                 auto record = [&](const approx::ModelSpec& m, const std::string& sampling,

@@ -285,7 +285,9 @@ void study_section(std::ostringstream& os, const StudyOutput& so, const PlotResu
             const size_t slash = name.rfind('/');
             panels[name.substr(0, slash + 1)].push_back(name.substr(slash + 1));
         }
-    for (const auto& [folder, names] : panels) {
+    for (const auto& panel : panels) {
+        const std::string& folder = panel.first;  // captured below: no structured binding
+        const std::vector<std::string>& names = panel.second;
         os << "<p><b>" << esc(folder.substr(7))
            << "</b> (differences scaled to the largest "
               "difference among the models)</p>\n<table class=\"panels\"><tr>";

@@ -1,0 +1,19 @@
+// Function multi-versioning: SSSLAB_AVX2_CLONES before a hot function compiles it twice (AVX2 and
+// the baseline) and lets the loader pick one through an ifunc resolver. Under ThreadSanitizer the
+// resolver runs instrumented before the TSan runtime is set up and the program dies while loading
+// (GCC 12), so a TSan build compiles the baseline only.
+#pragma once
+
+#if defined(__SANITIZE_THREAD__)
+#define SSSLAB_TSAN 1
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define SSSLAB_TSAN 1
+#endif
+#endif
+
+#ifdef SSSLAB_TSAN
+#define SSSLAB_AVX2_CLONES
+#else
+#define SSSLAB_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+#endif

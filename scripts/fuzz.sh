@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Fuzz the readers of user input with libFuzzer (fuzz/README.md): .mci and .mco files, experiment
+# configs, scene files and OBJ meshes. Builds build/fuzz with Clang (AddressSanitizer,
+# UndefinedBehaviorSanitizer, coverage from all of ssslab), then runs each target for the given
+# seconds from its committed seeds (fuzz/corpus/<target>) and the inputs found so far
+# (results/fuzz/<target>/corpus, not committed). A failing input is written to
+# results/fuzz/<target>/ and the script exits non-zero: copy it to fuzz/regressions/<target>/
+# once fixed, so that the tests replay it forever.
+#
+#   scripts/fuzz.sh [seconds per target] [targets...]     default 60 s, every target
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds="${1:-60}"
+[[ $# -gt 0 ]] && shift
+targets=("$@")
+[[ ${#targets[@]} -eq 0 ]] && targets=(mci mco config scene obj)
+command -v clang++ >/dev/null || { echo "fuzz: needs clang (scripts/setup.sh --dev)" >&2; exit 2; }
+
+generator=()
+command -v ninja >/dev/null 2>&1 && generator=(-G Ninja)
+if [[ ! -f build/fuzz/CMakeCache.txt ]]; then
+  CC=clang CXX=clang++ cmake -S . -B build/fuzz "${generator[@]}" -DCMAKE_BUILD_TYPE=Release \
+    -DCMAKE_CXX_FLAGS=-g1 -DSSSLAB_SANITIZE=address,undefined -DSSSLAB_BUILD_FUZZERS=ON \
+    -DSSSLAB_BUILD_TESTS=OFF -DSSSLAB_BUILD_BENCHMARKS=OFF -DSSSLAB_WITH_MPI=OFF \
+    -DSSSLAB_WITH_GL=OFF
+fi
+cmake --build build/fuzz -j "$(nproc)" $(printf -- '--target fuzz_%s ' "${targets[@]}")
+
+failed=0
+for t in "${targets[@]}"; do
+  out="results/fuzz/$t"
+  mkdir -p "$out/corpus"
+  echo "== fuzz_$t: $seconds s"
+  if ! ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+      LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp \
+      "build/fuzz/fuzz/fuzz_$t" "$out/corpus" "fuzz/corpus/$t" \
+      -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=1024 \
+      -max_len=16384 -artifact_prefix="$out/" -print_final_stats=1 2> "$out/log.txt"; then
+    failed=1
+    tail -60 "$out/log.txt"
+    echo "fuzz_$t FAILED: the input is in $out/ (crash-*, timeout-*, oom-*)"
+  else
+    grep -E "^stat::number_of_executed_units|^stat::new_units_added" "$out/log.txt" | tr '\n' ' '
+    echo
+  fi
+done
+exit $failed
