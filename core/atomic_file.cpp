@@ -131,7 +131,6 @@ void OutputTransaction::stage(const fs::path& path, std::string_view content) {
 }
 
 void OutputTransaction::commit() {
-    if (g_discard) temps_.clear();
     for (size_t i = 0; i < temps_.size(); ++i) {
         if (std::rename(temps_[i].c_str(), finals_[i].c_str()) != 0)
             throw IoError("cannot rename '" + temps_[i].string() + "' to '" + finals_[i].string() +

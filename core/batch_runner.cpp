@@ -34,6 +34,8 @@ constexpr char kResultMagic[8] = {'S', 'S', 'S', 'L', 'B', 'R', 'S', '1'};
 // batch it simulated (kBatch: index, samples, work, then the tally) and, when it stops, kDone;
 // rank 0 tells the workers to stop (kStop) once the budget is met or the run is interrupted.
 enum Tag : int { kBatch = 1, kDone = 2, kStop = 3 };
+/// A kBatch message's header: index, samples, work.
+constexpr std::size_t kBatchHeader = 3 * sizeof(std::uint64_t);
 
 }  // namespace
 
@@ -332,8 +334,7 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
             done[static_cast<size_t>(m.source)] = 1;
             return;
         }
-        constexpr size_t header = 3 * sizeof(std::uint64_t);
-        if (m.tag != kBatch || m.bytes.size() != header + opt.tally_size * sizeof(double))
+        if (m.tag != kBatch || m.bytes.size() != kBatchHeader + opt.tally_size * sizeof(double))
             throw std::runtime_error("MPI: an unexpected message from rank " +
                                      std::to_string(m.source));
         Work* w = nullptr;
@@ -346,11 +347,13 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
             received_free.pop_back();
         }
         std::uint64_t h[3];
-        std::memcpy(h, m.bytes.data(), header);
+        static_assert(sizeof h == kBatchHeader);
+        std::memcpy(h, m.bytes.data(), kBatchHeader);
         w->index = h[0];
         w->samples = static_cast<std::int64_t>(h[1]);
         w->work = h[2];
-        std::memcpy(w->tally.data(), m.bytes.data() + header, opt.tally_size * sizeof(double));
+        std::memcpy(w->tally.data(), m.bytes.data() + kBatchHeader,
+                    opt.tally_size * sizeof(double));
         if (owner(w->index) == 0 || w->index < acc.batches() || pending.count(w->index))
             throw std::runtime_error("MPI: batch " + std::to_string(w->index) + " came from rank " +
                                      std::to_string(m.source));
@@ -381,10 +384,10 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
     // Worker ranks: send each batch to rank 0 in order; look for rank 0's "stop" after each.
     bool stop_received = false;
     auto send_batch = [&](Work* w) {
-        std::vector<char> msg(3 * sizeof(std::uint64_t) + opt.tally_size * sizeof(double));
+        std::vector<char> msg(kBatchHeader + opt.tally_size * sizeof(double));
         const std::uint64_t h[3] = {w->index, static_cast<std::uint64_t>(w->samples), w->work};
-        std::memcpy(msg.data(), h, sizeof h);
-        std::memcpy(msg.data() + sizeof h, w->tally.data(), opt.tally_size * sizeof(double));
+        std::memcpy(msg.data(), h, kBatchHeader);
+        std::memcpy(msg.data() + kBatchHeader, w->tally.data(), opt.tally_size * sizeof(double));
         dist::send(0, kBatch, msg.data(), msg.size());
         if (!stop_received && dist::poll(0, kStop)) {
             dist::receive(0);

@@ -67,11 +67,14 @@ std::map<std::string, std::string> unpack_entry(const std::string& bytes) {
 
 std::optional<fs::path> ArtifactCache::find(const std::string& kind, const std::string& key) const {
     if (!dist::active()) return find_here(kind, key);
+    std::optional<fs::path> here;  // rank 0's entry
     const auto entry = dist::from_root([&]() -> std::optional<std::string> {
-        if (const auto dir = find_here(kind, key)) return pack_entry(*dir);
+        here = find_here(kind, key);
+        if (here) return pack_entry(*here);
         return std::nullopt;
     });
-    if (dist::is_root() || !entry) return entry ? find_here(kind, key) : std::nullopt;
+    if (dist::is_root()) return here;
+    if (!entry) return std::nullopt;
     if (const auto dir = find_here(kind, key)) return dir;
     return store(kind, key, unpack_entry(*entry));
 }

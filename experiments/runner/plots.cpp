@@ -1,7 +1,5 @@
 #include "experiments/runner/plots.h"
 
-#include "core/distributed.h"
-
 #include "experiments/runner/engines.h"
 
 #include "core/atomic_file.h"
