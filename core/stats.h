@@ -54,6 +54,26 @@ inline double chi_square_p(double chi2, double dof) {
     return dof > 0 ? gamma_q(0.5 * dof, 0.5 * chi2) : 1.0;
 }
 
+/// The standard normal quantile: x with P(N(0, 1) <= x) = p (bisection on the CDF
+/// 0.5 erfc(-x / sqrt 2): slow but exact to double precision).
+inline double normal_quantile(double p) {
+    double lo = -40, hi = 40;
+    for (int i = 0; i < 200; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        if (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+/// The per-test significance that keeps a family of `tests` independent tests at `alpha`
+/// (Sidak).
+inline double sidak(double alpha, int tests) {
+    return 1.0 - std::pow(1.0 - alpha, 1.0 / std::max(1, tests));
+}
+
 class BatchAccumulator {
   public:
     BatchAccumulator() = default;

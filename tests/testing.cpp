@@ -412,28 +412,11 @@ double student_t_quantile(double p, double dof) {
     return z + g1 / n + g2 / (n * n) + g3 / (n * n * n) + g4 / (n * n * n * n);
 }
 
-double normal_quantile(double p) {
-    // Bisection on the CDF 0.5 erfc(-x / sqrt 2): slow but exact to double precision.
-    double lo = -40, hi = 40;
-    for (int i = 0; i < 200; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        if (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    return 0.5 * (lo + hi);
-}
-
 double chi2_critical(double dof, double alpha) {
     const double z = normal_quantile(1.0 - alpha);
     const double a = 2.0 / (9.0 * dof);
     const double t = 1.0 - a + z * std::sqrt(a);
     return dof * t * t * t;
-}
-
-double sidak(double alpha, int tests) {
-    return 1.0 - std::pow(1.0 - alpha, 1.0 / tests);
 }
 
 double chi2_statistic(const std::vector<double>& observed, const std::vector<double>& expected,

@@ -3,6 +3,8 @@
 // real-time tests' scene and the screen-space SSS tests' inputs.
 #pragma once
 
+#include "core/stats.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -137,8 +139,9 @@ const char* edge_mode_name(realtime::SssEdgeMode m);
 /// Factor for Monte Carlo sample counts: 1 by default, SSSLAB_TEST_SCALE for the slow variants.
 double test_scale();
 
-/// Standard normal quantile (inverse CDF), to ~1e-12.
-double normal_quantile(double p);
+// The standard normal quantile and Sidak's per-test significance: core/stats.h.
+using ssslab::normal_quantile;
+using ssslab::sidak;
 /// Quantile of Student's t distribution with `dof` degrees of freedom (Cornish-Fisher expansion
 /// about the normal quantile, four terms [Abramowitz & Stegun 26.7.5]; relative error below
 /// 1e-3 for dof >= 20 and p up to 1 - 1e-7).
@@ -146,8 +149,6 @@ double student_t_quantile(double p, double dof);
 /// Upper critical value of the chi-square distribution with `dof` degrees of freedom at
 /// significance `alpha` (Wilson-Hilferty, relative error below 1e-3 for dof >= 10).
 double chi2_critical(double dof, double alpha);
-/// Per-test significance giving family-wise `alpha` over `tests` tests (Sidak).
-double sidak(double alpha, int tests);
 
 /// Pearson chi-square statistic of observed counts against expected counts. Cells with an
 /// expectation below 5 are pooled with their neighbours first (as pbrt and Mitsuba do).

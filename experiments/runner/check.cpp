@@ -3,6 +3,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/provenance.h"
+#include "core/stats.h"
 
 #include <cmath>
 #include <cstdio>
@@ -15,15 +16,6 @@ namespace ssslab::runner {
 namespace fs = std::filesystem;
 
 namespace {
-
-double normal_quantile(double p) {
-    double lo = -40, hi = 40;
-    for (int i = 0; i < 200; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
-    }
-    return 0.5 * (lo + hi);
-}
 
 std::string g17(double v) {
     char buf[40];
@@ -96,7 +88,7 @@ CheckResult check_against_baseline(const ExperimentRun& r, const CheckOptions& o
     CheckResult res;
     int stochastic = 0;
     for (const auto& m : r.metrics) stochastic += m.stochastic;
-    const double alpha_each = 1.0 - std::pow(1.0 - o.alpha, 1.0 / std::max(1, stochastic));
+    const double alpha_each = sidak(o.alpha, stochastic);
     res.z_threshold = normal_quantile(1.0 - alpha_each / 2);
     std::map<std::string, bool> seen;
     for (const auto& m : r.metrics) {

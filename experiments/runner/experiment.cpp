@@ -170,21 +170,23 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
     if (auto t = outs.table("realtime"))
         e.realtime =
             read_realtime_study(*t, std::filesystem::path(e.source).parent_path().string());
+    if (auto t = outs.table("stiff")) e.stiff = read_stiff_study(*t);
     const bool material_outputs = e.profiles.enabled || e.profile_plots.enabled ||
                                   e.convergence.enabled || !e.kernel_studies.empty() ||
                                   e.crossval.enabled || e.pencil.enabled || e.efficiency.enabled;
-    if (!material_outputs && !e.render.enabled && !e.realtime.enabled)
+    if (!material_outputs && !e.render.enabled && !e.realtime.enabled && !e.stiff.enabled)
         outs.fail("profiles",
                   "no outputs: give at least one of [outputs.profiles], "
                   "[outputs.profile_plots], [outputs.convergence], [[outputs.kernels]], "
                   "[outputs.crossval], [outputs.pencil], [outputs.efficiency], [outputs.render], "
-                  "[outputs.realtime]");
+                  "[outputs.realtime], [outputs.stiff]");
     if (material_outputs && e.materials.empty())
         mats.fail("presets", "no materials: give presets = [...] or [[materials.custom]] tables");
     if (!material_outputs && !e.materials.empty())
         mats.fail("presets",
                   "no output of this experiment reads materials ([outputs.render] and "
-                  "[outputs.realtime] take them from their scenes): remove [materials]");
+                  "[outputs.realtime] take them from their scenes, [outputs.stiff] has its "
+                  "own): remove [materials]");
     root.finish();
     return e;
 }

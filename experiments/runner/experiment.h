@@ -28,6 +28,8 @@
 //   [outputs.realtime]       the real-time renderer's frames of scene files scored against the
 //                            screen-space reference and the path tracer, Freude14 Table 6.4
 //                            (experiments/runner/realtime_study.h); needs no [materials]
+//   [outputs.stiff]          the stiff sweep: every engine and model on the extremes of its
+//                            inputs (experiments/runner/stiff_study.h); needs no [materials]
 // Every error names file:line:column and the key.
 #pragma once
 
@@ -37,6 +39,7 @@
 #include "core/profile.h"
 #include "experiments/runner/kernel_study.h"
 #include "experiments/runner/realtime_study.h"
+#include "experiments/runner/stiff_study.h"
 #include "experiments/runner/render_study.h"
 #include "mcml/engine.h"
 #include "mcml/profile.h"
@@ -109,6 +112,7 @@ struct Experiment {
     std::vector<KernelStudySpec> kernel_studies;  ///< [[outputs.kernels]]
     RenderStudySpec render;                       ///< [outputs.render]
     RealtimeStudySpec realtime;                   ///< [outputs.realtime]
+    StiffStudySpec stiff;                         ///< [outputs.stiff]
 
     std::shared_ptr<ConfigDocument> doc;  ///< parsed config; holds the resolved configuration
 };

@@ -113,9 +113,6 @@ void figures(std::ostringstream& os, const PlotResult& p, const std::string& sec
     }
 }
 
-namespace {
-
-// A CSV cell reader that honours double quotes (model specs contain commas).
 std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
     std::vector<std::vector<std::string>> rows;
     std::istringstream in(text);
@@ -138,6 +135,8 @@ std::vector<std::vector<std::string>> parse_csv(const std::string& text) {
     }
     return rows;
 }
+
+namespace {
 
 size_t column(const std::vector<std::string>& header, const char* name) {
     for (size_t i = 0; i < header.size(); ++i)
@@ -523,7 +522,8 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
        << (r.quick ? "<b>--quick</b> (budgets &times; " +
                          num(!e.materials.empty() ? e.mcml.quick_factor
                              : e.realtime.enabled ? e.realtime.quick_factor
-                                                  : e.render.quick_factor) +
+                             : e.render.enabled   ? e.render.quick_factor
+                                                  : e.stiff.quick_factor) +
                          ")"
                    : "full budgets")
        << " &middot; seed " << e.seed << " &middot; revision <code>" << esc(git_revision())
@@ -609,6 +609,7 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
     }
     os << c.render_html;
     os << c.realtime_html;
+    os << c.stiff_html;
 
     os << "<h2 id=\"metrics\">Metrics</h2>\n<p>What <code>ssslab check</code> compares with the "
           "baselines in <code>results/baselines/</code>: stochastic metrics by z-score with "

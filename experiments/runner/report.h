@@ -30,6 +30,7 @@ struct ReportContent {
     const std::map<std::string, std::string>* engine_files = nullptr;  ///< engines.h tables
     std::string render_html;    ///< [outputs.render] (render_study.h)
     std::string realtime_html;  ///< [outputs.realtime] (realtime_study.h)
+    std::string stiff_html;     ///< [outputs.stiff] (stiff_study.h)
 };
 
 std::string render_report(const ExperimentRun& r, const ReportContent& c);
@@ -38,6 +39,9 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c);
 std::string esc(const std::string& s);
 /// The figures of one report section.
 void figures(std::ostringstream& os, const PlotResult& p, const std::string& section);
+/// The rows of a CSV, its cells split at commas outside double quotes (model specs and notes
+/// contain commas); quotes are dropped.
+std::vector<std::vector<std::string>> parse_csv(const std::string& text);
 /// A whole CSV as an HTML table with a title.
 void csv_table(std::ostringstream& os, const std::string& csv, const char* title);
 

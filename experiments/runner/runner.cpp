@@ -403,6 +403,7 @@ void print_plan(const ExperimentRun& r, std::ostream& os, bool verbose) {
         os << " realtime (" << r.exp.realtime.scenes.size() << " scenes, "
            << r.exp.realtime.models.size() << " models; profiles and renders reused or computed "
            << "when run)";
+    if (r.exp.stiff.enabled) os << " stiff (the sweep, computed when run)";
     os << " report\n";
 }
 
@@ -730,6 +731,19 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
         r.computed += rr.computed;
         r.reused += rr.reused;
         report.realtime_html = std::move(rr.html);
+    }
+    if (r.exp.stiff.enabled) {
+        const RenderStudyContext ctx = study_context(r, o);
+        StiffStudyResult sr = run_stiff_study(r.exp.stiff, ctx, stage, r.metrics);
+        if (sr.interrupted) {
+            fs::remove_all(stage, ec);
+            r.interrupted = true;
+            return false;
+        }
+        if (!o.quiet)
+            std::printf("  stiff sweep: %d checks, %d failed, %d refused\n", sr.checks, sr.failed,
+                        sr.refused);
+        report.stiff_html = std::move(sr.html);
     }
     write_file_atomic(stage / "metrics.csv", metrics_csv(r.metrics));
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
