@@ -39,8 +39,8 @@
 #include "core/profile.h"
 #include "experiments/runner/kernel_study.h"
 #include "experiments/runner/realtime_study.h"
-#include "experiments/runner/stiff_study.h"
 #include "experiments/runner/render_study.h"
+#include "experiments/runner/stiff_study.h"
 #include "mcml/engine.h"
 #include "mcml/profile.h"
 
