@@ -78,6 +78,7 @@ TEST(StiffSweep, EveryEngineAndModelStaysFiniteConservesEnergyAndEnds) {
         EXPECT_EQ(r.at("refused"), "0")
             << r.at("engine") << " " << r.at("value") << ": " << r.at("note");
         EXPECT_EQ(r.at("nonfinite"), "0") << r.at("engine") << " " << r.at("value");
+        EXPECT_EQ(r.at("out_of_range"), "0") << r.at("engine") << " " << r.at("value");
         EXPECT_EQ(r.at("ended"), "1") << r.at("engine") << " " << r.at("value");
         if (r.at("pass") != "1") {
             ++failed;

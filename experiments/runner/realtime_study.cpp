@@ -38,21 +38,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string fmt(double v, int digits = 6) {
-    char b[64];
-    std::snprintf(b, sizeof b, "%.*g", digits, v);
-    return b;
-}
-
-/// A CSV field: quoted where it holds a comma or a quote (model specs do:
-/// "manual:table_a1,unit=mm").
-std::string csv_field(const std::string& v) {
-    if (v.find_first_of(",\"") == std::string::npos) return v;
-    std::string q = "\"";
-    for (char c : v) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return q + "\"";
-}
-
 /// A model's label as a metric name part (no dots).
 std::string metric_label(const std::string& label) {
     std::string s = label;
@@ -531,11 +516,11 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         auto approximation_row = [&](const std::string& method, const std::string& family,
                                      const Score& sc, double seconds) {
             const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
-            approximations << scene.name << "," << csv_field(method) << "," << fmt(vp_rgb.rms)
-                           << "," << fmt(vp_rgb.rms_se) << "," << fmt(seconds) << "," << family
-                           << "," << fmt(ref_rgb.rms) << "," << fmt(ref_rgb.rms_se) << ","
-                           << fmt(sc.bias_vs_volpath.value) << "," << fmt(sc.bias_vs_volpath.se)
-                           << "," << fmt(sc.bias_vs_reference.value) << "\n";
+            approximations << scene.name << "," << csv_field(method) << "," << num(vp_rgb.rms)
+                           << "," << num(vp_rgb.rms_se) << "," << num(seconds) << "," << family
+                           << "," << num(ref_rgb.rms) << "," << num(ref_rgb.rms_se) << ","
+                           << num(sc.bias_vs_volpath.value) << "," << num(sc.bias_vs_volpath.se)
+                           << "," << num(sc.bias_vs_reference.value) << "\n";
         };
         {
             Score sc;
@@ -550,9 +535,9 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         auto sweep_row = [&](const Score& sc) {
             const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
             sweep << scene.name << "," << csv_field(sc.model) << "," << sc.label << "," << sc.taps
-                  << "," << fmt(sc.jitter) << "," << (sc.rotate ? 1 : 0) << "," << fmt(ref_rgb.rms)
-                  << "," << fmt(ref_rgb.rms_se) << "," << fmt(vp_rgb.rms) << ","
-                  << fmt(vp_rgb.rms_se) << "," << fmt(sc.sss_ms) << "," << fmt(sc.frame_ms) << "\n";
+                  << "," << num(sc.jitter) << "," << (sc.rotate ? 1 : 0) << "," << num(ref_rgb.rms)
+                  << "," << num(ref_rgb.rms_se) << "," << num(vp_rgb.rms) << ","
+                  << num(vp_rgb.rms_se) << "," << num(sc.sss_ms) << "," << num(sc.frame_ms) << "\n";
         };
         for (const Score& sc : ss.scores) sweep_row(sc);
         // Variants of the sweep: (jitter, rotate).
@@ -596,17 +581,17 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                 std::string variant = approx::munoz_label(mo);  // spaces for commas
                 std::replace(variant.begin(), variant.end(), ',', ' ');
                 munoz << scene.name << "," << variant << "," << mo.layers << ","
-                      << fmt(mo.threshold) << "," << mo.downsample << ","
-                      << approx::split_name(mo.split) << "," << fmt(ref_rgb.rms) << ","
-                      << fmt(ref_rgb.rms_se) << "," << fmt(vp_rgb.rms) << "," << fmt(vp_rgb.rms_se)
-                      << "," << fmt(mf.stats.seconds) << "," << mf.stats.convolutions << ","
+                      << num(mo.threshold) << "," << mo.downsample << ","
+                      << approx::split_name(mo.split) << "," << num(ref_rgb.rms) << ","
+                      << num(ref_rgb.rms_se) << "," << num(vp_rgb.rms) << "," << num(vp_rgb.rms_se)
+                      << "," << num(mf.stats.seconds) << "," << mf.stats.convolutions << ","
                       << mf.stats.skipped_threshold << "," << mf.stats.skipped_invisible << ","
                       << (mo.kernel == approx::MunozKernel::point ? "point" : "average") << ","
                       << (mo.skip_invisible ? "skip" : "all") << "\n";
                 // Under regression like the models: scene.munoz_l<layers>_t<t>_d<downsample>
                 // [_linear][_all][_avg].rms_vs_volpath, the RGB error.
                 const std::string id = "munoz_l" + std::to_string(mo.layers) + "_t" +
-                                       fmt(mo.threshold) + "_d" + std::to_string(mo.downsample) +
+                                       num(mo.threshold) + "_d" + std::to_string(mo.downsample) +
                                        (mo.split == approx::MunozSplit::equal
                                             ? std::string()
                                             : std::string("_") + approx::split_name(mo.split)) +
@@ -652,18 +637,18 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                 const double seconds = cloud.seconds() + jf.query_seconds;
                 std::string variant = approx::jensen_buhler_label(jo);
                 std::replace(variant.begin(), variant.end(), ',', ' ');
-                jb << scene.name << "," << fmt(jo.max_solid_angle) << "," << cloud.points << ","
-                   << fmt(vp_rgb.rms) << "," << fmt(vp_rgb.rms_se) << "," << fmt(seconds) << ","
-                   << variant << "," << fmt(jo.points_per_mm2) << ","
+                jb << scene.name << "," << num(jo.max_solid_angle) << "," << cloud.points << ","
+                   << num(vp_rgb.rms) << "," << num(vp_rgb.rms_se) << "," << num(seconds) << ","
+                   << variant << "," << num(jo.points_per_mm2) << ","
                    << (jo.conservative ? "box" : "centre") << "," << jo.profile << ","
-                   << fmt(ref_rgb.rms) << "," << fmt(ref_rgb.rms_se) << "," << fmt(jf.query_seconds)
-                   << "," << fmt(cloud.seconds()) << "," << fmt(cloud.light_seconds) << ","
+                   << num(ref_rgb.rms) << "," << num(ref_rgb.rms_se) << "," << num(jf.query_seconds)
+                   << "," << num(cloud.seconds()) << "," << num(cloud.light_seconds) << ","
                    << jf.stats.nodes_visited << "," << jf.stats.clusters << "," << jf.stats.points
                    << "\n";
                 // Under regression: scene.jb_d<density>_t<threshold>[_box][_<profile>]
                 // [_c<candidates>].rms_vs_volpath, the RGB error.
                 const std::string id =
-                    "jb_d" + fmt(jo.points_per_mm2) + "_t" + fmt(jo.max_solid_angle) +
+                    "jb_d" + num(jo.points_per_mm2) + "_t" + num(jo.max_solid_angle) +
                     (jo.conservative ? "_box" : "") + (jo.profile == "mc" ? "" : "_" + jo.profile) +
                     (jo.candidates_per_point == 5 ? ""
                                                   : "_c" + std::to_string(jo.candidates_per_point));
@@ -695,12 +680,12 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
             const NoiseCorrectedRms total =
                 score(first.image, "radiance", vp->image, "radiance", mask, c, vp_dof);
             decomposition << scene.name << "," << kChannelNames[c] << "," << mask.size() << ","
-                          << fmt(ss.signal[static_cast<size_t>(c)]) << ","
+                          << num(ss.signal[static_cast<size_t>(c)]) << ","
                           << csv_field(ss.scores[0].model) << ","
-                          << fmt(ss.scores[0].vs_reference[static_cast<size_t>(c)].rms) << ","
-                          << fmt(scr.rms) << "," << fmt(scr.rms_se) << "," << fmt(spec_err.rms)
-                          << "," << fmt(spec_err.rms_se) << "," << fmt(surf.rms) << ","
-                          << fmt(surf.rms_se) << "," << fmt(total.rms) << "," << fmt(total.rms_se)
+                          << num(ss.scores[0].vs_reference[static_cast<size_t>(c)].rms) << ","
+                          << num(scr.rms) << "," << num(scr.rms_se) << "," << num(spec_err.rms)
+                          << "," << num(spec_err.rms_se) << "," << num(surf.rms) << ","
+                          << num(surf.rms_se) << "," << num(total.rms) << "," << num(total.rms_se)
                           << "\n";
             const std::string base = scene.name + ".reference." + kChannelNames[c];
             metrics.push_back({base + ".rms_vs_volpath", "1", scr.rms, scr.rms_se, true, 0});
@@ -813,13 +798,13 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                     const double sig = ss.signal[static_cast<size_t>(c)];
                     table << ss.scene << "," << csv_field(sc.model) << "," << sc.label << ","
                           << sc.taps << "," << kChannelNames[c] << "," << ss.pixels << ","
-                          << fmt(r.rms) << "," << fmt(r.rms_se) << ","
-                          << fmt(table_max > 0 ? r.rms / table_max : 0) << ","
-                          << fmt(scene_max > 0 ? r.rms / scene_max : 0) << ","
-                          << fmt(sig > 0 ? r.rms / sig : 0) << "," << fmt(v.rms) << ","
-                          << fmt(v.rms_se) << "," << fmt(v.raw_rms) << "," << fmt(v.noise_rms)
-                          << "," << fmt(sc.sss_ms) << "," << fmt(sc.frame_ms) << ","
-                          << fmt(sc.build_s) << "\n";
+                          << num(r.rms) << "," << num(r.rms_se) << ","
+                          << num(table_max > 0 ? r.rms / table_max : 0) << ","
+                          << num(scene_max > 0 ? r.rms / scene_max : 0) << ","
+                          << num(sig > 0 ? r.rms / sig : 0) << "," << num(v.rms) << ","
+                          << num(v.rms_se) << "," << num(v.raw_rms) << "," << num(v.noise_rms)
+                          << "," << num(sc.sss_ms) << "," << num(sc.frame_ms) << ","
+                          << num(sc.build_s) << "\n";
                     sum_norm += table_max > 0 ? r.rms / table_max : 0;
                     const std::string base =
                         ss.scene + "." + metric_label(sc.label) + "." + kChannelNames[c];
@@ -836,11 +821,11 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                     for (int c = 0; c < 3; ++c)
                         ours_vs_thesis
                             << "<td>"
-                            << fmt(sc.vs_reference[static_cast<size_t>(c)].rms / table_max, 3)
+                            << num(sc.vs_reference[static_cast<size_t>(c)].rms / table_max, 3)
                             << "</td>";
-                    ours_vs_thesis << "<td><b>" << fmt(sum_norm, 3) << "</b></td><td>"
-                                   << fmt(t.r, 3) << "</td><td>" << fmt(t.g, 3) << "</td><td>"
-                                   << fmt(t.b, 3) << "</td><td><b>" << fmt(t.sum, 3)
+                    ours_vs_thesis << "<td><b>" << num(sum_norm, 3) << "</b></td><td>"
+                                   << num(t.r, 3) << "</td><td>" << num(t.g, 3) << "</td><td>"
+                                   << num(t.b, 3) << "</td><td><b>" << num(t.sum, 3)
                                    << "</b></td></tr>\n";
                 }
         }
@@ -879,7 +864,7 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                    "separability error), right against the path tracer (noise-corrected, error "
                    "bars +-1 standard error). A line per swept model through its tap counts "
                    "(points labelled by taps), solid without jitter, dashed with jitter "
-                << fmt(spec.jitter, 3)
+                << num(spec.jitter, 3)
                 << (spec.rotate ? ", dash-dotted with the pass axes rotated per pixel" : "")
                 << "; the table's models of one family at " << spec.taps
                 << " taps (SVD ranks, d'Eon's numbers of Gaussians) joined by a dotted line, "
@@ -986,10 +971,10 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                 "<th>B</th><th>sss ms</th><th>frame ms</th></tr>\n";
         for (const Score& sc : ss.scores) {
             html << "<tr><td class=\"l\"><code>" << esc(sc.model) << "</code></td>";
-            for (const auto& e : sc.vs_reference) html << "<td>" << fmt(e.rms, 3) << "</td>";
+            for (const auto& e : sc.vs_reference) html << "<td>" << num(e.rms, 3) << "</td>";
             for (const auto& e : sc.vs_volpath)
                 html << "<td>" << with_error(e.rms, e.rms_se) << "</td>";
-            html << "<td>" << fmt(sc.sss_ms, 3) << "</td><td>" << fmt(sc.frame_ms, 4)
+            html << "<td>" << num(sc.sss_ms, 3) << "</td><td>" << num(sc.frame_ms, 4)
                  << "</td></tr>\n";
         }
         html << "</table>\n";

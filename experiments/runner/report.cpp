@@ -39,13 +39,20 @@ std::string esc(const std::string& s) {
     return o;
 }
 
-namespace {
-
-std::string num(double v, int digits = 6) {
+std::string num(double v, int digits) {
     char buf[40];
     std::snprintf(buf, sizeof buf, "%.*g", digits, v);
     return buf;
 }
+
+std::string csv_field(const std::string& v) {
+    if (v.find_first_of(",\"\n") == std::string::npos) return v;
+    std::string q = "\"";
+    for (char c : v) q += c == '"' ? std::string("\"\"") : std::string(1, c == '\n' ? ' ' : c);
+    return q + "\"";
+}
+
+namespace {
 
 const char* kStyle = R"CSS(
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1200px; color: #222;

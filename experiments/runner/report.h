@@ -39,6 +39,11 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c);
 std::string esc(const std::string& s);
 /// The figures of one report section.
 void figures(std::ostringstream& os, const PlotResult& p, const std::string& section);
+/// A number as %.<digits>g.
+std::string num(double v, int digits = 6);
+/// A CSV field: quoted where it holds a comma, a quote or a line break (model specs and
+/// messages do: "manual:table_a1,unit=mm"); line breaks become spaces.
+std::string csv_field(const std::string& v);
 /// The rows of a CSV, its cells split at commas outside double quotes (model specs and notes
 /// contain commas); quotes are dropped.
 std::vector<std::vector<std::string>> parse_csv(const std::string& text);

@@ -43,10 +43,11 @@
 // A model that refuses an input (std::invalid_argument, InfeasibleError) is listed as refused
 // with its message: a clear refusal is not a failure; a crash, a hang or a NaN is.
 //
-// results/<name>/stiff/sweep.csv: one row per check (engine, axis, value, quantity, estimate,
-// SE, expected, its SE, the deterministic allowance, z, non-finite count, seconds, ended, pass,
-// note) and summary.csv (per engine and axis: checks, passed, refused, non-finite, worst |z|,
-// longest run). Metrics: per engine the number of failed checks (deterministic, must stay 0).
+// results/<name>/stiff/sweep.csv: one row per check (engine, axis, value, quantity, test,
+// estimate, SE, expected, its SE, an interval's upper end, the deterministic allowance, z, the
+// counts of non-finite and out-of-range values, seconds, ended, refused, pass, note) and
+// summary.csv (per engine and axis: checks, passed, refused, non-finite, worst |z|, longest run).
+// Metrics: per engine the number of failed checks (deterministic, must stay 0).
 #pragma once
 
 #include "core/config.h"
