@@ -399,4 +399,17 @@ DiffusionMedium invert_diffusion_parameters(const std::string& name, const Inver
     return m;
 }
 
+DiffusionMedium diffusion_medium(const Medium& m, int c, LengthUnit unit) {
+    require_homogeneous(m, "the diffusion models");
+    const double per_cm = unit == LengthUnit::kMm ? 10.0 : 1.0;  // unit lengths per cm
+    DiffusionMedium d;
+    d.sigma_a = m.sigma_a_per_cm[c] / per_cm;
+    d.sigma_s = m.sigma_s_per_cm[c] / per_cm;
+    d.g = m.g[c];
+    d.eta = m.eta / m.eta_above;
+    d.thickness =
+        m.thickness_cm >= 1e8 ? std::numeric_limits<double>::infinity() : m.thickness_cm * per_cm;
+    return d;
+}
+
 }  // namespace ssslab::approx

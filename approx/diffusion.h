@@ -34,6 +34,9 @@
 // profiles for efficient subsurface scattering, Pixar 2015.
 #pragma once
 
+#include "core/material.h"
+#include "core/profile.h"
+
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -406,5 +409,10 @@ struct InversionTarget {
 DiffusionMedium invert_diffusion_parameters(
     const std::string& name, const InversionTarget& t, const DiffusionOptions& o = {},
     TransportDefinition def = TransportDefinition::classical);
+
+/// Channel c of a homogeneous slab as the diffusion models see it: coefficients in 1/unit, the
+/// index relative to the ambient above, the thickness in unit (quasi-infinite, >= 1e8 cm, as
+/// infinity). Throws std::invalid_argument for a layered medium.
+DiffusionMedium diffusion_medium(const Medium& m, int c, LengthUnit unit = LengthUnit::kCm);
 
 }  // namespace ssslab::approx

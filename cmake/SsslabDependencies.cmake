@@ -1,17 +1,6 @@
 # Dependencies come from Debian 12 packages (scripts/setup.sh installs them).
-find_package(Threads REQUIRED)
-find_package(TBB CONFIG REQUIRED)             # libtbb-dev: parallel batches
-find_package(fmt CONFIG REQUIRED)             # libfmt-dev: formatting
-find_package(CLI11 CONFIG REQUIRED)           # libcli11-dev: command line
-find_package(tomlplusplus CONFIG REQUIRED)    # libtomlplusplus-dev: TOML with source positions
-find_package(PkgConfig REQUIRED)
-find_package(ZLIB REQUIRED)                  # zlib1g-dev: PNG images, gzipped test data
-# libopenexr-dev: layered float images. CONFIG, and before anything appends Debian's OpenVDB cmake
-# folder to CMAKE_MODULE_PATH: its FindOpenEXR.cmake would shadow the config package.
-find_package(OpenEXR CONFIG REQUIRED)
-find_package(embree 3 CONFIG REQUIRED)        # libembree-dev: ray queries against scene meshes
-find_package(tinyobjloader CONFIG REQUIRED)  # libtinyobjloader-dev: OBJ meshes of scene files
-pkg_check_modules(xxhash REQUIRED IMPORTED_TARGET libxxhash)  # libxxhash-dev: artifact content hashes
+# The packages ssslab's libraries link, also read by the installed ssslabConfig.cmake.
+include(${CMAKE_CURRENT_LIST_DIR}/SsslabLinkDependencies.cmake)
 find_path(RANDOM123_INCLUDE_DIR Random123/philox.h REQUIRED)  # librandom123-dev: Philox streams
 add_library(ssslab_random123 INTERFACE)
 target_include_directories(ssslab_random123 SYSTEM INTERFACE ${RANDOM123_INCLUDE_DIR})
@@ -29,15 +18,7 @@ endif()
 # do; the modules that use them say so when a scene or experiment needs a missing part.
 set(SSSLAB_HAVE_OPENVDB OFF)
 if(SSSLAB_WITH_OPENVDB)
-  # Debian ships only a find module, in a folder whose FindTBB/FindOpenEXR would shadow the
-  # config packages found above (debian-notes.md): append it last, and only here.
-  find_path(SSSLAB_OPENVDB_MODULE_DIR FindOpenVDB.cmake
-            PATHS /usr/lib/x86_64-linux-gnu/cmake/OpenVDB /usr/lib/cmake/OpenVDB NO_DEFAULT_PATH)
-  find_package(Boost QUIET COMPONENTS iostreams)
-  if(SSSLAB_OPENVDB_MODULE_DIR AND Boost_FOUND)
-    list(APPEND CMAKE_MODULE_PATH ${SSSLAB_OPENVDB_MODULE_DIR})
-    find_package(OpenVDB QUIET COMPONENTS openvdb)
-  endif()
+  ssslab_find_openvdb()
   if(TARGET OpenVDB::openvdb)
     set(SSSLAB_HAVE_OPENVDB ON)
   else()
@@ -82,5 +63,21 @@ if(SSSLAB_WITH_MPI)
     set(SSSLAB_HAVE_MPI ON)
   else()
     message(STATUS "MPI not found: multi-process runs disabled (apt-get install libopenmpi-dev)")
+  endif()
+endif()
+set(SSSLAB_HAVE_PYTHON OFF)
+if(SSSLAB_WITH_PYTHON)
+  # pybind11-dev (Debian 12 has no nanobind) for Debian's python3 (python3-dev), whose numpy and
+  # pytest the tests use: /usr/bin/python3 first, not another python3 earlier in PATH.
+  if(NOT DEFINED Python_EXECUTABLE AND EXISTS /usr/bin/python3)
+    set(Python_EXECUTABLE /usr/bin/python3)
+  endif()
+  find_package(Python COMPONENTS Interpreter Development.Module QUIET)
+  set(PYBIND11_FINDPYTHON ON)
+  find_package(pybind11 CONFIG QUIET)
+  if(Python_FOUND AND pybind11_FOUND)
+    set(SSSLAB_HAVE_PYTHON ON)
+  else()
+    message(STATUS "pybind11 or Python headers not found: Python module disabled (apt-get install pybind11-dev python3-dev)")
   endif()
 endif()

@@ -2,7 +2,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "core/png.h"
+#include "core/image_io.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>

@@ -12,12 +12,13 @@ command -v ninja >/dev/null 2>&1 && generator=(-G Ninja)
 case "$kind" in
   release) flags=(-DCMAKE_BUILD_TYPE=Release) ;;
   debug)   flags=(-DCMAKE_BUILD_TYPE=Debug) ;;
-  # The sanitizer builds leave MPI out: Open MPI's own allocations would read as leaks.
-  asan)    flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSSSLAB_SANITIZE=address,undefined -DSSSLAB_BUILD_BENCHMARKS=OFF -DSSSLAB_WITH_MPI=OFF) ;;
+  # The sanitizer builds leave MPI out (Open MPI's own allocations would read as leaks) and the
+  # Python module (an uninstrumented interpreter would have to preload the sanitizer runtime).
+  asan)    flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSSSLAB_SANITIZE=address,undefined -DSSSLAB_BUILD_BENCHMARKS=OFF -DSSSLAB_WITH_MPI=OFF -DSSSLAB_WITH_PYTHON=OFF) ;;
   # ThreadSanitizer: the threaded engines' races (tests labelled tsan run in it in CI).
   # Linked with oneTBB built with TSan (scripts/tbb_tsan.sh), found first through the run path.
   tsan)    bash scripts/tbb_tsan.sh
-           flags=(-DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS=-g1 -DSSSLAB_SANITIZE=thread -DSSSLAB_BUILD_BENCHMARKS=OFF -DSSSLAB_WITH_MPI=OFF
+           flags=(-DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS=-g1 -DSSSLAB_SANITIZE=thread -DSSSLAB_BUILD_BENCHMARKS=OFF -DSSSLAB_WITH_MPI=OFF -DSSSLAB_WITH_PYTHON=OFF
                   -DTBB_DIR="$PWD/build/tbb-tsan/install/lib/cmake/TBB") ;;
   *) echo "usage: $0 [release|debug|asan|tsan] [cmake args...]" >&2; exit 2 ;;
 esac

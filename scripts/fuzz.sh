@@ -21,7 +21,7 @@ command -v ninja >/dev/null 2>&1 && generator=(-G Ninja)
 if [[ ! -f build/fuzz/CMakeCache.txt ]]; then
   CC=clang CXX=clang++ cmake -S . -B build/fuzz "${generator[@]}" -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_CXX_FLAGS=-g1 -DSSSLAB_SANITIZE=address,undefined -DSSSLAB_BUILD_FUZZERS=ON \
-    -DSSSLAB_BUILD_TESTS=OFF -DSSSLAB_BUILD_BENCHMARKS=OFF -DSSSLAB_WITH_MPI=OFF \
+    -DSSSLAB_BUILD_TESTS=OFF -DSSSLAB_BUILD_BENCHMARKS=OFF -DSSSLAB_WITH_MPI=OFF -DSSSLAB_WITH_PYTHON=OFF \
     -DSSSLAB_WITH_GL=OFF
 fi
 cmake --build build/fuzz -j "$(nproc)" $(printf -- '--target fuzz_%s ' "${targets[@]}")

@@ -20,7 +20,8 @@ packages=(
   libbenchmark-dev      # Google Benchmark: micro-benchmarks
   zlib1g-dev            # zlib: reading the gzipped MCML reference outputs in the tests
   libxxhash-dev         # xxHash: content hashes that key the artifact cache
-  libopenexr-dev        # OpenEXR 3.1: layered float images (directly, not through OpenImageIO)
+  libopenexr-dev        # OpenEXR 3.1: layered float images with standard-error layers (directly)
+  libopenimageio-dev    # OpenImageIO: PNG previews, and ssslab compare on images of any format
   libtinyobjloader-dev  # tinyobjloader: Wavefront OBJ meshes of scene files
   libembree-dev         # Embree 3: ray queries against the meshes of scenes (path tracer)
   libopenvdb-dev libboost-iostreams-dev  # OpenVDB: heterogeneous media (optional part; FindOpenVDB needs Boost iostreams)
@@ -28,6 +29,7 @@ packages=(
   python3-glad          # glad2: generates the GL twin's loader at build time, offline
   libopenmpi-dev openmpi-bin  # Open MPI: runs spread over processes and machines (mpirun; optional part)
   python3-matplotlib    # plots of the experiment reports (run by Debian's /usr/bin/python3)
+  pybind11-dev python3-dev python3-numpy python3-pytest  # the Python module (python/) and its tests
   chromium              # headless check that the HTML reports open and show their plots
 )
 if [[ "${1:-}" == "--dev" ]]; then

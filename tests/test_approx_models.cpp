@@ -1,5 +1,6 @@
 // Kernel2D and the models of Freude14 ch. 5 against linear algebra and independent solvers.
 #include "approx/kernel2d.h"
+#include "approx/model_spec.h"
 #include "approx/models.h"
 #include "core/profile.h"
 
@@ -7,8 +8,11 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <string>
 
 namespace ssslab::approx {
 namespace {
@@ -261,6 +265,111 @@ TEST(Guided, LargerKApproximatesTheFalloffMoreClosely) {
     errors(g2.kernel, c2, f2);
     EXPECT_LT(f2, f0);
     EXPECT_GT(c2, c0);
+}
+
+// ---- The name -> factory table (approx/model_spec.h) -------------------------------------------
+
+// A model registered as a program outside ssslab would: the pre-integrated kernel scaled by a
+// factor, so what it builds is known from the built-in model.
+void register_scaled_preintegration() {
+    static bool done = false;
+    if (done) return;
+    done = true;
+    ModelFactory f;
+    f.name = "test_scaled";
+    f.keys = {"f"};
+    f.help = "test_scaled:f=F (a test's model)";
+    f.version = "test-scaled-1";
+    f.validate = [](const ModelSpec& m) {
+        if (!(m.number("f", 1) > 0)) throw std::invalid_argument("model \"" + m.text + "\": f > 0");
+    };
+    f.build = [](const ModelSpec& m, const Kernel2D& k, const ModelContext&) {
+        ModelResult r = preintegration(k);
+        r.kernel.scale(m.number("f", 1));
+        return r;
+    };
+    register_model(std::move(f));
+}
+
+TEST(ModelRegistry, ARegisteredModelIsParsedValidatedAndBuiltLikeTheBuiltIns) {
+    register_scaled_preintegration();
+    const std::vector<std::string> names = model_names();
+    for (const char* n :
+         {"svd", "preintegration", "guided", "manual", "deon", "ssss_skin", "test_scaled"})
+        EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
+    const ModelSpec s = parse_model("test_scaled:f=2");
+    EXPECT_EQ(s.label(), "test_scaled_f2");
+    EXPECT_TRUE(s.closed_form());  // no closed_form function: closed form
+    EXPECT_EQ(s.cache_text(), "test_scaled:f=2@test-scaled-1");
+    EXPECT_EQ(parse_model("svd:rank=2").cache_text(), "svd:rank=2");  // built-ins: text only
+    EXPECT_FALSE(parse_model("guided:k=1").closed_form());
+    EXPECT_FALSE(parse_model("manual:fit=edge").closed_form());
+    EXPECT_TRUE(parse_model("manual:near=0.1,far=1,w=0.5").closed_form());
+
+    const RadialProfile p = analytic_profile(40, 0.005, 0.015, 0.1);
+    const Kernel2D k(p, 1, KernelGrid::from_profile(p));
+    const ModelResult m = build_model(s, k, {"x", 1, {}});
+    const ModelResult pre = preintegration(k);
+    EXPECT_EQ(m.kernel.model, "test_scaled_f2");
+    EXPECT_NEAR(m.kernel.sum(), 2.0 * pre.kernel.sum(), 1e-12);
+    EXPECT_NEAR(m.kernel.at(3, -5), 2.0 * pre.kernel.at(3, -5), 1e-15);
+}
+
+TEST(ModelRegistry, BadRegistrationsAndSpecsAreRefusedWithTheReason) {
+    register_scaled_preintegration();
+    const auto refused = [](ModelFactory f, const std::string& why) {
+        try {
+            register_model(std::move(f));
+            ADD_FAILURE() << "registered: " << why;
+        } catch (const std::invalid_argument& e) {
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+        }
+    };
+    const auto build = [](const ModelSpec&, const Kernel2D& k, const ModelContext&) {
+        return preintegration(k);
+    };
+    refused({"svd", {}, "", "v1", {}, {}, build}, "exists already");
+    refused({"test_scaled", {}, "", "v1", {}, {}, build}, "exists already");
+    refused({"Bad-Name", {}, "", "v1", {}, {}, build}, "is not [a-z0-9_]+");
+    refused({"", {}, "", "v1", {}, {}, build}, "is not [a-z0-9_]+");
+    refused({"no_build", {}, "", "v1", {}, {}, {}}, "no build");
+    refused({"no_version", {}, "", "", {}, {}, build}, "a version is required");
+    refused({"bad_key", {"a=b"}, "", "v1", {}, {}, build}, "the key \"a=b\"");
+
+    // Specs: an unknown model lists every model, the registered one among them; an unknown key
+    // lists the model's keys; the model's own check runs at parse time.
+    try {
+        parse_model("nonesuch");
+        ADD_FAILURE();
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("test_scaled:f=F (a test's model)"), std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("svd:rank=N"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(parse_model("test_scaled:g=1"), std::invalid_argument);
+    EXPECT_THROW(parse_model("test_scaled:f=-1"), std::invalid_argument);
+    EXPECT_THROW(parse_model("test_scaled:f=x"), std::invalid_argument);
+    EXPECT_THROW(parse_model("test_scaled:f=1,f=2"), std::invalid_argument);
+}
+
+TEST(ModelRegistry, AModelThatBuildsOnAnotherGridIsAnError) {
+    static bool done = false;
+    if (!done) {
+        done = true;
+        ModelFactory f;
+        f.name = "test_wrong_grid";
+        f.version = "1";
+        f.build = [](const ModelSpec&, const Kernel2D& k, const ModelContext&) {
+            ModelResult r = preintegration(k);
+            r.kernel.n -= 1;
+            r.kernel.terms[0].a.pop_back();
+            return r;
+        };
+        register_model(std::move(f));
+    }
+    const RadialProfile p = analytic_profile(40, 0.005, 0.015, 0.1);
+    const Kernel2D k(p, 0, KernelGrid::from_profile(p));
+    EXPECT_THROW(build_model(parse_model("test_wrong_grid"), k, {"x", 0, {}}), std::logic_error);
 }
 
 }  // namespace

@@ -272,6 +272,38 @@ TEST(Cli, BenchRealtimeWritesPassTimesPerSceneAndThreadCount) {
     }
 }
 
+// `bench --original PATH` runs a program on the bench's own .mci (here a stand-in that only
+// writes the output file the .mci names) and divides by its time; a program that fails or
+// writes nothing is refused, exit 2, naming it.
+TEST(Cli, BenchTimesTheOriginalProgramOnTheSameInputs) {
+    testing::TempDir dir;
+    const auto script = [&](const std::string& name, const std::string& body) {
+        const fs::path p = dir.write(name, "#!/bin/sh\n" + body);
+        fs::permissions(p, fs::perms::owner_all);
+        return p.string();
+    };
+    // The output name is the first word of the first line that names a .mco.
+    const std::string fake =
+        script("fake_mcml", "sleep 0.05; touch \"$(grep -m1 -o '^[^ \t]*\\.mco' \"$1\")\"\n");
+    const auto r = run_ssslab({"bench", "--case", "Skin1 red, full", "--quick", "--repeat", "1",
+                               "--threads", "1", "--original", fake},
+                              dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("timed in this run on the same inputs"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("Skin1 red, full tallies"), std::string::npos) << r.out;
+    for (const std::string& body : {std::string("exit 1\n"), std::string("exit 0\n")}) {
+        const std::string bad = script("bad_mcml", body);
+        const auto b = run_ssslab(
+            {"bench", "--case", "Skin1 red, full", "--quick", "--repeat", "1", "--original", bad},
+            dir.path());
+        EXPECT_EQ(b.exit_code, 2) << body << b.err;
+        EXPECT_NE(b.err.find("bad_mcml"), std::string::npos) << b.err;
+    }
+    const auto missing =
+        run_ssslab({"bench", "--original", (dir / "nonesuch").string()}, dir.path());
+    EXPECT_EQ(missing.exit_code, 2) << missing.err;
+}
+
 TEST(Cli, McmlDefaultModeIsIndependentOfThreads) {
     testing::TempDir one, two;
     for (auto* d : {&one, &two}) fs::copy_file(data_path("mcml-1.2.2/a_vdh.mci"), *d / "a.mci");

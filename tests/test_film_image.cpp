@@ -16,7 +16,6 @@
 #include <OpenEXR/ImfStringAttribute.h>
 #include <OpenEXR/ImfTiledOutputFile.h>
 #include <gtest/gtest.h>
-#include <zlib.h>
 
 #include <bit>
 #include <cmath>
@@ -557,56 +556,6 @@ TEST(Exr, WriteIntoMissingDirectoryFailsAndLeavesNothing) {
 
 // --- PNG preview -------------------------------------------------------------------------------
 
-struct DecodedPng {
-    int width = 0, height = 0;
-    std::vector<unsigned char> rgb;
-};
-
-std::uint32_t be32(const std::string& s, size_t at) {
-    return (std::uint32_t(static_cast<unsigned char>(s[at])) << 24) |
-           (std::uint32_t(static_cast<unsigned char>(s[at + 1])) << 16) |
-           (std::uint32_t(static_cast<unsigned char>(s[at + 2])) << 8) |
-           std::uint32_t(static_cast<unsigned char>(s[at + 3]));
-}
-
-// Decodes the 8-bit RGB, non-interlaced PNGs core/png writes (filter type 0 on every row).
-DecodedPng decode_png(const std::string& png) {
-    DecodedPng out;
-    EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
-    std::string idat;
-    for (size_t at = 8; at + 12 <= png.size();) {
-        const std::uint32_t len = be32(png, at);
-        const std::string type = png.substr(at + 4, 4);
-        const std::string data = png.substr(at + 8, len);
-        const std::uint32_t crc = be32(png, at + 8 + len);
-        const std::string body = png.substr(at + 4, 4 + len);
-        EXPECT_EQ(crc, crc32(0L, reinterpret_cast<const Bytef*>(body.data()),
-                             static_cast<uInt>(body.size())))
-            << type;
-        if (type == "IHDR") {
-            out.width = static_cast<int>(be32(data, 0));
-            out.height = static_cast<int>(be32(data, 4));
-            EXPECT_EQ(data.substr(8), std::string("\x08\x02\0\0\0", 5));  // 8-bit RGB
-        } else if (type == "IDAT") {
-            idat += data;
-        }
-        at += 12 + len;
-    }
-    const size_t row = static_cast<size_t>(out.width) * 3 + 1;
-    std::vector<unsigned char> raw(row * static_cast<size_t>(out.height));
-    uLongf n = static_cast<uLongf>(raw.size());
-    EXPECT_EQ(uncompress(raw.data(), &n, reinterpret_cast<const Bytef*>(idat.data()),
-                         static_cast<uLong>(idat.size())),
-              Z_OK);
-    EXPECT_EQ(n, raw.size());
-    for (int y = 0; y < out.height; ++y) {
-        EXPECT_EQ(raw[static_cast<size_t>(y) * row], 0) << "filter of row " << y;
-        out.rgb.insert(out.rgb.end(), raw.begin() + static_cast<long>(y * row + 1),
-                       raw.begin() + static_cast<long>((y + 1) * row));
-    }
-    return out;
-}
-
 // The sRGB transfer curve (IEC 61966-2-1), written out here independently of the library.
 int expected_byte(double linear, double exposure) {
     double v = linear * std::pow(2.0, exposure);
@@ -635,7 +584,7 @@ TEST(PngPreview, MapsLinearValuesToSrgbBytes) {
     for (double exposure : {0.0, 1.0, -2.5}) {
         const std::string path = (dir / "preview.png").string();
         write_png_preview(img, "radiance", path, exposure);
-        const DecodedPng png = decode_png(testing::read_text(path));
+        const testing::RgbImage png = testing::read_png(path);
         ASSERT_EQ(png.width, 2);
         ASSERT_EQ(png.height, 2);
         ASSERT_EQ(png.rgb.size(), values.size());
@@ -644,7 +593,7 @@ TEST(PngPreview, MapsLinearValuesToSrgbBytes) {
                 << "value " << values[i] << " exposure " << exposure;
 
         write_png_preview(img, "depth", path, exposure);
-        const DecodedPng grey = decode_png(testing::read_text(path));
+        const testing::RgbImage grey = testing::read_png(path);
         for (size_t i = 0; i < 12; ++i)
             EXPECT_EQ(grey.rgb[i], expected_byte(values[i / 3], exposure));
     }

@@ -1,14 +1,20 @@
 // core/image_compare.h and `ssslab compare`: two Monte Carlo images of one scene compared by
 // image means and per-block z-scores. Synthetic images with known noise: independent estimates
 // of the same image must pass, a bias of a fraction of the noise per block must be caught, and
-// the statistics must equal hand-computed values on tiny images.
+// the statistics must equal hand-computed values on tiny images. core/image_io.h: PNG written
+// through OpenImageIO against the tests' own decoder, and files of other renderers' formats
+// written byte by byte here (Radiance HDR, binary PPM) read back to the values they encode.
+#include "core/error.h"
 #include "core/film_image.h"
 #include "core/image_compare.h"
+#include "core/image_io.h"
 #include "core/stats.h"
 #include "testing.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -286,6 +292,135 @@ TEST(NoiseCorrectedRms, ExactInputsGiveTheRmsAndMisuseIsRefused) {
     EXPECT_EQ(r.ms_se, 0.0);
     EXPECT_THROW(noise_corrected_rms({1, 2}, {}, {1}, {}), std::invalid_argument);
     EXPECT_THROW(noise_corrected_rms({1, 2}, {0.1}, {1, 2}, {}), std::invalid_argument);
+}
+
+// ---- core/image_io.h -------------------------------------------------------------------------
+
+// A Radiance HDR file of flat (not run-length encoded) RGBE scanlines, as the format's first
+// version writes them (Ward, Graphics Gems II): the header, the resolution line, 4 bytes a pixel.
+std::string radiance_hdr(int w, int h, const std::vector<std::array<unsigned char, 4>>& rgbe) {
+    std::string s = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y " + std::to_string(h) + " +X " +
+                    std::to_string(w) + "\n";
+    for (const auto& p : rgbe) s.append(reinterpret_cast<const char*>(p.data()), 4);
+    return s;
+}
+
+// RGBE of a linear RGB value: the shared exponent of the largest component (frexp), mantissas
+// scaled to [0, 256).
+std::array<unsigned char, 4> to_rgbe(double r, double g, double b) {
+    const double m = std::max({r, g, b});
+    if (m < 1e-32) return {0, 0, 0, 0};
+    int e = 0;
+    const double f = std::frexp(m, &e) * 256.0 / m;
+    return {static_cast<unsigned char>(r * f), static_cast<unsigned char>(g * f),
+            static_cast<unsigned char>(b * f), static_cast<unsigned char>(e + 128)};
+}
+
+TEST(ImageIo, PngThroughOpenImageIoDecodesToItsPixelsAndIsDeterministic) {
+    std::mt19937 rng(3);
+    const int w = 37, h = 23;
+    std::vector<unsigned char> rgb(static_cast<size_t>(w * h * 3));
+    for (auto& v : rgb) v = static_cast<unsigned char>(rng() & 0xff);
+    const std::string png = encode_png_rgb8(w, h, rgb);
+    EXPECT_EQ(png, encode_png_rgb8(w, h, rgb));  // same pixels, same bytes
+    testing::TempDir dir;
+    const testing::RgbImage back = testing::read_png(dir.write("x.png", png));
+    ASSERT_EQ(back.width, w);
+    ASSERT_EQ(back.height, h);
+    EXPECT_EQ(back.rgb, rgb);
+    EXPECT_THROW(encode_png_rgb8(w, h, std::vector<unsigned char>(5)), std::invalid_argument);
+    // read_image decodes the 8-bit sRGB values to linear, by the sRGB curve written out here.
+    const LayeredImage img = read_image((dir / "x.png").string());
+    EXPECT_EQ(img.metadata().at("ssslab.decoding"), "sRGB to linear");
+    for (int i : {0, 100, 2000}) {
+        const double v = rgb[static_cast<size_t>(i)] / 255.0;
+        const double lin = v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+        EXPECT_NEAR(img.layer("").pixels()[static_cast<size_t>(i)], lin, 1e-6) << i;
+    }
+}
+
+TEST(ImageIo, ReadsARadianceHdrAndABinaryPpmWrittenByHand) {
+    testing::TempDir dir;
+    // HDR: v = m 2^(E - 136) (up to half a mantissa step, by the reader's rounding convention).
+    const std::vector<std::array<unsigned char, 4>> px = {
+        {128, 64, 32, 129}, {255, 1, 0, 128}, {0, 0, 0, 0},         {200, 100, 50, 140},
+        {10, 20, 30, 120},  {1, 2, 3, 200},   {128, 128, 128, 128}, {64, 0, 255, 130}};
+    dir.write("x.hdr", radiance_hdr(4, 2, px));
+    const LayeredImage hdr = read_image((dir / "x.hdr").string());
+    ASSERT_EQ(hdr.width(), 4);
+    ASSERT_EQ(hdr.height(), 2);
+    EXPECT_EQ(hdr.metadata().at("ssslab.decoding"), "linear");
+    const ImageLayer& L = hdr.layer("");
+    ASSERT_EQ(L.channels(), 3);
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 4; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const auto& p = px[static_cast<size_t>(y * 4 + x)];
+                const double step = p[3] ? std::ldexp(1.0, p[3] - 136) : 0.0;
+                EXPECT_NEAR(L.at(x, y, c), p[static_cast<size_t>(c)] * step, 0.5 * step + 1e-30)
+                    << x << " " << y << " " << c;
+            }
+    // PPM (P6, 8 bits): Rec. 709-encoded (Netpbm's definition), decoded to linear.
+    std::string ppm = "P6\n2 1\n255\n";
+    for (unsigned char v : {0, 188, 255, 10, 128, 250}) ppm += static_cast<char>(v);
+    dir.write("x.ppm", ppm);
+    const LayeredImage pnm = read_image((dir / "x.ppm").string());
+    const auto lin = [](double v) {
+        v /= 255.0;
+        return v < 0.081 ? v / 4.5 : std::pow((v + 0.099) / 1.099, 1 / 0.45);
+    };
+    EXPECT_EQ(pnm.metadata().at("ssslab.decoding"), "Rec. 709 to linear");
+    EXPECT_NEAR(pnm.layer("").at(0, 0, 1), lin(188), 1e-6);
+    EXPECT_NEAR(pnm.layer("").at(1, 0, 0), lin(10), 1e-7);
+    EXPECT_NEAR(pnm.layer("").at(0, 0, 2), 1.0, 1e-6);
+}
+
+TEST(ImageIo, WhatIsNotAnImageIsRefusedNamingTheFile) {
+    testing::TempDir dir;
+    dir.write("notes.png", "not an image at all");
+    for (const std::string name : {"notes.png", "missing.tif"}) {
+        const std::string path = (dir / name).string();
+        try {
+            read_image(path);
+            ADD_FAILURE() << name << " read";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+        }
+    }
+}
+
+TEST(CompareCommand, ComparesRunsOfAnyFormatOpenImageIoReads) {
+    // Two sides of three HDR runs each, per-pixel noise of 5 % around the same image: the same
+    // image up to noise (the block chi-square is not rejected at a small p).
+    testing::TempDir dir;
+    std::mt19937_64 rng(9);
+    std::normal_distribution<double> n01;
+    std::vector<std::string> args = {"compare", "--block", "4", "--a"};
+    for (int side = 0; side < 2; ++side) {
+        if (side == 1) args.push_back("--b");
+        for (int k = 0; k < 3; ++k) {
+            std::vector<std::array<unsigned char, 4>> px;
+            for (int y = 0; y < 16; ++y)
+                for (int x = 0; x < 16; ++x) {
+                    std::array<double, 3> v{};
+                    for (int c = 0; c < 3; ++c)
+                        v[static_cast<size_t>(c)] = truth(x + 8, y + 8, c) * (1 + 0.05 * n01(rng));
+                    px.push_back(to_rgbe(v[0], v[1], v[2]));
+                }
+            const std::string name = "s" + std::to_string(side) + "_" + std::to_string(k) + ".hdr";
+            dir.write(name, radiance_hdr(16, 16, px));
+            args.push_back(name);
+        }
+    }
+    const auto r = testing::run_ssslab(args, dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("s0_0.hdr + 2 more runs"), std::string::npos) << r.out;
+    // A file that is no image: exit 2 naming it.
+    dir.write("bad.png", "no");
+    const auto bad = testing::run_ssslab(
+        {"compare", "--a", "bad.png", "s0_0.hdr", "--b", "s1_0.hdr", "s1_1.hdr"}, dir.path());
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_NE(bad.err.find("bad.png"), std::string::npos) << bad.err;
 }
 
 }  // namespace

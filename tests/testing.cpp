@@ -346,6 +346,12 @@ RgbImage read_png(const std::filesystem::path& path) {
     for (size_t at = 8; at + 12 <= f.size();) {
         const size_t len = be32(at);
         const std::string type = f.substr(at + 4, 4);
+        if (at + 12 + len > f.size())
+            throw std::runtime_error(path.string() + ": chunk " + type + " runs past the end");
+        const std::string body = f.substr(at + 4, 4 + len);  // type and data
+        if (be32(at + 8 + len) !=
+            crc32(0L, reinterpret_cast<const Bytef*>(body.data()), static_cast<uInt>(body.size())))
+            throw std::runtime_error(path.string() + ": bad CRC of chunk " + type);
         if (type == "IHDR") {
             img.width = static_cast<int>(be32(at + 8));
             img.height = static_cast<int>(be32(at + 12));

@@ -92,7 +92,8 @@ struct RgbImage {
                     (static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x))];
     }
 };
-/// Decode a non-interlaced 8-bit greyscale, RGB or RGBA PNG (screenshots of the browser tests);
+/// Decode a non-interlaced 8-bit greyscale, RGB or RGBA PNG (screenshots of the browser tests,
+/// the previews OpenImageIO writes), every chunk's CRC checked, every row filter undone;
 /// throws for anything else.
 RgbImage read_png(const std::filesystem::path& path);
 

@@ -4,7 +4,9 @@
 // validation case) and for the red channel of Skin1 (semi-infinite, albedo 0.959, n = 1.3, the
 // Freude14 Table 6.1 grid). The reference figures of the original MCML 1.2.2 on one core of this
 // machine class (2270 and 104 photons/ms) are from the issue that specified the port; `--write-mci`
-// writes the exact inputs so the original can be timed on the same cases.
+// writes the exact inputs so the original can be timed on the same cases, and `--original PATH`
+// times a build of the original program on them in the same run (best of the repeats, its whole
+// process: reading the .mci, the photons, writing the .mco) and prints the ratio per thread.
 //
 // `ssslab bench --kernels`: build time of every kernel model per material and channel, for the
 // eleven Freude14 materials on the thesis grid (Table 6.1). The ground-truth profiles come from
@@ -14,6 +16,7 @@
 #include "core/atomic_file.h"
 #include "core/build_info.h"
 #include "core/config.h"
+#include "core/error.h"
 #include "core/material.h"
 #include "core/provenance.h"
 #include "experiments/cli/bench_volpath.h"
@@ -23,13 +26,16 @@
 #include "mcml/mci.h"
 #include "mcml/profile.h"
 
+#include <sys/wait.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -79,6 +85,7 @@ struct BenchArgs {
     int repeat = 3;
     std::string only;
     std::string write_mci;
+    std::string original;  ///< a build of the original MCML 1.2.2, timed beside the port
     // --kernels
     bool kernels = false;
     bool volpath = false;
@@ -93,6 +100,52 @@ struct BenchArgs {
     std::string csv;
     std::string backend = "software", platform = "auto";
 };
+
+// Quoted for /bin/sh.
+std::string shell_quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+// Photons per ms of the original program on `run` with `photons` photons: the best of `repeat`
+// runs of the whole process in a scratch directory (the .mci written there, output discarded).
+double time_original(const std::string& program, mcml::RunSpec run, std::int64_t photons,
+                     int repeat) {
+    namespace fs = std::filesystem;
+    const fs::path dir =
+        fs::temp_directory_path() /
+        ("ssslab-bench-original-" + std::to_string(::getpid()) + "-" + run.out_name);
+    fs::create_directories(dir);
+    run.photons = photons;
+    write_file_atomic(dir / "in.mci", mcml::format_mci({run}));
+    const std::string cmd = "cd " + shell_quote(dir.string()) + " && " +
+                            shell_quote(fs::absolute(program).string()) +
+                            " in.mci > /dev/null 2>&1";
+    double best = 0;
+    for (int k = 0; k < repeat; ++k) {
+        fs::remove(dir / run.out_name);
+        const auto t0 = std::chrono::steady_clock::now();
+        const int status = std::system(cmd.c_str());
+        const double s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (status != 0 || !fs::exists(dir / run.out_name)) {
+            fs::remove_all(dir);
+            const std::string how =
+                status == 0 ? "it wrote no " + run.out_name
+                : WIFEXITED(status)
+                    ? "exit status " + std::to_string(WEXITSTATUS(status))
+                    : "killed by signal " +
+                          std::to_string(WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+            throw InfeasibleError("--original: " + program + " failed on the bench's " +
+                                  run.out_name.substr(0, run.out_name.size() - 4) + ".mci (" + how +
+                                  ")");
+        }
+        if (k == 0 || s < best) best = s;
+    }
+    fs::remove_all(dir);
+    return static_cast<double>(photons) / (best * 1e3);
+}
 
 int run_bench(const BenchArgs& a) {
     const int all = a.threads > 0 ? a.threads : tbb::info::default_concurrency();
@@ -114,6 +167,13 @@ int run_bench(const BenchArgs& a) {
         {"Skin1 red, profile tallies", skin1_red_run(), mcml::TallyMode::kProfile,
          static_cast<std::int64_t>(300'000 * q), 0},
     };
+    // The original, timed first on every case it has a figure for (one thread).
+    std::map<std::string, double> original;
+    if (!a.original.empty())
+        for (const auto& c : cases)
+            if (c.original_photons_per_ms > 0 &&
+                (a.only.empty() || c.name.find(a.only) != std::string::npos))
+                original[c.name] = time_original(a.original, c.run, c.photons, a.repeat);
     std::printf("MCML default engine, %d hardware threads used for 'all'\n", all);
     std::printf("%-34s %7s %10s %12s %12s %9s %11s\n", "case", "threads", "photons", "photons/ms",
                 "ns/event", "events/ph", "x original");
@@ -137,8 +197,10 @@ int run_bench(const BenchArgs& a) {
             const double ppms = static_cast<double>(r.photons) / (r.seconds * 1e3);
             const double ns_event = r.seconds * 1e9 / static_cast<double>(r.events);
             char ratio[32] = "-";
-            if (c.original_photons_per_ms > 0)
-                std::snprintf(ratio, sizeof ratio, "%.2f", ppms / c.original_photons_per_ms / t);
+            const auto measured = original.find(c.name);
+            const double reference =
+                measured != original.end() ? measured->second : c.original_photons_per_ms;
+            if (reference > 0) std::snprintf(ratio, sizeof ratio, "%.2f", ppms / reference / t);
             std::printf("%-34s %7d %10llu %12.1f %12.2f %9.1f %11s", c.name.c_str(), t,
                         static_cast<unsigned long long>(r.photons), ppms, ns_event * t,
                         static_cast<double>(r.events) / static_cast<double>(r.photons), ratio);
@@ -151,9 +213,19 @@ int run_bench(const BenchArgs& a) {
     }
     std::printf(
         "Each row is the fastest of %d runs. ns/event is CPU time per scattering event (wall "
-        "time x threads). 'x original' is per thread, against the original MCML 1.2.2 figure for "
-        "this machine class (slab 2270, Skin1 red 104 photons/ms on one core).\n",
+        "time x threads). 'x original' is per thread, ",
         a.repeat);
+    if (original.empty()) {
+        std::printf(
+            "against the original MCML 1.2.2 figure for this machine class (slab 2270, Skin1 red "
+            "104 photons/ms on one core; --original PATH times a build of it here).\n");
+    } else {
+        std::printf("against %s timed in this run on the same inputs (one thread, best of %d):",
+                    a.original.c_str(), a.repeat);
+        for (const auto& [name, ppms] : original)
+            std::printf(" %s %.1f photons/ms;", name.c_str(), ppms);
+        std::printf("\n");
+    }
     return 0;
 }
 
@@ -513,6 +585,12 @@ void register_bench(CLI::App& app, std::function<int()>& action) {
                     "Write the benchmark inputs as .mci files into this directory (to time the "
                     "original program on the same cases) and exit")
         ->excludes(kernels);
+    sub->add_option("--original", a->original,
+                    "A build of the original MCML 1.2.2 (never part of ssslab): time it on the "
+                    "same inputs in this run and print the ratio per thread")
+        ->check(CLI::ExistingFile)
+        ->excludes(kernels)
+        ->excludes(volpath);
     sub->add_option("--photons", a->photons,
                     "With --kernels: MCML photons per channel for the ground-truth profiles "
                     "(default 100000)")

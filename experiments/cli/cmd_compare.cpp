@@ -1,6 +1,7 @@
 // `ssslab compare`: are two Monte Carlo images of one scene the same up to noise? Each side is
 // one EXR with a standard-error layer (ssslab render's "radiance" + "radiance.stderr") or K >= 2
-// independent runs of a renderer that reports no variance (e.g. Cycles with different seeds).
+// independent runs of a renderer that reports no variance (e.g. Cycles with different seeds), in
+// any format OpenImageIO reads (core/image_io.h: EXR, HDR, PNG, TIFF, ...).
 // Prints the whole-image means with their standard errors and z per channel, and the per-block
 // chi-square (core/image_compare.h); --csv writes every block's z.
 #include "core/atomic_file.h"
@@ -9,6 +10,7 @@
 #include "core/film_image.h"
 #include "core/hash.h"
 #include "core/image_compare.h"
+#include "core/image_io.h"
 #include "core/provenance.h"
 #include "experiments/cli/commands.h"
 #include "experiments/cli/common.h"
@@ -38,7 +40,7 @@ struct CompareArgs {
 ImageEstimate read_side(const std::vector<std::string>& files, const std::string& layer,
                         const char* flag) {
     std::vector<LayeredImage> images;
-    for (const std::string& f : files) images.push_back(read_exr(f));
+    for (const std::string& f : files) images.push_back(read_image(f));
     std::string source =
         files[0] +
         (files.size() > 1 ? " + " + std::to_string(files.size() - 1) + " more runs" : "");
@@ -143,10 +145,12 @@ void register_compare(CLI::App& app, std::function<int()>& action) {
         "compare",
         "Compare two Monte Carlo images statistically: image means and per-block z-scores "
         "(each side one EXR with a .stderr layer, or several independent runs)");
-    sub->add_option("--a", a->a, "Image A: one EXR with <layer>.stderr, or >= 2 runs")
+    sub->add_option("--a", a->a,
+                    "Image A: one EXR with <layer>.stderr, or >= 2 runs (EXR, HDR, PNG, TIFF, ...)")
         ->required()
         ->check(existing_file("image"));
-    sub->add_option("--b", a->b, "Image B: one EXR with <layer>.stderr, or >= 2 runs")
+    sub->add_option("--b", a->b,
+                    "Image B: one EXR with <layer>.stderr, or >= 2 runs (EXR, HDR, PNG, TIFF, ...)")
         ->required()
         ->check(existing_file("image"));
     sub->add_option("--layer-a", a->layer_a,

@@ -21,5 +21,8 @@ void register_check(CLI::App& app, std::function<int()>& action);
 
 /// Parse and run; returns the exit status. Errors in input: 2; I/O: 3; interrupted: 130.
 int main(int argc, char** argv);
+/// `main` under mpirun as well (core/distributed.h): what the `ssslab` command runs. A failure on
+/// any rank ends all of them with its exit status.
+int main_distributed(int argc, char** argv);
 
 }  // namespace ssslab::cli

@@ -79,17 +79,6 @@ double rel_l2_rr(const Bins& b, const std::vector<double>& m, const std::vector<
     return den > 0 ? std::sqrt(num / den) : 0.0;
 }
 
-approx::DiffusionMedium diffusion_medium(const Medium& m, int c) {
-    require_homogeneous(m, "the diffusion models");
-    approx::DiffusionMedium d;
-    d.sigma_a = m.sigma_a_per_cm[c];
-    d.sigma_s = m.sigma_s_per_cm[c];
-    d.g = m.g[c];
-    d.eta = m.eta / m.eta_above;
-    d.thickness = m.thickness_cm >= 1e8 ? std::numeric_limits<double>::infinity() : m.thickness_cm;
-    return d;
-}
-
 // What every model is compared with, per material and channel.
 struct Reference {
     std::vector<double> all, all_se, ms, ms_se, mcml, mcml_se;
@@ -138,7 +127,7 @@ MaterialPencil pencil_data(const ExperimentRun& r, const MaterialEntry& me, bool
             m.name = name;
             try {
                 const auto model =
-                    approx::make_diffusion_profile(name, diffusion_medium(me.medium, c));
+                    approx::make_diffusion_profile(name, approx::diffusion_medium(me.medium, c));
                 m.single = model->includes_single_scattering();
                 m.fresnel = model->includes_entry_fresnel();
                 const double scale = m.fresnel ? 1.0 : 1.0 - f.rsp;

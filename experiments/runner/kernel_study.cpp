@@ -5,7 +5,7 @@
 #include "approx/models.h"
 #include "core/error.h"
 #include "core/material.h"
-#include "core/png.h"
+#include "core/image_io.h"
 
 #include <algorithm>
 #include <chrono>
@@ -102,7 +102,7 @@ std::string KernelStudySpec::canonical() const {
     os << "name=" << name << "\nmaterials=";
     for (const auto& m : materials) os << m << ",";
     os << "\nmodels=";
-    for (const auto& m : models) os << m.text << ";";
+    for (const auto& m : models) os << m.cache_text() << ";";
     os << "\nsignals=";
     for (auto s : signals) os << approx::signal_name(s) << ",";
     os << "\ntaps=" << taps << "\njitter=" << num(jitter) << "\npixels=" << pixels

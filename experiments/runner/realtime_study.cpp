@@ -7,7 +7,7 @@
 #include "core/error.h"
 #include "core/film_image.h"
 #include "core/image_compare.h"
-#include "core/png.h"
+#include "core/image_io.h"
 #include "core/scene.h"
 #include "experiments/runner/engines.h"
 #include "experiments/runner/plots.h"

@@ -296,12 +296,9 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
         const std::string& name = job.models[k];
         auto& per_channel = job.profiles.emplace_back();
         for (int ch = 0; ch < 3; ++ch) {
-            approx::DiffusionMedium dm;
-            dm.sigma_a = m.sigma_a_per_cm[ch];
-            dm.sigma_s = m.sigma_s_per_cm[ch];
-            dm.g = m.g[ch];
-            dm.eta = m.eta / m.eta_above;
             try {
+                approx::DiffusionMedium dm = approx::diffusion_medium(m, ch);
+                dm.thickness = std::numeric_limits<double>::infinity();  // a sphere, not a slab
                 per_channel[static_cast<size_t>(ch)] = approx::make_diffusion_profile(name, dm);
             } catch (const std::invalid_argument& e) {
                 models_error(k, "model \"" + name + "\" refuses channel " + kChannelNames[ch] +

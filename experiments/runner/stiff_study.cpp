@@ -387,12 +387,7 @@ void run_render(Sweep& s, const Case& c) {
 // Every analytic profile on the case's medium (lengths in cm).
 void run_diffusion(Sweep& s, const Case& c) {
     const Medium& m = c.medium;
-    approx::DiffusionMedium d;
-    d.sigma_a = m.sigma_a_per_cm[0];
-    d.sigma_s = m.sigma_s_per_cm[0];
-    d.g = m.g[0];
-    d.eta = m.eta / m.eta_above;
-    d.thickness = m.thickness_cm;
+    const approx::DiffusionMedium d = approx::diffusion_medium(m, 0);
     for (const std::string& name : approx::diffusion_model_names()) {
         s.guarded("diffusion " + name, c, [&] {
             const auto t0 = std::chrono::steady_clock::now();

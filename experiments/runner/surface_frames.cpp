@@ -94,11 +94,8 @@ approx::RadialFunction analytic_profile(const Scene& scene, const SceneMaterial&
     std::array<std::shared_ptr<const approx::DiffusionProfile>, 3> ch;
     double mfp_min = std::numeric_limits<double>::infinity();
     for (int c = 0; c < 3; ++c) {
-        approx::DiffusionMedium dm;
-        dm.sigma_a = sm.medium.sigma_a_per_cm[c] / 10;  // per mm
-        dm.sigma_s = sm.medium.sigma_s_per_cm[c] / 10;
-        dm.g = sm.medium.g[c];
-        dm.eta = sm.medium.eta / sm.medium.eta_above;
+        approx::DiffusionMedium dm = approx::diffusion_medium(sm.medium, c, LengthUnit::kMm);
+        dm.thickness = std::numeric_limits<double>::infinity();  // surfaces of scene shapes
         ch[static_cast<size_t>(c)] = approx::make_diffusion_profile(name, dm);
         mfp_min = std::min(mfp_min, 1 / dm.sigma_t_reduced());
     }
