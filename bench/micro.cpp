@@ -20,20 +20,22 @@ void BM_PhiloxUniform(benchmark::State& state) {
 BENCHMARK(BM_PhiloxUniform);
 
 void BM_PhiloxGroup(benchmark::State& state) {
-    std::uint64_t out[16];
+    std::uint64_t out[2 * kPhiloxGroup];
     std::uint32_t c = 0;
-    const bool portable = state.range(0) == 0;
-    for (auto _ : state) {
-        if (portable)
-            philox4x32_10_group_portable(1, 2, c, 3, 4, 5, out);
-        else
-            philox4x32_10_group(1, 2, c, 3, 4, 5, out);
-        benchmark::DoNotOptimize(out);
-        c += 8;
+    const auto path = static_cast<PhiloxPath>(state.range(0));
+    if (!philox_path_available(path)) {
+        state.SkipWithError("this CPU lacks the path");
+        return;
     }
-    state.SetLabel(portable ? "Random123 scalar" : (philox_uses_avx2() ? "AVX2" : "portable"));
+    for (auto _ : state) {
+        philox4x32_10_group_on(path, 1, 2, c, 3, 4, 5, out);
+        benchmark::DoNotOptimize(out);
+        c += kPhiloxGroup;
+    }
+    state.SetLabel(to_string(path));
+    state.SetItemsProcessed(state.iterations() * kPhiloxGroup);
 }
-BENCHMARK(BM_PhiloxGroup)->Arg(0)->Arg(1);
+BENCHMARK(BM_PhiloxGroup)->Arg(0)->Arg(1)->Arg(2);
 
 void BM_ExpZiggurat(benchmark::State& state) {
     RngStream rng(1, rng_domain::kTest, 0);
