@@ -4,8 +4,8 @@
 #include "approx/kernel2d.h"
 #include "approx/models.h"
 #include "core/error.h"
-#include "core/material.h"
 #include "core/image_io.h"
+#include "core/material.h"
 
 #include <algorithm>
 #include <chrono>
