@@ -212,8 +212,8 @@ void register_model(ModelFactory f) {
 std::vector<std::string> model_names() {
     Registry& r = registry();
     std::lock_guard<std::mutex> lock(r.mutex);
-    std::vector<std::string> names(r.order);
-    std::sort(names.begin(), names.end());
+    std::vector<std::string> names;
+    for (const auto& [name, f] : r.factories) names.push_back(name);  // sorted by the map
     return names;
 }
 

@@ -4,6 +4,7 @@
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
 
 #include <cmath>
 #include <filesystem>
@@ -21,11 +22,6 @@ float srgb_to_linear(float v) {
 // The inverse of the Rec. 709 OETF (ITU-R BT.709), what OpenImageIO calls "Rec709" (e.g. PNM).
 float rec709_to_linear(float v) {
     return v < 0.081f ? v / 4.5f : std::pow((v + 0.099f) / 1.099f, 1.0f / 0.45f);
-}
-
-std::string lower(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
 }
 
 }  // namespace
@@ -73,7 +69,7 @@ LayeredImage read_image(const std::string& path) {
         return fail("cannot decode the " + format + " image: " + in->geterror());
     // Integer pixels are encoded values: decode them to linear by the transfer function the file
     // declares (sRGB when it declares none).
-    const std::string cs = lower(spec.get_string_attribute("oiio:ColorSpace"));
+    const std::string cs = OIIO::Strutil::lower(spec.get_string_attribute("oiio:ColorSpace"));
     const bool integer = !spec.format.is_floating_point();
     float (*decode)(float) = nullptr;
     std::string decoding = "linear";
@@ -87,7 +83,7 @@ LayeredImage read_image(const std::string& path) {
         decoding = "as stored (colour space " + cs + ")";
     }
     std::vector<std::string> names;
-    int alpha = spec.alpha_channel;
+    const int alpha = spec.alpha_channel;
     for (int c = 0; c < spec.nchannels; ++c) {
         std::string n = c < static_cast<int>(spec.channelnames.size()) ? spec.channelnames[c] : "";
         if (n.empty() || n.find('.') != std::string::npos) n = "C" + std::to_string(c);

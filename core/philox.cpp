@@ -170,11 +170,7 @@ void philox4x32_10_group_on(PhiloxPath p, std::uint32_t k0, std::uint32_t k1, st
 
 void philox4x32_10_group(std::uint32_t k0, std::uint32_t k1, std::uint32_t c0, std::uint32_t c1,
                          std::uint32_t c2, std::uint32_t c3, std::uint64_t out[2 * kPhiloxGroup]) {
-    static const PhiloxPath p = philox_path();
-    if (p == PhiloxPath::kAvx512)
-        group_avx512(k0, k1, c0, c1, c2, c3, out);
-    else
-        philox4x32_10_group_on(p, k0, k1, c0, c1, c2, c3, out);
+    philox4x32_10_group_on(philox_path(), k0, k1, c0, c1, c2, c3, out);
 }
 
 }  // namespace ssslab

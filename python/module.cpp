@@ -107,18 +107,12 @@ int check_channel(int c) {
     return c;
 }
 
+// The grid of Freude14 Table 6.1 with the caller's dr_cm / nr over it, as a config's grid keys.
 mcml::ProfileGrid grid_of(const Medium& m, std::optional<double> dr_cm, std::optional<int> nr) {
-    mcml::ProfileGrid g = mcml::freude14_grid(m);
-    if (dr_cm) {
-        if (!(*dr_cm > 0) || !std::isfinite(*dr_cm))
-            throw std::invalid_argument("dr_cm must be positive");
-        g.dr_cm = *dr_cm;
-    }
-    if (nr) {
-        if (*nr < 1 || *nr > 100000000) throw std::invalid_argument("nr must be in [1, 1e8]");
-        g.nr = *nr;
-    }
-    return g;
+    if (dr_cm && (!(*dr_cm > 0) || !std::isfinite(*dr_cm)))
+        throw std::invalid_argument("dr_cm must be positive");
+    if (nr && (*nr < 1 || *nr > 100000000)) throw std::invalid_argument("nr must be in [1, 1e8]");
+    return mcml::GridOverride{dr_cm, nr}.apply(mcml::freude14_grid(m));
 }
 
 // The layers of a rendered image as numpy arrays (height, width, channels).

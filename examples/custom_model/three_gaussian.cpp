@@ -28,20 +28,11 @@ using ssslab::approx::ModelContext;
 using ssslab::approx::ModelResult;
 using ssslab::approx::ModelSpec;
 
-// The half vector (cells i h .. (i + 1) h, i in [0, n)) of a unit Gaussian of deviation sigma,
-// scaled to sum 1/2: the factor of a kernel of unit L1.
-std::vector<double> gaussian_cells(int n, double h, double sigma) {
-    std::vector<double> g(static_cast<size_t>(n));
-    const double s = 1.0 / (sigma * std::sqrt(2.0));
-    double sum = 0;
-    for (int i = 0; i < n; ++i) {
-        const double u0 = i * h * s, u1 = (i + 1) * h * s;
-        const double m =
-            u0 < 0.5 ? 0.5 * (std::erf(u1) - std::erf(u0)) : 0.5 * (std::erfc(u0) - std::erfc(u1));
-        sum += g[static_cast<size_t>(i)] = m;
-    }
-    for (double& x : g) x *= 0.5 / sum;
-    return g;
+// The half vector (cells i h .. (i + 1) h, i in [0, n)) of a Gaussian of deviation sigma on k's
+// grid, exact cell masses scaled to sum 1/2 (the factor of a kernel of unit L1): the manual
+// model's factor with both Gaussians the same (approx/models.h).
+std::vector<double> gaussian_cells(const Kernel2D& k, double sigma) {
+    return ssslab::approx::manual_two_gaussian(k, sigma, sigma, 1.0).kernel.terms.at(0).a;
 }
 
 struct Fit {
@@ -111,7 +102,7 @@ ModelResult three_gaussian(const ModelSpec& spec, const Kernel2D& k, const Model
     std::vector<std::vector<double>> cells;
     for (int i = 0; i < count; ++i) {
         sigmas.push_back(std::exp(lo + (hi - lo) * i / (count - 1)));
-        cells.push_back(gaussian_cells(n, h, sigmas.back()));
+        cells.push_back(gaussian_cells(k, sigmas.back()));
     }
     Fit best;
     for (int a = 0; a < count; ++a)
@@ -126,13 +117,13 @@ ModelResult three_gaussian(const ModelSpec& spec, const Kernel2D& k, const Model
     // ... refined one width at a time by factors exp(+-step), the step halved each round.
     double step = (hi - lo) / (count - 1);
     std::array<std::vector<double>, 3> g;
-    for (int i = 0; i < 3; ++i) g[i] = gaussian_cells(n, h, best.sigma[i]);
+    for (int i = 0; i < 3; ++i) g[i] = gaussian_cells(k, best.sigma[i]);
     for (int round = 0; round < 12; ++round, step *= 0.5)
         for (int i = 0; i < 3; ++i)
             for (const double dir : {-1.0, 1.0}) {
                 const double s = best.sigma[i] * std::exp(dir * step);
                 std::array<std::vector<double>, 3> trial = g;
-                trial[i] = gaussian_cells(n, h, s);
+                trial[i] = gaussian_cells(k, s);
                 Fit f = fit_weights({&trial[0], &trial[1], &trial[2]}, target);
                 if (f.sse < best.sse) {
                     f.sigma = best.sigma;
