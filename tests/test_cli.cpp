@@ -6,21 +6,13 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <set>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
-
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-extern char** environ;
 
 namespace ssslab {
 namespace {
@@ -330,24 +322,10 @@ TEST(Cli, InterruptedRunResumesToTheUninterruptedResult) {
     ASSERT_EQ(full.exit_code, 0) << full.err;
 
     // Start the same run, interrupt it with SIGINT, and check it saved a checkpoint only.
-    const std::string bin = testing::ssslab_binary();
-    std::vector<std::string> argv_s = {bin};
-    argv_s.insert(argv_s.end(), args.begin(), args.end());
-    argv_s.push_back("-q");
-    std::vector<char*> argv;
-    for (auto& s : argv_s) argv.push_back(s.data());
-    argv.push_back(nullptr);
-    const fs::path cwd = fs::current_path();
-    fs::current_path(parts.path());
-    pid_t pid = 0;
-    ASSERT_EQ(posix_spawn(&pid, bin.c_str(), nullptr, nullptr, argv.data(), environ), 0);
-    fs::current_path(cwd);
-    std::this_thread::sleep_for(std::chrono::milliseconds(700));
-    ::kill(pid, SIGINT);
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    ASSERT_TRUE(WIFEXITED(status));
-    ASSERT_EQ(WEXITSTATUS(status), 130) << "the run finished before the interruption";
+    std::vector<std::string> quiet = args;
+    quiet.push_back("-q");
+    ASSERT_EQ(testing::run_and_kill(quiet, parts.path(), 700, SIGINT), 130)
+        << "the run finished before the interruption";
     EXPECT_EQ(parts.files(), (std::vector<std::string>{"b.mci", "b_giov_n15.mco.ckpt"}));
 
     const auto resumed = run_ssslab(args, parts.path());

@@ -116,6 +116,33 @@ std::vector<std::string> mpi_launcher(int ranks) {
             "-np",    std::to_string(ranks)};
 }
 
+namespace {
+
+/// Whether process `pid` catches `sig`, from the SigCgt mask of /proc/<pid>/status; false once
+/// the process has ended.
+bool catches(pid_t pid, int sig) {
+    std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.rfind("SigCgt:", 0) == 0) {
+            const unsigned long long mask = std::stoull(line.substr(7), nullptr, 16);
+            return (mask >> (sig - 1)) & 1ULL;
+        }
+    return false;
+}
+
+}  // namespace
+
+bool wait_for_handler(pid_t pid, int sig, double timeout_s) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (std::chrono::steady_clock::now() < until) {
+        if (catches(pid, sig)) return true;
+        if (::waitpid(pid, nullptr, WNOHANG) == pid) return false;  // it ended first
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return false;
+}
+
 int run_and_kill(const std::vector<std::string>& args, const fs::path& cwd, int ms, int sig) {
     const std::string bin = ssslab_binary();
     std::vector<std::string> argv_s = {bin};
@@ -129,6 +156,14 @@ int run_and_kill(const std::vector<std::string>& args, const fs::path& cwd, int 
     const int rc = posix_spawn(&pid, bin.c_str(), nullptr, nullptr, argv.data(), environ);
     fs::current_path(here);
     if (rc != 0) return -1;
+    // A signal the program catches is sent `ms` after its handler is in place: before that the
+    // default action would kill it, and a loaded machine may take longer than `ms` to load the
+    // shared libraries and parse the inputs (CI once did).
+    if (sig != SIGKILL && !wait_for_handler(pid, sig)) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, nullptr, 0);
+        return -2;
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(ms));
     ::kill(pid, sig);
     int status = 0;
