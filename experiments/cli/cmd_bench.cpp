@@ -6,7 +6,8 @@
 // machine class (2270 and 104 photons/ms) are from the issue that specified the port; `--write-mci`
 // writes the exact inputs so the original can be timed on the same cases, and `--original PATH`
 // times a build of the original program on them in the same run (best of the repeats, its whole
-// process: reading the .mci, the photons, writing the .mco) and prints the ratio per thread.
+// process: reading the .mci, the photons, writing the .mco; each of its runs follows one of the
+// port's on the same CPU, so both see the same machine) and prints the ratio per thread.
 //
 // `ssslab bench --kernels`: build time of every kernel model per material and channel, for the
 // eleven Freude14 materials on the thesis grid (Table 6.1). The ground-truth profiles come from
@@ -26,6 +27,7 @@
 #include "mcml/mci.h"
 #include "mcml/profile.h"
 
+#include <sched.h>
 #include <sys/wait.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
@@ -108,44 +110,81 @@ std::string shell_quote(const std::string& s) {
     return q + "'";
 }
 
-// Photons per ms of the original program on `run` with `photons` photons: the best of `repeat`
-// runs of the whole process in a scratch directory (the .mci written there, output discarded).
-double time_original(const std::string& program, mcml::RunSpec run, std::int64_t photons,
-                     int repeat) {
-    namespace fs = std::filesystem;
-    const fs::path dir =
-        fs::temp_directory_path() /
-        ("ssslab-bench-original-" + std::to_string(::getpid()) + "-" + run.out_name);
-    fs::create_directories(dir);
-    run.photons = photons;
-    write_file_atomic(dir / "in.mci", mcml::format_mci({run}));
-    const std::string cmd = "cd " + shell_quote(dir.string()) + " && " +
-                            shell_quote(fs::absolute(program).string()) +
-                            " in.mci > /dev/null 2>&1";
-    double best = 0;
-    for (int k = 0; k < repeat; ++k) {
-        fs::remove(dir / run.out_name);
+// Keeps the calling thread (and the processes it starts) on the CPU it is running on while it
+// lives, then restores its CPU set. The one-thread rows and the original's runs go to one CPU:
+// on a virtual machine one virtual CPU can be slower than another for minutes (a busy
+// hyperthread sibling on the host), and a ratio of runs on two of them measures the CPUs.
+class PinnedToThisCpu {
+  public:
+    PinnedToThisCpu() {
+        saved_ok_ = ::sched_getaffinity(0, sizeof saved_, &saved_) == 0;
+        const int cpu = ::sched_getcpu();
+        if (!saved_ok_ || cpu < 0) return;
+        cpu_set_t one;
+        CPU_ZERO(&one);
+        CPU_SET(cpu, &one);
+        pinned_ = ::sched_setaffinity(0, sizeof one, &one) == 0;
+    }
+    PinnedToThisCpu(const PinnedToThisCpu&) = delete;
+    PinnedToThisCpu& operator=(const PinnedToThisCpu&) = delete;
+    ~PinnedToThisCpu() {
+        if (pinned_) (void)::sched_setaffinity(0, sizeof saved_, &saved_);
+    }
+
+  private:
+    cpu_set_t saved_{};
+    bool saved_ok_ = false, pinned_ = false;
+};
+
+// The original program on one bench case: its .mci (the case's run with `photons` photons) in
+// a scratch directory that lives as long as this object; each run() times one whole process
+// (output discarded) and returns its photons per ms.
+class OriginalProgram {
+  public:
+    OriginalProgram(const std::string& program, mcml::RunSpec run, std::int64_t photons)
+        : program_(program), photons_(photons) {
+        namespace fs = std::filesystem;
+        dir_ = fs::temp_directory_path() /
+               ("ssslab-bench-original-" + std::to_string(::getpid()) + "-" + run.out_name);
+        fs::create_directories(dir_);
+        run.photons = photons;
+        out_ = run.out_name;
+        write_file_atomic(dir_ / "in.mci", mcml::format_mci({run}));
+        cmd_ = "cd " + shell_quote(dir_.string()) + " && " +
+               shell_quote(fs::absolute(program).string()) + " in.mci > /dev/null 2>&1";
+    }
+    OriginalProgram(const OriginalProgram&) = delete;
+    OriginalProgram& operator=(const OriginalProgram&) = delete;
+    ~OriginalProgram() {
+        std::error_code ec;
+        std::filesystem::remove_all(dir_, ec);
+    }
+
+    double run() const {
+        namespace fs = std::filesystem;
+        fs::remove(dir_ / out_);
         const auto t0 = std::chrono::steady_clock::now();
-        const int status = std::system(cmd.c_str());
+        const int status = std::system(cmd_.c_str());
         const double s =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        if (status != 0 || !fs::exists(dir / run.out_name)) {
-            fs::remove_all(dir);
+        if (status != 0 || !fs::exists(dir_ / out_)) {
             const std::string how =
-                status == 0 ? "it wrote no " + run.out_name
+                status == 0 ? "it wrote no " + out_
                 : WIFEXITED(status)
                     ? "exit status " + std::to_string(WEXITSTATUS(status))
                     : "killed by signal " +
                           std::to_string(WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-            throw InfeasibleError("--original: " + program + " failed on the bench's " +
-                                  run.out_name.substr(0, run.out_name.size() - 4) + ".mci (" + how +
-                                  ")");
+            throw InfeasibleError("--original: " + program_ + " failed on the bench's " +
+                                  out_.substr(0, out_.size() - 4) + ".mci (" + how + ")");
         }
-        if (k == 0 || s < best) best = s;
+        return static_cast<double>(photons_) / (s * 1e3);
     }
-    fs::remove_all(dir);
-    return static_cast<double>(photons) / (best * 1e3);
-}
+
+  private:
+    std::string program_, out_, cmd_;
+    std::int64_t photons_;
+    std::filesystem::path dir_;
+};
 
 int run_bench(const BenchArgs& a) {
     const int all = a.threads > 0 ? a.threads : tbb::info::default_concurrency();
@@ -167,13 +206,18 @@ int run_bench(const BenchArgs& a) {
         {"Skin1 red, profile tallies", skin1_red_run(), mcml::TallyMode::kProfile,
          static_cast<std::int64_t>(300'000 * q), 0},
     };
-    // The original, timed first on every case it has a figure for (one thread).
+    // The original on every case it has a figure for (one thread): its runs alternate with the
+    // port's one-thread runs, so that both see the same state of the machine (a busy spell slows
+    // the runs of both, not the repeats of one). Checked first on each case, before any timing.
     std::map<std::string, double> original;
+    std::map<std::string, std::unique_ptr<OriginalProgram>> programs;
     if (!a.original.empty())
         for (const auto& c : cases)
             if (c.original_photons_per_ms > 0 &&
-                (a.only.empty() || c.name.find(a.only) != std::string::npos))
-                original[c.name] = time_original(a.original, c.run, c.photons, a.repeat);
+                (a.only.empty() || c.name.find(a.only) != std::string::npos)) {
+                programs[c.name] = std::make_unique<OriginalProgram>(a.original, c.run, c.photons);
+                (void)programs[c.name]->run();
+            }
     std::printf("MCML default engine, %d hardware threads used for 'all'\n", all);
     std::printf("%-34s %7s %10s %12s %12s %9s %11s\n", "case", "threads", "photons", "photons/ms",
                 "ns/event", "events/ph", "x original");
@@ -189,10 +233,18 @@ int run_bench(const BenchArgs& a) {
             o.mode = c.mode;
             o.budget.samples = c.photons;
             // Best of `repeat` runs: interference from other processes only ever slows a run.
-            mcml::RunResult r = mcml::run_default(c.run, o);
-            for (int k = 1; k < a.repeat; ++k) {
+            std::optional<PinnedToThisCpu> pin;
+            if (t == 1) pin.emplace();
+            const auto program = t == 1 ? programs.find(c.name) : programs.end();
+            mcml::RunResult r;
+            for (int k = 0; k < a.repeat; ++k) {
                 mcml::RunResult again = mcml::run_default(c.run, o);
-                if (again.seconds < r.seconds) r = std::move(again);
+                if (k == 0 || again.seconds < r.seconds) r = std::move(again);
+                if (program != programs.end()) {
+                    const double ppms = program->second->run();
+                    double& best = original[c.name];
+                    best = std::max(best, ppms);
+                }
             }
             const double ppms = static_cast<double>(r.photons) / (r.seconds * 1e3);
             const double ns_event = r.seconds * 1e9 / static_cast<double>(r.events);
@@ -220,8 +272,10 @@ int run_bench(const BenchArgs& a) {
             "against the original MCML 1.2.2 figure for this machine class (slab 2270, Skin1 red "
             "104 photons/ms on one core; --original PATH times a build of it here).\n");
     } else {
-        std::printf("against %s timed in this run on the same inputs (one thread, best of %d):",
-                    a.original.c_str(), a.repeat);
+        std::printf(
+            "against %s timed in this run on the same inputs (one thread, best of %d, "
+            "its runs alternating with the port's on the same CPU):",
+            a.original.c_str(), a.repeat);
         for (const auto& [name, ppms] : original)
             std::printf(" %s %.1f photons/ms;", name.c_str(), ppms);
         std::printf("\n");
