@@ -3,7 +3,8 @@
 # build/package/prefix, build examples/custom_model/ against the installed tree only, and run its
 # experiment (the out-of-tree "three_gaussian" model scored beside the built-in ones against
 # MCML ground truth, --quick). Checks that the model's rows are there, finite and energy-
-# conserving, and that the plain `ssslab` refuses the model it does not know (exit 2).
+# conserving, that the plain `ssslab` refuses the model it does not know (exit 2), and that the
+# installed Python module imports from the prefix alone and computes a profile.
 # Needs build/release (scripts/build.sh). Exits non-zero on any failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -41,5 +42,20 @@ if [[ $status -ne 2 ]] || ! grep -q 'unknown model "three_gaussian"' "$root/refu
   echo "the installed ssslab should refuse three_gaussian with exit 2, got $status:"
   cat "$root/refused.txt"
   exit 1
+fi
+# The Python module as installed (when the build has it): imported from the prefix alone, its
+# libraries found through its RPATH, one profile computed.
+module=$(find "$root/prefix" -name 'ssslab.cpython-*.so' | head -n 1)
+if [[ -n "$(find build/release/python -maxdepth 1 -name 'ssslab.cpython-*.so' 2>/dev/null)" ]]; then
+  [[ -n "$module" ]] || { echo "the build has the Python module, the install does not"; exit 1; }
+  (cd "$root" && env -u LD_LIBRARY_PATH PYTHONPATH="$(dirname "$module")" /usr/bin/python3 - "$root/prefix" <<'PY'
+import sys
+import ssslab
+if not ssslab.__file__.startswith(sys.argv[1]):
+    sys.exit(f"imported {ssslab.__file__}, not the installed module")
+rd, total = ssslab.diffusion_profile("dipole", ssslab.material("Skin1"), [0.01, 0.1])
+print(f"installed Python module: {ssslab.__file__}, dipole R_d(0.1 cm) red {rd[0][1]:.6g}")
+PY
+  )
 fi
 echo "package check passed: examples/custom_model built against $root/prefix and ran"
