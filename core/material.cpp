@@ -68,6 +68,9 @@ std::string material_names() {
     return s;
 }
 
+namespace {
+
+// The preset name nearest to `name` (edit distance at most 3), or "" if none is near.
 std::string nearest_material(const std::string& name) {
     std::string best;
     int best_d = 1 << 30;
@@ -76,6 +79,15 @@ std::string nearest_material(const std::string& name) {
         if (d < best_d) best_d = d, best = q.name;
     }
     return best_d <= 3 ? best : std::string();
+}
+
+}  // namespace
+
+std::string unknown_material_message(const std::string& name) {
+    std::string msg = "unknown material \"" + name + "\"";
+    const std::string near = nearest_material(name);
+    if (!near.empty()) msg += " (did you mean \"" + near + "\"?)";
+    return msg + "; known materials: " + material_names();
 }
 
 namespace {
@@ -115,12 +127,7 @@ Medium read_homogeneous(ConfigTable& t, bool with_thickness = true) {
     if (t.has("preset")) {
         const std::string name = t.string("preset");
         auto p = find_material(name);
-        if (!p) {
-            std::string msg = "unknown material \"" + name + "\"";
-            const std::string near = nearest_material(name);
-            if (!near.empty()) msg += " (did you mean \"" + near + "\"?)";
-            t.fail("preset", msg + "; known materials: " + material_names());
-        }
+        if (!p) t.fail("preset", unknown_material_message(name));
         if (explicit_coeffs)
             t.fail("preset", "give either a preset or explicit coefficients, not both");
         m = *p;

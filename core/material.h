@@ -104,8 +104,9 @@ const std::vector<std::string>& freude14_main_materials();
 std::optional<Medium> find_material(const std::string& name);
 /// The preset names, comma-separated, for error messages.
 std::string material_names();
-/// The preset name nearest to `name` (edit distance at most 3), or "" if none is near.
-std::string nearest_material(const std::string& name);
+/// The message for a preset name that does not exist: `unknown material "name" (did you mean
+/// "Skin1"?); known materials: Apple, ...` (the suggestion only when one is near).
+std::string unknown_material_message(const std::string& name);
 
 /// A length given as <base>_mm or <base>_cm (not both), in cm; nullopt if neither is given.
 std::optional<double> optional_length_cm(ConfigTable& t, const std::string& base, const Range& r);

@@ -86,7 +86,10 @@ SampleBudget budget(std::optional<double> samples, std::optional<double> seconds
     return b;
 }
 
-int check_threads(int threads);
+int check_threads(int threads) {
+    if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0: all cores)");
+    return threads;
+}
 
 // The run control every engine call takes: seed, threads, a budget (`fallback` samples if none).
 void set_run_control(RunControl& o, std::uint64_t seed, int threads, std::optional<double> samples,
@@ -95,11 +98,6 @@ void set_run_control(RunControl& o, std::uint64_t seed, int threads, std::option
     o.threads = check_threads(threads);
     o.budget = budget(samples, seconds, what);
     if (!o.budget.any()) o.budget.samples = fallback;
-}
-
-int check_threads(int threads) {
-    if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0: all cores)");
-    return threads;
 }
 
 int check_channel(int c) {
@@ -224,12 +222,7 @@ PYBIND11_MODULE(ssslab, m) {
         "material",
         [](const std::string& name) {
             const auto md = find_material(name);
-            if (!md) {
-                const std::string near = nearest_material(name);
-                throw std::invalid_argument("unknown material \"" + name + "\"" +
-                                            (near.empty() ? "" : " (did you mean " + near + "?)") +
-                                            "; materials: " + material_names());
-            }
+            if (!md) throw std::invalid_argument(unknown_material_message(name));
             return *md;
         },
         py::arg("name"), "A measured material by name (case-insensitive), e.g. \"Skin1\".");

@@ -131,9 +131,9 @@ bool catches(pid_t pid, int sig) {
     return false;
 }
 
-}  // namespace
-
-bool wait_for_handler(pid_t pid, int sig, double timeout_s) {
+// Wait until process `pid` has a handler for `sig` installed (up to `timeout_s`); false if it
+// ended or the time ran out first.
+bool wait_for_handler(pid_t pid, int sig, double timeout_s = 60.0) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
     while (std::chrono::steady_clock::now() < until) {
         if (catches(pid, sig)) return true;
@@ -142,6 +142,8 @@ bool wait_for_handler(pid_t pid, int sig, double timeout_s) {
     }
     return false;
 }
+
+}  // namespace
 
 int run_and_kill(const std::vector<std::string>& args, const fs::path& cwd, int ms, int sig) {
     const std::string bin = ssslab_binary();

@@ -14,8 +14,6 @@
 #include <string>
 #include <vector>
 
-#include <sys/types.h>
-
 namespace ssslab {
 struct RadialProfile;  // core/profile.h
 namespace approx {
@@ -67,10 +65,6 @@ CommandResult run_ssslab(const std::vector<std::string>& args, const std::filesy
 /// `mpirun` for `ranks` ranks (as root too, oversubscribing the cores), or empty when this
 /// build has no MPI or mpirun is not installed: the launcher for run_ssslab.
 std::vector<std::string> mpi_launcher(int ranks);
-
-/// Wait until process `pid` has a handler for `sig` installed (up to `timeout_s`); false if it
-/// ended or the time ran out first. Linux: reads /proc/<pid>/status.
-bool wait_for_handler(pid_t pid, int sig, double timeout_s = 60.0);
 
 /// Start `ssslab` with the given arguments in `cwd` (output to this process's), send it `sig`
 /// `ms` milliseconds after it installed its handler for `sig` (after it started, for SIGKILL),

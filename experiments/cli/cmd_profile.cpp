@@ -31,13 +31,9 @@ ProfileJob read_profile_job(const std::string& config_path, const std::string& m
             throw InputError({config_path, 0, 0}, "--material",
                              "give the material either with --material or in [material], not both");
         job.medium = find_material(material).value_or(Medium{});
-        if (job.medium.name.empty()) {
-            std::string msg = "unknown material \"" + material + "\"";
-            const std::string near = nearest_material(material);
-            if (!near.empty()) msg += " (did you mean \"" + near + "\"?)";
+        if (job.medium.name.empty())
             throw InputError({"<command line>", 0, 0}, "--material",
-                             msg + "; known materials: " + material_names());
-        }
+                             unknown_material_message(material));
         ConfigTable mt = root.table_or_empty("material");
         mt.record("preset", job.medium.name);
         mt.record("thickness_cm", job.medium.thickness_cm);

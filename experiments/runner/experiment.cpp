@@ -37,12 +37,7 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
         auto presets = mats.string_list("presets");
         for (size_t i = 0; i < presets.size(); ++i) {
             auto m = find_material(presets[i]);
-            if (!m) {
-                std::string msg = "unknown material \"" + presets[i] + "\"";
-                const std::string near = nearest_material(presets[i]);
-                if (!near.empty()) msg += " (did you mean \"" + near + "\"?)";
-                mats.fail_item("presets", i, msg + "; known materials: " + material_names());
-            }
+            if (!m) mats.fail_item("presets", i, unknown_material_message(presets[i]));
             if (!labels.insert(m->name).second)
                 mats.fail_item("presets", i, "material \"" + m->name + "\" is listed twice");
             e.materials.push_back({m->name, *m});

@@ -49,13 +49,9 @@ Medium read_material(ConfigTable& root, const std::string& material, const std::
             throw InputError({src, 0, 0}, "--material",
                              "give the material either with --material or in [material], not both");
         auto m = find_material(material);
-        if (!m) {
-            std::string msg = "unknown material \"" + material + "\"";
-            const std::string near = nearest_material(material);
-            if (!near.empty()) msg += " (did you mean \"" + near + "\"?)";
+        if (!m)
             throw InputError({kCommandLine, 0, 0}, "--material",
-                             msg + "; known materials: " + material_names());
-        }
+                             unknown_material_message(material));
         ConfigTable mt = root.table_or_empty("material");
         mt.record("preset", m->name);
         return *m;

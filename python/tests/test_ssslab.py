@@ -31,7 +31,7 @@ def test_materials_and_media():
     # mfp = 1 / (sigma_a + sigma_s (1 - g)), per channel.
     expected = 1.0 / (skin.sigma_a_per_cm + skin.sigma_s_per_cm * (1.0 - skin.g))
     np.testing.assert_allclose(skin.mfp_cm, expected, rtol=1e-15)
-    with pytest.raises(ValueError, match="did you mean Skin1"):
+    with pytest.raises(ValueError, match='did you mean "Skin1"'):
         ssslab.material("Skinn1")
     with pytest.raises(ValueError, match="g must be in"):
         ssslab.Medium(sigma_a_per_cm=1, sigma_s_per_cm=1, g=2)
