@@ -31,6 +31,8 @@
 #include <sys/wait.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -218,6 +220,9 @@ int run_bench(const BenchArgs& a) {
                 programs[c.name] = std::make_unique<OriginalProgram>(a.original, c.run, c.photons);
                 (void)programs[c.name]->run();
             }
+    // TBB sizes its worker pool from the process's CPU set when it first starts a thread: start
+    // it before any row pins the process to one CPU, or the multi-threaded rows get no workers.
+    tbb::task_arena(all).execute([all] { tbb::parallel_for(0, all, [](int) {}); });
     std::printf("MCML default engine, %d hardware threads used for 'all'\n", all);
     std::printf("%-34s %7s %10s %12s %12s %9s %11s\n", "case", "threads", "photons", "photons/ms",
                 "ns/event", "events/ph", "x original");
