@@ -29,6 +29,7 @@ pkg_check_modules(xxhash REQUIRED IMPORTED_TARGET libxxhash)  # libxxhash-dev: a
 find_package(Eigen3 3.3 CONFIG REQUIRED)   # libeigen3-dev: linear algebra
 find_package(spectra CONFIG REQUIRED)      # libspectra-dev: leading eigenpairs (Lanczos)
 pkg_check_modules(fftw3 REQUIRED IMPORTED_TARGET fftw3)  # libfftw3-dev: exact 2D convolutions
+pkg_check_modules(muparser REQUIRED IMPORTED_TARGET muparser)  # libmuparser-dev: profile models written as expressions
 
 # OpenVDB (optional): Debian ships only a find module, in a folder whose FindTBB/FindOpenEXR would
 # shadow the config packages found above (debian-notes.md): appended last, and only here.

@@ -12,6 +12,7 @@ packages=(
   libeigen3-dev         # Eigen: dense linear algebra of the kernel models
   libspectra-dev        # Spectra: leading eigenpairs only (truncated SVD of large kernels)
   libfftw3-dev          # FFTW: exact 2D convolutions (the image-space ground truth)
+  libmuparser-dev       # muparser: profile models written as expressions in TOML files (no rebuild, no GL)
   libfmt-dev            # fmt: formatting
   libcli11-dev          # CLI11: the command line
   libtomlplusplus-dev   # toml++: TOML configs with source positions for error messages
