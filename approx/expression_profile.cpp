@@ -53,6 +53,10 @@ class Variables {
     bool has(const std::string& name) const { return v_.count(name) != 0; }
     void define_all(mu::Parser& p) {
         p.DefineConst("pi", kPi);
+        // Beside muparser's own functions: e^x - 1 without cancellation near 0 (for profiles
+        // that subtract close exponentials, as the better dipole's fluence).
+        p.DefineFun(
+            "expm1", +[](double x) { return std::expm1(x); });
         for (auto& [name, value] : v_) p.DefineVar(name, &value);
     }
     std::vector<std::string> names() const {

@@ -20,6 +20,7 @@
 // Names the expressions may use: r (in rd only), the medium's sigma_a, sigma_s, g, eta and
 // sigma_s_r = sigma_s (1 - g), sigma_t_r = sigma_a + sigma_s_r, alpha_r = sigma_s_r / sigma_t_r,
 // pi, the parameters, and the init names defined before; any unit of length L, the medium's.
+// Functions: muparser's (exp, sqrt, ln, sin, ..., min, max, the ternary a ? b : c) and expm1.
 #pragma once
 
 #include "approx/diffusion.h"
