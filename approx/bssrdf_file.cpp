@@ -1,5 +1,6 @@
 #include "approx/bssrdf_file.h"
 
+#include "core/atomic_file.h"
 #include "core/error.h"
 
 #include <algorithm>
@@ -7,7 +8,6 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <sstream>
 
 namespace ssslab::approx {
@@ -23,12 +23,6 @@ std::vector<std::string> words(const std::string& line) {
 
 bool blank(const std::string& line) {
     return std::all_of(line.begin(), line.end(), [](unsigned char c) { return std::isspace(c); });
-}
-
-bool is_identifier(const std::string& s) {
-    if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
-    return std::all_of(s.begin(), s.end(),
-                       [](unsigned char c) { return std::isalnum(c) || c == '_'; });
 }
 
 class Parser {
@@ -102,7 +96,7 @@ class Parser {
 
     // A section from its `::begin` line `b`; returns the index of its `::end` line.
     size_t section(size_t b, const std::vector<std::string>& w) {
-        if (w.size() != 2 || !is_identifier(w[1]))
+        if (w.size() != 2 || !is_glsl_identifier(w[1]))
             fail(line(b), "", "'::begin' takes one section name, e.g. '::begin shader'");
         const std::string name = w[1];
         size_t e = b + 1;
@@ -190,7 +184,7 @@ class Parser {
                  "a " + type + " parameter is declared as '" + forms[static_cast<int>(p.type)] +
                      "'");
         p.name = w[1];
-        if (!is_identifier(p.name))
+        if (!is_glsl_identifier(p.name))
             fail(line(k), p.name, "'" + p.name + "' is not a GLSL identifier");
         const auto& reserved = bssrdf_reserved_names();
         if (std::find(reserved.begin(), reserved.end(), p.name) != reserved.end())
@@ -231,6 +225,12 @@ class Parser {
 
 }  // namespace
 
+bool is_glsl_identifier(const std::string& s) {
+    if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+    return std::all_of(s.begin(), s.end(),
+                       [](unsigned char c) { return std::isalnum(c) || c == '_'; });
+}
+
 const BssrdfParameter* BssrdfFile::find_parameter(const std::string& name) const {
     for (const auto& p : parameters)
         if (p.name == name) return &p;
@@ -247,11 +247,7 @@ BssrdfFile parse_bssrdf(const std::string& text, const std::string& path) {
 }
 
 BssrdfFile read_bssrdf(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError({path, 0, 0}, "", "cannot read the .bssrdf file");
-    std::ostringstream s;
-    s << in.rdbuf();
-    return parse_bssrdf(s.str(), path);
+    return parse_bssrdf(read_input_file(path, ".bssrdf file"), path);
 }
 
 }  // namespace ssslab::approx

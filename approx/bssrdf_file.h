@@ -57,6 +57,9 @@ BssrdfFile parse_bssrdf(const std::string& text, const std::string& path);
 /// Reads and parses a .bssrdf file (an IoError-free InputError if it cannot be read).
 BssrdfFile read_bssrdf(const std::string& path);
 
+/// Whether `s` is an identifier of GLSL (and of muparser): [A-Za-z_][A-Za-z0-9_]*.
+bool is_glsl_identifier(const std::string& s);
+
 /// The names the application defines for the GLSL code (uniforms of the medium, PI): a parameter
 /// may not take one of them.
 const std::vector<std::string>& bssrdf_reserved_names();

@@ -1,18 +1,17 @@
 #include "approx/expression_profile.h"
 
+#include "approx/bssrdf_file.h"
 #include "approx/diffusion_detail.h"
+#include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/error.h"
 
 #include <muParser.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <mutex>
-#include <sstream>
 #include <stdexcept>
 
 namespace ssslab::approx {
@@ -26,12 +25,6 @@ const std::vector<std::string>& medium_names() {
     static const std::vector<std::string> n = {"sigma_a",   "sigma_s",   "g",      "eta",
                                                "sigma_s_r", "sigma_t_r", "alpha_r"};
     return n;
-}
-
-bool is_identifier(const std::string& s) {
-    if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
-    return std::all_of(s.begin(), s.end(),
-                       [](unsigned char c) { return std::isalnum(c) || c == '_'; });
 }
 
 bool reserved(const std::string& s) {
@@ -77,7 +70,7 @@ class Variables {
 // muparser's message for an expression, with "unknown name" for an undefined identifier.
 std::string parser_message(const mu::Parser::exception_type& e, const Variables& vars) {
     const std::string token = e.GetToken();
-    if (e.GetCode() == mu::ecUNASSIGNABLE_TOKEN && is_identifier(token)) {
+    if (e.GetCode() == mu::ecUNASSIGNABLE_TOKEN && is_glsl_identifier(token)) {
         const std::string near = nearest_name(token, vars.names(), suggestion_distance(token));
         return "unknown name '" + token + "' at position " + std::to_string(e.GetPos() + 1) +
                (near.empty() ? "" : " (did you mean '" + near + "'?)") +
@@ -182,7 +175,7 @@ ExpressionProfileDef parse_expression_profile(const std::string& text, const std
     for (ConfigTable p : root.table_array("parameter")) {
         ExpressionProfileDef::Parameter q;
         q.name = p.string("name");
-        if (!is_identifier(q.name)) p.fail("name", "'" + q.name + "' is not an identifier");
+        if (!is_glsl_identifier(q.name)) p.fail("name", "'" + q.name + "' is not an identifier");
         if (reserved(q.name) || vars.has(q.name))
             p.fail("name", "'" + q.name +
                                "' is taken (r, pi, the medium's names and the other "
@@ -219,7 +212,7 @@ ExpressionProfileDef parse_expression_profile(const std::string& text, const std
         d.name = trim(init[i].substr(0, eq == std::string::npos ? 0 : eq));
         d.expression = eq == std::string::npos ? "" : trim(init[i].substr(eq + 1));
         d.line = prof.location("init").line;
-        if (eq == std::string::npos || !is_identifier(d.name))
+        if (eq == std::string::npos || !is_glsl_identifier(d.name))
             prof.fail_item("init", i, "expected 'name = expression', got '" + init[i] + "'");
         if (reserved(d.name) || vars.has(d.name))
             prof.fail_item("init", i, "'" + d.name + "' is already defined");
@@ -238,11 +231,7 @@ ExpressionProfileDef parse_expression_profile(const std::string& text, const std
 }
 
 ExpressionProfileDef read_expression_profile(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError({path, 0, 0}, "", "cannot read the profile file");
-    std::ostringstream s;
-    s << in.rdbuf();
-    return parse_expression_profile(s.str(), path);
+    return parse_expression_profile(read_input_file(path, "profile file"), path);
 }
 
 std::unique_ptr<DiffusionProfile> make_expression_profile(

@@ -148,4 +148,12 @@ std::string read_file(const fs::path& path) {
     return ss.str();
 }
 
+std::string read_input_file(const fs::path& path, const std::string& what) {
+    try {
+        return read_file(path);
+    } catch (const IoError&) {
+        throw InputError({path.string(), 0, 0}, "", "cannot read the " + what);
+    }
+}
+
 }  // namespace ssslab

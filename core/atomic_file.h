@@ -52,5 +52,8 @@ class OutputTransaction {
 
 /// Read a whole file (binary). Throws IoError.
 std::string read_file(const std::filesystem::path& path);
+/// Read a whole input file the user named: an InputError located at the file ("cannot read
+/// the <what>") when it cannot be read, so that the command exits 2 naming it.
+std::string read_input_file(const std::filesystem::path& path, const std::string& what);
 
 }  // namespace ssslab
