@@ -14,7 +14,9 @@ case "$kind" in
   debug)   flags=(-DCMAKE_BUILD_TYPE=Debug) ;;
   # The sanitizer builds leave MPI out (Open MPI's own allocations would read as leaks) and the
   # Python module (an uninstrumented interpreter would have to preload the sanitizer runtime).
-  asan)    flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSSSLAB_SANITIZE=address,undefined -DSSSLAB_BUILD_BENCHMARKS=OFF -DSSSLAB_WITH_MPI=OFF -DSSSLAB_WITH_PYTHON=OFF) ;;
+  # Line tables only (-g1): the reports' stack traces keep their file:line, and the build (CI's
+  # largest step) takes a third less time than with full debug information.
+  asan)    flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1 -DNDEBUG" -DSSSLAB_SANITIZE=address,undefined -DSSSLAB_BUILD_BENCHMARKS=OFF -DSSSLAB_WITH_MPI=OFF -DSSSLAB_WITH_PYTHON=OFF) ;;
   # ThreadSanitizer: the threaded engines' races (tests labelled tsan run in it in CI).
   # Linked with oneTBB built with TSan (scripts/tbb_tsan.sh), found first through the run path.
   tsan)    bash scripts/tbb_tsan.sh
