@@ -95,7 +95,9 @@ class ExpressionProfile final : public DiffusionProfile {
                       const std::map<std::string, double>& values)
         : DiffusionProfile(m), def_(def) {
         validate(m, FresnelMoments::fit);
-        for (const auto& [name, value] : values) {
+        for (const auto& given : values) {
+            const std::string& name = given.first;
+            const double value = given.second;
             const auto p = std::find_if(def.parameters.begin(), def.parameters.end(),
                                         [&](const auto& q) { return q.name == name; });
             if (p == def.parameters.end())
