@@ -18,7 +18,7 @@ namespace ssslab::approx {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using diffusion_detail::kPi;
 
 // The medium's names, in the order the error messages list them.
 const std::vector<std::string>& medium_names() {
@@ -58,9 +58,16 @@ class Variables {
         return n;
     }
     std::string known() const {
-        std::string k = "pi";
-        for (const auto& [name, value] : v_) k += ", " + name;
+        std::string k;
+        for (const std::string& n : names()) k += (k.empty() ? "" : ", ") + n;
         return k;
+    }
+    /// The value of `expression` with these variables (muparser compiles it on the way).
+    double evaluate(const std::string& expression) {
+        mu::Parser p;
+        define_all(p);
+        p.SetExpr(expression);
+        return p.Eval();
     }
 
   private:
@@ -116,19 +123,13 @@ class ExpressionProfile final : public DiffusionProfile {
         vars_["r"] = 0.0;
         r_ = &vars_["r"];
         for (const auto& d : def.init) {
-            double& slot = vars_[d.name];
-            mu::Parser p;
-            vars_.define_all(p);
-            p.SetExpr(d.expression);
-            slot = p.Eval();
+            const double v = vars_.evaluate(d.expression);
+            vars_[d.name] = v;
         }
         vars_.define_all(rd_);
         rd_.SetExpr(def.rd.expression);
         if (!def.total_rd.expression.empty()) {
-            mu::Parser p;
-            vars_.define_all(p);
-            p.SetExpr(def.total_rd.expression);
-            total_ = p.Eval();
+            total_ = vars_.evaluate(def.total_rd.expression);
         } else {
             // 2 pi int_0^inf R_d r dr = int 2 pi r^2 R_d d(ln r), r = l e^t, t in [-64, 48] about
             // the reduced mean free path l, in unit panels.
@@ -195,11 +196,8 @@ ExpressionProfileDef parse_expression_profile(const std::string& text, const std
     auto check = [&](const std::string& e, const std::string& key, std::size_t item, bool with_r) {
         Variables seen = vars;
         if (with_r) seen["r"] = 1.0;
-        mu::Parser p;
-        seen.define_all(p);
         try {
-            p.SetExpr(e);
-            (void)p.Eval();
+            (void)seen.evaluate(e);
         } catch (const mu::Parser::exception_type& x) {
             const std::string m = "expression '" + e + "': " + parser_message(x, seen);
             if (item == std::string::npos) prof.fail(key, m);
@@ -213,7 +211,6 @@ ExpressionProfileDef parse_expression_profile(const std::string& text, const std
         ExpressionProfileDef::Definition d;
         d.name = trim(init[i].substr(0, eq == std::string::npos ? 0 : eq));
         d.expression = eq == std::string::npos ? "" : trim(init[i].substr(eq + 1));
-        d.line = prof.location("init").line;
         if (eq == std::string::npos || !is_glsl_identifier(d.name))
             prof.fail_item("init", i, "expected 'name = expression', got '" + init[i] + "'");
         if (reserved(d.name) || vars.has(d.name))
@@ -222,10 +219,10 @@ ExpressionProfileDef parse_expression_profile(const std::string& text, const std
         vars[d.name] = 1.0;
         def.init.push_back(d);
     }
-    def.rd = {"rd", prof.string("rd"), prof.location("rd").line};
+    def.rd = {"rd", prof.string("rd")};
     check(def.rd.expression, "rd", std::string::npos, true);
     if (auto t = prof.optional_string("total_rd")) {
-        def.total_rd = {"total_rd", *t, prof.location("total_rd").line};
+        def.total_rd = {"total_rd", *t};
         check(*t, "total_rd", std::string::npos, false);
     }
     root.finish();

@@ -40,7 +40,6 @@ struct ExpressionProfileDef {
     };
     struct Definition {
         std::string name, expression;
-        int line = 0;
     };
     std::string path;  ///< the file, for messages
     std::string name;  ///< the model's name: the file's stem

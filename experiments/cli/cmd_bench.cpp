@@ -32,7 +32,6 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -119,6 +118,9 @@ std::string shell_quote(const std::string& s) {
 class PinnedToThisCpu {
   public:
     PinnedToThisCpu() {
+        // TBB sizes its worker pool from the process's CPU set when it first starts a thread:
+        // start it before the set shrinks, or later multi-threaded runs get no workers.
+        tbb::parallel_for(0, tbb::info::default_concurrency(), [](int) {});
         saved_ok_ = ::sched_getaffinity(0, sizeof saved_, &saved_) == 0;
         const int cpu = ::sched_getcpu();
         if (!saved_ok_ || cpu < 0) return;
@@ -220,9 +222,6 @@ int run_bench(const BenchArgs& a) {
                 programs[c.name] = std::make_unique<OriginalProgram>(a.original, c.run, c.photons);
                 (void)programs[c.name]->run();
             }
-    // TBB sizes its worker pool from the process's CPU set when it first starts a thread: start
-    // it before any row pins the process to one CPU, or the multi-threaded rows get no workers.
-    tbb::task_arena(all).execute([all] { tbb::parallel_for(0, all, [](int) {}); });
     std::printf("MCML default engine, %d hardware threads used for 'all'\n", all);
     std::printf("%-34s %7s %10s %12s %12s %9s %11s\n", "case", "threads", "photons", "photons/ms",
                 "ns/event", "events/ph", "x original");
