@@ -24,7 +24,9 @@ case "$kind" in
                   -DTBB_DIR="$PWD/build/tbb-tsan/install/lib/cmake/TBB") ;;
   *) echo "usage: $0 [release|debug|asan|tsan] [cmake args...]" >&2; exit 2 ;;
 esac
-if [[ ! -f "build/$kind/CMakeCache.txt" ]]; then
+# Configured unless a configure already finished (one that failed leaves a cache but no build
+# files: it is run again, so that a fixed setup is picked up).
+if [[ ! -f "build/$kind/CMakeCache.txt" || ( ! -f "build/$kind/build.ninja" && ! -f "build/$kind/Makefile" ) ]]; then
   cmake -S . -B "build/$kind" "${generator[@]}" "${flags[@]}" "$@"
 fi
 # SSSLAB_TARGETS="a b": build those targets only (CI's ThreadSanitizer build: the threaded tests).

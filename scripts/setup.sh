@@ -23,6 +23,7 @@ packages=(
   libxxhash-dev         # xxHash: content hashes that key the artifact cache
   libopenexr-dev        # OpenEXR 3.1: layered float images with standard-error layers (directly)
   libopenimageio-dev    # OpenImageIO: PNG previews, and ssslab compare on images of any format
+  openimageio-tools     # OpenImageIO's CMake config refuses to load without its tools (/usr/bin/iconvert)
   libtinyobjloader-dev  # tinyobjloader: Wavefront OBJ meshes of scene files
   libembree-dev         # Embree 3: ray queries against the meshes of scenes (path tracer)
   libopenvdb-dev libboost-iostreams-dev  # OpenVDB: heterogeneous media (optional part; FindOpenVDB needs Boost iostreams)
