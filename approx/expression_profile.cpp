@@ -226,6 +226,7 @@ ExpressionProfileDef parse_expression_profile(const std::string& text, const std
         check(*t, "total_rd", std::string::npos, false);
     }
     root.finish();
+    def.text = text;
     return def;
 }
 

@@ -42,6 +42,7 @@ struct ExpressionProfileDef {
         std::string name, expression;
     };
     std::string path;  ///< the file, for messages
+    std::string text;  ///< the file's content: what keys a cache entry of results that use it
     std::string name;  ///< the model's name: the file's stem
     bool single_scattering = false;
     std::vector<Parameter> parameters;

@@ -237,6 +237,88 @@ materials = ["Skin1"]
     EXPECT_NE(third.out.find("7 computed, 6 reused"), std::string::npos) << third.out;
 }
 
+/// The column named `name` of a CSV table, as numbers.
+std::vector<double> csv_column(const std::string& csv, const std::string& name) {
+    std::istringstream in(csv);
+    std::string line, cell;
+    std::getline(in, line);
+    std::istringstream head(line);
+    size_t col = 0;
+    bool found = false;
+    for (; std::getline(head, cell, ','); ++col)
+        if (cell == name) {
+            found = true;
+            break;
+        }
+    EXPECT_TRUE(found) << "no column " << name;
+    std::vector<double> out;
+    while (found && std::getline(in, line)) {
+        std::istringstream row(line);
+        for (size_t k = 0; k <= col; ++k) std::getline(row, cell, ',');
+        out.push_back(std::stod(cell));
+    }
+    return out;
+}
+
+TEST(Runner, AProfileFileIsScoredBesideTheBuiltInModelsAndKeyedByItsContent) {
+    // [Issue 19] experiments/bssrdf/dipole.toml named in [outputs.pencil] by its path: its curve
+    // equals the built-in dipole's (the independent C++ model) in every bin; an edit of the file
+    // recomputes the model tables and nothing else; a file that is not there is refused at the
+    // config's line.
+    const std::string text = std::string(kSmall) + R"(
+[volpath]
+photons = 20000
+
+[outputs.pencil]
+models = ["dipole", "models/dipole.toml"]
+)";
+    testing::TempDir dir;
+    dir.write("small.toml", text);
+    const std::string profile =
+        testing::read_text(testing::source_path("experiments/bssrdf/dipole.toml"));
+    dir.write("models/dipole.toml", profile);
+    const auto first = run_ssslab({"run", "small.toml"}, dir.path());
+    ASSERT_EQ(first.exit_code, 0) << first.err;
+    EXPECT_NE(first.out.find("13 computed, 0 reused"), std::string::npos) << first.out;
+    const fs::path res = dir / "results" / "small";
+    const std::string csv = testing::read_text(res / "pencil" / "Skin1.csv");
+    for (const char* ch : {"R", "G", "B"}) {
+        const auto builtin = csv_column(csv, std::string("dipole_") + ch + "_per_mm2");
+        const auto file = csv_column(csv, std::string("dipole.toml_") + ch + "_per_mm2");
+        ASSERT_EQ(builtin.size(), file.size());
+        ASSERT_GT(builtin.size(), 10u);
+        for (size_t k = 0; k < builtin.size(); ++k)
+            EXPECT_NEAR(file[k], builtin[k], 1e-9 * std::abs(builtin[k])) << ch << " bin " << k;
+    }
+    const std::string metrics = testing::read_text(res / "metrics.csv");
+    EXPECT_NE(metrics.find("Skin1.G.model.dipole.toml.Rd,"), std::string::npos);
+
+    // The default multiplier 1 -> 2: the tables are computed again (only they), the curve doubles.
+    dir.write("models/dipole.toml", replace(profile, "default = 1.0", "default = 2.0"));
+    const auto second = run_ssslab({"run", "small.toml"}, dir.path());
+    ASSERT_EQ(second.exit_code, 0) << second.err;
+    EXPECT_NE(second.out.find("1 computed, 12 reused"), std::string::npos) << second.out;
+    const std::string doubled = testing::read_text(res / "pencil" / "Skin1.csv");
+    const auto builtin = csv_column(doubled, "dipole_R_per_mm2");
+    const auto file = csv_column(doubled, "dipole.toml_R_per_mm2");
+    ASSERT_EQ(builtin.size(), file.size());
+    for (size_t k = 0; k < builtin.size(); ++k)
+        EXPECT_NEAR(file[k], 2 * builtin[k], 1e-9 * std::abs(builtin[k])) << "bin " << k;
+
+    dir.write("small.toml", replace(text, "models/dipole.toml", "models/dipol.toml"));
+    const auto bad = run_ssslab({"run", "small.toml"}, dir.path());
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_NE(bad.err.find("small.toml:"), std::string::npos) << bad.err;
+    EXPECT_NE(bad.err.find("no profile file"), std::string::npos) << bad.err;
+    // A bad file is refused naming its own line (the reader's errors: test_expression_profile).
+    dir.write("small.toml", text);
+    dir.write("models/dipole.toml", replace(profile, "sigma_tr * zr", "sigma_tr * zrr"));
+    const auto broken = run_ssslab({"run", "small.toml"}, dir.path());
+    EXPECT_EQ(broken.exit_code, 2);
+    EXPECT_NE(broken.err.find("dipole.toml:18:"), std::string::npos) << broken.err;
+    EXPECT_NE(broken.err.find("zrr"), std::string::npos) << broken.err;
+}
+
 // Start ssslab in the background, kill it after `ms` milliseconds with `sig`, return its status.
 
 void expect_no_partial_cache_entries(const fs::path& cache) {

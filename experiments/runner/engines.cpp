@@ -1,6 +1,7 @@
 #include "experiments/runner/engines.h"
 
 #include "approx/diffusion.h"
+#include "approx/expression_profile.h"
 #include "core/stats.h"
 #include "experiments/runner/report.h"
 #include "volpath/pencil.h"
@@ -126,8 +127,11 @@ MaterialPencil pencil_data(const ExperimentRun& r, const MaterialEntry& me, bool
             ModelCurve m;
             m.name = name;
             try {
-                const auto model =
-                    approx::make_diffusion_profile(name, approx::diffusion_medium(me.medium, c));
+                const approx::DiffusionMedium dm = approx::diffusion_medium(me.medium, c);
+                const auto file = r.exp.pencil.files.find(name);
+                const auto model = file == r.exp.pencil.files.end()
+                                       ? approx::make_diffusion_profile(name, dm)
+                                       : approx::make_expression_profile(file->second, dm);
                 m.single = model->includes_single_scattering();
                 m.fresnel = model->includes_entry_fresnel();
                 const double scale = m.fresnel ? 1.0 : 1.0 - f.rsp;

@@ -93,14 +93,29 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
         e.pencil.enabled = true;
         e.pencil.models = t->string_list("models");
         const auto& known = approx::diffusion_model_names();
-        for (size_t i = 0; i < e.pencil.models.size(); ++i)
-            if (std::find(known.begin(), known.end(), e.pencil.models[i]) == known.end()) {
+        for (size_t i = 0; i < e.pencil.models.size(); ++i) {
+            std::string& name = e.pencil.models[i];
+            if (name.ends_with(".toml")) {
+                // A profile file, relative to the config; the model takes the file's name.
+                const std::filesystem::path file =
+                    std::filesystem::path(e.source).parent_path() / name;
+                if (!std::filesystem::is_regular_file(file))
+                    t->fail_item("models", i, "no profile file " + file.string());
+                name = file.filename().string();
+                if (e.pencil.files.count(name) ||
+                    std::find(known.begin(), known.end(), name) != known.end())
+                    t->fail_item("models", i, "two models named \"" + name + "\"");
+                e.pencil.files.emplace(name, approx::read_expression_profile(file.string()));
+                continue;
+            }
+            if (std::find(known.begin(), known.end(), name) == known.end()) {
                 std::string list;
                 for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-                t->fail_item(
-                    "models", i,
-                    "unknown diffusion model \"" + e.pencil.models[i] + "\"; known: " + list);
+                t->fail_item("models", i,
+                             "unknown diffusion model \"" + name + "\"; known: " + list +
+                                 ", or a profile file (a path ending in .toml)");
             }
+        }
         if (e.pencil.models.empty()) t->fail("models", "expected at least one diffusion model");
         for (const MaterialEntry& m : e.materials)
             if (m.medium.layered())

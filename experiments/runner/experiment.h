@@ -33,6 +33,7 @@
 // Every error names file:line:column and the key.
 #pragma once
 
+#include "approx/expression_profile.h"
 #include "core/batch_runner.h"
 #include "core/config.h"
 #include "core/material.h"
@@ -44,6 +45,7 @@
 #include "mcml/engine.h"
 #include "mcml/profile.h"
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -102,7 +104,11 @@ struct Experiment {
     } crossval;
     struct Pencil {
         bool enabled = false;
-        std::vector<std::string> models;  ///< approx::make_diffusion_profile names
+        /// approx::make_diffusion_profile names, or profile files (an entry ending in .toml,
+        /// relative to the config: approx/expression_profile.h) named by their file name
+        std::vector<std::string> models;
+        /// The files' models by the name in `models`, read and checked with the config.
+        std::map<std::string, approx::ExpressionProfileDef> files;
     } pencil;
     struct Efficiency {
         bool enabled = false;
