@@ -3,11 +3,13 @@
 #include "core/film_image.h"
 #include "experiments/runner/experiment.h"
 #include "experiments/runner/plots.h"
+#include "experiments/runner/report.h"
 #include "experiments/runner/runner.h"
 #include "testing.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -239,24 +241,13 @@ materials = ["Skin1"]
 
 /// The column named `name` of a CSV table, as numbers.
 std::vector<double> csv_column(const std::string& csv, const std::string& name) {
-    std::istringstream in(csv);
-    std::string line, cell;
-    std::getline(in, line);
-    std::istringstream head(line);
-    size_t col = 0;
-    bool found = false;
-    for (; std::getline(head, cell, ','); ++col)
-        if (cell == name) {
-            found = true;
-            break;
-        }
-    EXPECT_TRUE(found) << "no column " << name;
+    const auto cells = runner::parse_csv(csv);
+    const auto col = std::find(cells.at(0).begin(), cells.at(0).end(), name);
+    EXPECT_NE(col, cells[0].end()) << "no column " << name;
     std::vector<double> out;
-    while (found && std::getline(in, line)) {
-        std::istringstream row(line);
-        for (size_t k = 0; k <= col; ++k) std::getline(row, cell, ',');
-        out.push_back(std::stod(cell));
-    }
+    if (col == cells[0].end()) return out;
+    const size_t k = static_cast<size_t>(col - cells[0].begin());
+    for (size_t row = 1; row < cells.size(); ++row) out.push_back(std::stod(cells[row].at(k)));
     return out;
 }
 
