@@ -243,7 +243,17 @@ const std::vector<std::string>& bssrdf_reserved_names() {
 }
 
 BssrdfFile parse_bssrdf(const std::string& text, const std::string& path) {
-    return Parser(text, path).parse();
+    BssrdfFile f = Parser(text, path).parse();
+    f.text = text;
+    return f;
+}
+
+void require_radial_profile(const BssrdfFile& f) {
+    if (!f.radial || !f.no_wo)
+        throw InputError({f.path, 1, 0}, "",
+                         "a profile model needs the attributes 'radial' and 'no_wo' (R_d is the "
+                         "exitance at a distance: a BSSRDF that depends on more than the distance "
+                         "or on Wo is not a radial profile)");
 }
 
 BssrdfFile read_bssrdf(const std::string& path) {

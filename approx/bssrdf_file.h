@@ -37,6 +37,7 @@ struct BssrdfSection {
 /// A parsed .bssrdf file.
 struct BssrdfFile {
     std::string path;
+    std::string text;  ///< the file's content: what keys a cache entry of results that use it
     bool radial = false, no_wi = false, no_wo = false;  ///< `analytic` is required
     std::vector<BssrdfParameter> parameters;
     std::optional<BssrdfSection> initializer, diffuse_reflectance, shader;
@@ -53,6 +54,11 @@ struct BssrdfFile {
 /// a name given twice, a name that is not a GLSL identifier or is one the application defines),
 /// and a file without a `shader` section.
 BssrdfFile parse_bssrdf(const std::string& text, const std::string& path);
+
+/// Throws InputError at the file's first line unless it is `radial` and `no_wo`: what a radial
+/// profile model needs (R_d is the exitance at a distance, which a BSSRDF that depends on more
+/// than the distance, or on Wo, gives only through integrals).
+void require_radial_profile(const BssrdfFile& f);
 
 /// Reads and parses a .bssrdf file (an IoError-free InputError if it cannot be read).
 BssrdfFile read_bssrdf(const std::string& path);

@@ -126,6 +126,7 @@ double DiffusionProfile::annulus_mean(double r0, double r1) const {
         throw std::invalid_argument("annulus_mean: need 0 <= r0 < r1 < inf, got r0 = " +
                                     number(r0) + ", r1 = " + number(r1));
     // int 2 pi r R dr = int 2 pi r^2 R d(ln r): smooth in ln r for R ~ r^-p, p < 2.
+    const double tol = std::max(1e-10, rd_accuracy());
     double integral;
     if (r0 == 0) {
         // r = r1 e^{-s}, s in [0, 64]: every profile here is O(1/r) at 0, so the disc of radius
@@ -135,7 +136,7 @@ double DiffusionProfile::annulus_mean(double r0, double r1) const {
                 const double r = r1 * std::exp(-s);
                 return 2 * kPi * r * r * eval_rd(r);
             },
-            {0, 0.5, 1, 2, 4, 8, 16, 32, 64}, 1e-10);
+            {0, 0.5, 1, 2, 4, 8, 16, 32, 64}, tol);
     } else {
         const double span = std::log(r1 / r0);
         const int n = std::max(1, static_cast<int>(std::ceil(span / 0.5)));
@@ -146,7 +147,7 @@ double DiffusionProfile::annulus_mean(double r0, double r1) const {
                 const double r = std::min(r0 * std::exp(s), r1);
                 return 2 * kPi * r * r * eval_rd(r);
             },
-            breaks, 1e-10);
+            breaks, tol);
     }
     return integral / (kPi * (r1 - r0) * (r1 + r0));
 }

@@ -176,10 +176,16 @@ class DiffusionProfile {
     /// The area average (int_{r0}^{r1} R_d 2 pi r dr) / (pi (r1^2 - r0^2)) [1/L^2] over the
     /// annulus 0 <= r0 < r1 < inf: what a Monte Carlo radial bin measures. Adaptive Gauss-Kronrod
     /// in ln r (r = r1 e^{-s}, s in [0, 64] for r0 = 0), so the integrable singularities at 0 of
-    /// the models here (1/r, log(1/r)) are integrated accurately; relative accuracy 1e-10.
+    /// the models here (1/r, log(1/r)) are integrated accurately; relative accuracy 1e-10 (or
+    /// rd_accuracy(), if coarser).
     double annulus_mean(double r0, double r1) const;
     /// The medium the profile was built for.
     const DiffusionMedium& medium() const { return medium_; }
+    /// The relative accuracy of rd()'s values where it is coarser than double's (0 here): a
+    /// model evaluated in float (a .bssrdf file's GLSL, approx/tabulated_profile.h). Integrals of
+    /// the profile (annulus_mean, integrate_sphere) are not refined below it: the adaptive
+    /// quadratures would otherwise chase the table's interpolation to 1e-10.
+    virtual double rd_accuracy() const { return 0; }
 
   protected:
     explicit DiffusionProfile(const DiffusionMedium& m) : medium_(m) {}

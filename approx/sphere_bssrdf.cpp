@@ -529,6 +529,7 @@ SphereExitance integrate_sphere(const RadialFunction& rd, const SphereIntegratio
 SphereExitance integrate_sphere(const DiffusionProfile& profile, SphereIntegration o) {
     o.eta = profile.medium().eta;
     o.profile_entry_fresnel = profile.includes_entry_fresnel();
+    o.rel_tol = std::max(o.rel_tol, profile.rd_accuracy());
     return integrate_sphere([&profile](double r) { return profile.rd(r); }, o);
 }
 

@@ -14,6 +14,7 @@
 #include "core/material.h"
 #include "core/profile.h"
 #include "core/scene.h"
+#include "experiments/runner/profile_models.h"
 #include "experiments/runner/runner.h"
 #include "mcml/profile.h"
 #include "volpath/pencil.h"
@@ -317,14 +318,29 @@ PYBIND11_MODULE(ssslab, m) {
           "The analytic profile models: dipole, better-dipole, multipole, qd, pbd, burley-*.");
     m.def(
         "diffusion_profile",
-        [](const std::string& model, const Medium& md, const Array& r_cm, bool annulus) {
+        [](const std::string& model, const Medium& md, const Array& r_cm, bool annulus,
+           const py::dict& parameters) {
+            // A built-in name or a profile file's path (experiments/runner/profile_models.h).
+            runner::ProfileModels models;
+            const std::string name = models.add(model, "");
+            for (const auto& [key, value] : parameters) {
+                const auto param = key.cast<std::string>();
+                const auto v = py::isinstance<py::sequence>(value)
+                                   ? value.cast<std::vector<double>>()
+                                   : std::vector<double>{value.cast<double>()};
+                if (v.size() != 1 && v.size() != 3)
+                    throw std::invalid_argument("parameter \"" + param +
+                                                "\": give one value or three (RGB)");
+                models.set_parameter(
+                    name, param,
+                    v.size() == 1 ? std::array{v[0], v[0], v[0]} : std::array{v[0], v[1], v[2]});
+            }
             const auto r = r_cm.unchecked<1>();
             Array out({py::ssize_t{3}, r.shape(0)});
             auto o = out.mutable_unchecked<2>();
             std::array<double, 3> total{};
             for (int c = 0; c < 3; ++c) {
-                const auto p =
-                    approx::make_diffusion_profile(model, approx::diffusion_medium(md, c));
+                const auto p = models.make(name, approx::diffusion_medium(md, c), c);
                 total[static_cast<size_t>(c)] = p->total_rd();
                 py::gil_scoped_release release;
                 if (!annulus) {
@@ -339,6 +355,10 @@ PYBIND11_MODULE(ssslab, m) {
             return py::make_tuple(out, vec3(total));
         },
         py::arg("model"), py::arg("medium"), py::arg("r_cm"), py::arg("annulus") = false,
+        py::arg("parameters") = py::dict(),
+        "A built-in model by name, or a profile file by its path (.toml expressions, .bssrdf GLSL "
+        "through the headless GL twin; experiments/bssrdf/README.md) with `parameters` {name: "
+        "value or [R, G, B]}: "
         "(R_d [1/cm^2] of shape (3, len(r_cm)), R_dr per channel), per unit power entering (no "
         "entry Fresnel factor: multiply by 1 - rsp to compare with the Monte Carlo profiles). "
         "With annulus=True, r_cm are bin edges and each value the area mean over [r_i, r_i+1) "

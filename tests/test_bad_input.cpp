@@ -890,7 +890,7 @@ std::vector<BadInputCase> cli_cases() {
          "models = [\"dipole\", \"bogus\"]\n[material]\npreset = \"Skin1\"\n",
          {"sphere", "--config", "sph.toml", "--photons", "100", "--out", "o"},
          2,
-         {"sph.toml:1:21: error: key 'models': unknown model \"bogus\"",
+         {"sph.toml:1:21: error: key 'models': unknown diffusion model \"bogus\"",
           "\n    models = [\"dipole\", \"bogus\"]\n                        ^"}},
 
         // Files that are not text: the error names the place but shows none of the bytes.

@@ -1,5 +1,6 @@
 // The experiment runner: content keys, cache reuse, interruption and resumption, config errors,
 // regression checks, and the report in a headless browser.
+#include "core/build_info.h"
 #include "core/film_image.h"
 #include "experiments/runner/experiment.h"
 #include "experiments/runner/plots.h"
@@ -19,6 +20,7 @@
 #include <set>
 #include <sstream>
 #include <thread>
+#include <tuple>
 
 namespace ssslab {
 namespace {
@@ -296,6 +298,41 @@ models = ["dipole", "models/dipole.toml"]
     for (size_t k = 0; k < builtin.size(); ++k)
         EXPECT_NEAR(file[k], 2 * builtin[k], 1e-9 * std::abs(builtin[k])) << "bin " << k;
 
+    // Parameters from the config, one per RGB channel (the file's default back at 1): only the
+    // model tables again, the channels scaled 1, 2, 3.
+    dir.write("models/dipole.toml", profile);
+    const std::string with_parameters = text + R"(
+[outputs.pencil.parameters."dipole.toml"]
+Multiplier = [1.0, 2.0, 3.0]
+)";
+    dir.write("small.toml", with_parameters);
+    const auto third = run_ssslab({"run", "small.toml"}, dir.path());
+    ASSERT_EQ(third.exit_code, 0) << third.err;
+    EXPECT_NE(third.out.find("1 computed, 12 reused"), std::string::npos) << third.out;
+    const std::string scaled = testing::read_text(res / "pencil" / "Skin1.csv");
+    for (int c = 0; c < 3; ++c) {
+        const std::string ch = std::string(1, "RGB"[c]);
+        const auto b = csv_column(scaled, "dipole_" + ch + "_per_mm2");
+        const auto f = csv_column(scaled, "dipole.toml_" + ch + "_per_mm2");
+        ASSERT_EQ(b.size(), f.size());
+        for (size_t k = 0; k < b.size(); ++k)
+            EXPECT_NEAR(f[k], (c + 1) * b[k], 1e-9 * (c + 1) * std::abs(b[k]))
+                << ch << " bin " << k;
+    }
+    // A value outside the parameter's range, an unknown parameter, a built-in model's table:
+    // refused at the config's line, exit 2.
+    for (const auto& [from, to, expect] :
+         std::vector<std::tuple<std::string, std::string, std::string>>{
+             {"Multiplier = [1.0, 2.0, 3.0]", "Multiplier = [1.0, 20.0, 3.0]", "[0, 10]"},
+             {"Multiplier = [1.0, 2.0, 3.0]", "Multiplyer = 2", "Multiplier"},
+             {"parameters.\"dipole.toml\"", "parameters.dipole", "built-in"}}) {
+        dir.write("small.toml", replace(with_parameters, from, to));
+        const auto refused = run_ssslab({"run", "small.toml"}, dir.path());
+        EXPECT_EQ(refused.exit_code, 2) << to;
+        EXPECT_NE(refused.err.find("small.toml:"), std::string::npos) << refused.err;
+        EXPECT_NE(refused.err.find(expect), std::string::npos) << refused.err;
+    }
+
     dir.write("small.toml", replace(text, "models/dipole.toml", "models/dipol.toml"));
     const auto bad = run_ssslab({"run", "small.toml"}, dir.path());
     EXPECT_EQ(bad.exit_code, 2);
@@ -308,6 +345,126 @@ models = ["dipole", "models/dipole.toml"]
     EXPECT_EQ(broken.exit_code, 2);
     EXPECT_NE(broken.err.find("dipole.toml:18:"), std::string::npos) << broken.err;
     EXPECT_NE(broken.err.find("zrr"), std::string::npos) << broken.err;
+}
+
+TEST(Runner, ABssrdfFileIsEvaluatedThroughGlAndScoredBesideTheBuiltInModels) {
+    // [Issue 19] Listing A.2 (experiments/bssrdf/dipole.bssrdf) named in [outputs.pencil]: its
+    // GLSL compiled with the config and evaluated through the GL twin's headless context; its
+    // curve equals the built-in dipole's to float accuracy; GLSL that does not compile is refused
+    // at the file's line with the compiler's message, exit 2, before any output.
+    if (!SSSLAB_HAVE_GL) GTEST_SKIP() << "built without the GL twin";
+    const std::string text = std::string(kSmall) + R"(
+[volpath]
+photons = 20000
+
+[outputs.pencil]
+models = ["dipole", "models/dipole.bssrdf"]
+)";
+    testing::TempDir dir;
+    dir.write("small.toml", text);
+    const std::string listing =
+        testing::read_text(testing::source_path("experiments/bssrdf/dipole.bssrdf"));
+    dir.write("models/dipole.bssrdf", listing);
+    const auto first = run_ssslab({"run", "small.toml"}, dir.path());
+    if (first.exit_code == 2 && first.err.find("no OpenGL context") != std::string::npos)
+        GTEST_SKIP() << first.err;
+    ASSERT_EQ(first.exit_code, 0) << first.err;
+    const fs::path res = dir / "results" / "small";
+    const std::string csv = testing::read_text(res / "pencil" / "Skin1.csv");
+    for (const char* ch : {"R", "G", "B"}) {
+        const auto builtin = csv_column(csv, std::string("dipole_") + ch + "_per_mm2");
+        const auto file = csv_column(csv, std::string("dipole.bssrdf_") + ch + "_per_mm2");
+        ASSERT_EQ(builtin.size(), file.size());
+        ASSERT_GT(builtin.size(), 10u);
+        // Float accuracy (test_bssrdf_gl): 32 u (2 + sigma_tr d) with u = 2^-24, below 2e-4 for
+        // exponents up to 80; bins below float's range are left out.
+        for (size_t k = 0; k < builtin.size(); ++k) {
+            if (!(builtin[k] > 1e-30)) continue;
+            EXPECT_NEAR(file[k], builtin[k], 2e-4 * builtin[k]) << ch << " bin " << k;
+        }
+    }
+    EXPECT_NE(testing::read_text(res / "metrics.csv").find("Skin1.G.model.dipole.bssrdf.Rd,"),
+              std::string::npos);
+
+    // An edit of the file recomputes the model tables only.
+    dir.write("models/dipole.bssrdf", replace(listing, "0.0 10.0 1.0", "0.0 10.0 2.0"));
+    const auto second = run_ssslab({"run", "small.toml"}, dir.path());
+    ASSERT_EQ(second.exit_code, 0) << second.err;
+    EXPECT_NE(second.out.find("1 computed, 12 reused"), std::string::npos) << second.out;
+
+    // Parameters per RGB channel from the config, as uniforms: the channels scaled 1, 2, 3.
+    dir.write("models/dipole.bssrdf", listing);
+    dir.write("small.toml", text + R"(
+[outputs.pencil.parameters."dipole.bssrdf"]
+Multiplier = [1.0, 2.0, 3.0]
+)");
+    const auto third = run_ssslab({"run", "small.toml"}, dir.path());
+    ASSERT_EQ(third.exit_code, 0) << third.err;
+    const std::string scaled = testing::read_text(res / "pencil" / "Skin1.csv");
+    for (int c = 0; c < 3; ++c) {
+        const std::string ch = std::string(1, "RGB"[c]);
+        const auto b = csv_column(scaled, "dipole_" + ch + "_per_mm2");
+        const auto f = csv_column(scaled, "dipole.bssrdf_" + ch + "_per_mm2");
+        ASSERT_EQ(b.size(), f.size());
+        for (size_t k = 0; k < b.size(); ++k) {
+            if (!(b[k] > 1e-30)) continue;
+            EXPECT_NEAR(f[k], (c + 1) * b[k], 2e-4 * (c + 1) * b[k]) << ch << " bin " << k;
+        }
+    }
+
+    // Line 19 misspelled: refused with the config, at the file's line, in a fresh directory
+    // that keeps no output.
+    testing::TempDir bad;
+    bad.write("small.toml", text);
+    bad.write("models/dipole.bssrdf", replace(listing, "SigmaTPrime = SigmaSPrime + SigmaA",
+                                              "SigmaTPrime = SigmaSPrme + SigmaA"));
+    const auto broken = run_ssslab({"run", "small.toml"}, bad.path());
+    EXPECT_EQ(broken.exit_code, 2);
+    EXPECT_NE(broken.err.find("dipole.bssrdf:19:"), std::string::npos) << broken.err;
+    EXPECT_NE(broken.err.find("GLSL does not compile"), std::string::npos) << broken.err;
+    EXPECT_NE(broken.err.find("SigmaSPrme"), std::string::npos) << broken.err;
+    EXPECT_FALSE(fs::exists(bad / "results")) << "output written for a refused config";
+}
+
+TEST(Runner, SphereTakesProfileFilesWithTheirParameters) {
+    // [Issue 19] `ssslab sphere` resolves its models where the pencil study does
+    // (experiments/runner/profile_models.h): a profile file named in the config, relative to it,
+    // with its parameters per channel; integrated over the sphere like the built-in dipole.
+    testing::TempDir dir;
+    dir.write("models/dipole.toml",
+              testing::read_text(testing::source_path("experiments/bssrdf/dipole.toml")));
+    dir.write("sph.toml", R"(models = ["dipole", "models/dipole.toml"]
+[material]
+preset = "Skin1"
+[parameters."dipole.toml"]
+Multiplier = [1.0, 2.0, 0.5]
+)");
+    const auto r = run_ssslab({"sphere", "--config", "sph.toml", "--photons", "2000", "--size", "8",
+                               "--threads", "2", "--out", "s", "-q"},
+                              dir.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string csv = testing::read_text(dir / "s_beta.csv");
+    const double scale[3] = {1.0, 2.0, 0.5};
+    for (int c = 0; c < 3; ++c) {
+        const std::string ch = std::string(1, "RGB"[c]);
+        const auto b = csv_column(csv, "M_dipole_" + ch);
+        const auto f = csv_column(csv, "M_dipole.toml_" + ch);
+        ASSERT_EQ(b.size(), f.size());
+        ASSERT_GT(b.size(), 10u);
+        for (size_t k = 0; k < b.size(); ++k)
+            EXPECT_NEAR(f[k], scale[c] * b[k], 1e-8 * std::abs(b[k]) + 1e-300) << ch << " " << k;
+    }
+    // A parameter table of a built-in model is refused at its key.
+    dir.write("sph.toml", R"(models = ["dipole"]
+[material]
+preset = "Skin1"
+[parameters.dipole]
+Multiplier = 2
+)");
+    const auto bad = run_ssslab({"sphere", "--config", "sph.toml", "--out", "t", "-q"}, dir.path());
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_NE(bad.err.find("sph.toml:4:"), std::string::npos) << bad.err;
+    EXPECT_NE(bad.err.find("built-in"), std::string::npos) << bad.err;
 }
 
 // Start ssslab in the background, kill it after `ms` milliseconds with `sig`, return its status.

@@ -123,15 +123,12 @@ MaterialPencil pencil_data(const ExperimentRun& r, const MaterialEntry& me, bool
         f.rd_ms_se = all.rd_total_se[c];
         f.rsp = all.rsp[c];
         if (!with_models) continue;
-        for (const std::string& name : r.exp.pencil.models) {
+        for (const std::string& name : r.exp.pencil.models.names()) {
             ModelCurve m;
             m.name = name;
             try {
                 const approx::DiffusionMedium dm = approx::diffusion_medium(me.medium, c);
-                const auto file = r.exp.pencil.files.find(name);
-                const auto model = file == r.exp.pencil.files.end()
-                                       ? approx::make_diffusion_profile(name, dm)
-                                       : approx::make_expression_profile(file->second, dm);
+                const auto model = r.exp.pencil.models.make(name, dm, c);
                 m.single = model->includes_single_scattering();
                 m.fresnel = model->includes_entry_fresnel();
                 const double scale = m.fresnel ? 1.0 : 1.0 - f.rsp;
@@ -260,7 +257,7 @@ std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
                "Rd_reference,Rd_reference_se,Rd_rel_error,Rd_z,note\n";
         for (const auto& m : e.materials) {
             const MaterialPencil p = pencil_data(r, m, true);
-            files["pencil/" + m.label + ".csv"] = pencil_csv(p, e.pencil.models);
+            files["pencil/" + m.label + ".csv"] = pencil_csv(p, e.pencil.models.names());
             for (int c = 0; c < 3; ++c) {
                 const Reference& f = p.ref[static_cast<size_t>(c)];
                 for (const ModelCurve& mc : p.models[static_cast<size_t>(c)]) {
@@ -335,8 +332,8 @@ std::vector<PlotRequest> engine_plots(const ExperimentRun& r) {
     }
     if (e.pencil.enabled) {
         std::string models = "[";
-        for (size_t i = 0; i < e.pencil.models.size(); ++i)
-            models += (i ? ", " : "") + json_string(e.pencil.models[i]);
+        for (size_t i = 0; i < e.pencil.models.names().size(); ++i)
+            models += (i ? ", " : "") + json_string(e.pencil.models.names()[i]);
         models += "]";
         for (const auto& m : e.materials) {
             const std::string csv = "pencil/" + m.label + ".csv";

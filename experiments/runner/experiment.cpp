@@ -91,31 +91,17 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
     }
     if (auto t = outs.table("pencil")) {
         e.pencil.enabled = true;
-        e.pencil.models = t->string_list("models");
-        const auto& known = approx::diffusion_model_names();
-        for (size_t i = 0; i < e.pencil.models.size(); ++i) {
-            std::string& name = e.pencil.models[i];
-            if (name.ends_with(".toml")) {
-                // A profile file, relative to the config; the model takes the file's name.
-                const std::filesystem::path file =
-                    std::filesystem::path(e.source).parent_path() / name;
-                if (!std::filesystem::is_regular_file(file))
-                    t->fail_item("models", i, "no profile file " + file.string());
-                name = file.filename().string();
-                if (e.pencil.files.count(name))
-                    t->fail_item("models", i, "two models named \"" + name + "\"");
-                e.pencil.files.emplace(name, approx::read_expression_profile(file.string()));
-                continue;
-            }
-            if (std::find(known.begin(), known.end(), name) == known.end()) {
-                std::string list;
-                for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-                t->fail_item("models", i,
-                             "unknown diffusion model \"" + name + "\"; known: " + list +
-                                 ", or a profile file (a path ending in .toml)");
+        const std::vector<std::string> entries = t->string_list("models");
+        const std::string base = std::filesystem::path(e.source).parent_path().string();
+        for (size_t i = 0; i < entries.size(); ++i) {
+            try {
+                e.pencil.models.add(entries[i], base);
+            } catch (const std::invalid_argument& x) {
+                t->fail_item("models", i, x.what());
             }
         }
-        if (e.pencil.models.empty()) t->fail("models", "expected at least one diffusion model");
+        if (entries.empty()) t->fail("models", "expected at least one diffusion model");
+        if (auto pt = t->table("parameters")) e.pencil.models.read_parameters(*pt);
         for (const MaterialEntry& m : e.materials)
             if (m.medium.layered())
                 t->fail("models", "the diffusion models describe homogeneous slabs; material \"" +

@@ -33,18 +33,19 @@
 // Every error names file:line:column and the key.
 #pragma once
 
-#include "approx/expression_profile.h"
 #include "core/batch_runner.h"
 #include "core/config.h"
 #include "core/material.h"
 #include "core/profile.h"
 #include "experiments/runner/kernel_study.h"
+#include "experiments/runner/profile_models.h"
 #include "experiments/runner/realtime_study.h"
 #include "experiments/runner/render_study.h"
 #include "experiments/runner/stiff_study.h"
 #include "mcml/engine.h"
 #include "mcml/profile.h"
 
+#include <array>
 #include <map>
 #include <memory>
 #include <optional>
@@ -104,11 +105,9 @@ struct Experiment {
     } crossval;
     struct Pencil {
         bool enabled = false;
-        /// approx::make_diffusion_profile names, or profile files (an entry ending in .toml,
-        /// relative to the config: approx/expression_profile.h) named by their file name
-        std::vector<std::string> models;
-        /// The files' models by the name in `models`, read and checked with the config.
-        std::map<std::string, approx::ExpressionProfileDef> files;
+        /// The models (`models`: built-in names and profile files, relative to the config) and
+        /// their parameters ([outputs.pencil.parameters]): experiments/runner/profile_models.h.
+        ProfileModels models;
     } pencil;
     struct Efficiency {
         bool enabled = false;

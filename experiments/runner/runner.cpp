@@ -636,8 +636,7 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
             .add("crossval", r.exp.crossval.enabled)
             .add("max_rel_se", r.exp.crossval.max_rel_se)
             .add("volpath_mode", r.exp.volpath.mode);
-        for (const auto& m : r.exp.pencil.models) key.add("model", m);
-        for (const auto& [name, def] : r.exp.pencil.files) key.add("model_file:" + name, def.text);
+        r.exp.pencil.models.add_to_key(key);
         for (const auto& m : r.exp.efficiency.materials) key.add("efficiency", m);
         for (const auto& n : r.nodes) key.add(n.material + "." + n.role, n.key);
         const std::string k = key.hex();

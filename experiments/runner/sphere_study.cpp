@@ -3,12 +3,14 @@
 #include "core/error.h"
 #include "core/material.h"
 #include "core/provenance.h"
+#include "experiments/runner/profile_models.h"
 #include "mcml/profile.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -185,23 +187,28 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
         if (a.models.empty() && models_in_config) root.fail_item("models", i, msg);
         throw InputError({kCommandLine, 0, 0}, "--models", msg);
     };
-    const auto& known = approx::diffusion_model_names();
-    std::string known_list;
-    for (const auto& n : known) known_list += (known_list.empty() ? "" : ", ") + n;
+    // Built-in names and profile files (experiments/runner/profile_models.h): a file relative to
+    // the config that names it, or to the working directory for --models; the files' parameters
+    // from [parameters."<file name>"].
+    ProfileModels registry;
+    const std::string base = a.models.empty() && models_in_config
+                                 ? std::filesystem::path(src).parent_path().string()
+                                 : std::string();
     for (size_t i = 0; i < models.size(); ++i) {
-        if (std::find(known.begin(), known.end(), models[i]) == known.end())
-            models_error(i, "unknown model \"" + models[i] + "\"; known models: " + known_list +
-                                " (or \"none\")");
-        if (std::find(models.begin(), models.begin() + static_cast<long>(i), models[i]) !=
-            models.begin() + static_cast<long>(i))
-            models_error(i, "model \"" + models[i] + "\" given twice");
+        try {
+            registry.add(models[i], base);
+        } catch (const std::invalid_argument& e) {
+            const std::string msg = e.what();
+            models_error(i, msg.starts_with("unknown") ? msg + " (or \"none\")" : msg);
+        }
     }
+    if (auto pt = root.table("parameters")) registry.read_parameters(*pt);
     {
         std::string list;
         for (const auto& n : models) list += (list.empty() ? "" : ",") + n;
         root.record("models", list.empty() ? std::string("none") : list);
     }
-    job.models = models;
+    job.models = registry.names();
 
     ConfigTable sp = root.table_or_empty("sphere");
     if (a.radius_mm) {
@@ -295,8 +302,8 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
             try {
                 approx::DiffusionMedium dm = approx::diffusion_medium(m, ch);
                 dm.thickness = std::numeric_limits<double>::infinity();  // a sphere, not a slab
-                per_channel[static_cast<size_t>(ch)] = approx::make_diffusion_profile(name, dm);
-            } catch (const std::invalid_argument& e) {
+                per_channel[static_cast<size_t>(ch)] = registry.make(name, dm, ch);
+            } catch (const std::exception& e) {
                 models_error(k, "model \"" + name + "\" refuses channel " + kChannelNames[ch] +
                                     " of the material: " + e.what());
             }

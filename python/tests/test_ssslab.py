@@ -110,6 +110,26 @@ def test_diffusion_profiles_integrate_to_their_totals():
         ssslab.diffusion_profile("nonesuch", m, r)
 
 
+def test_a_profile_file_is_a_model_with_parameters_per_channel():
+    # experiments/bssrdf/dipole.toml, named by its path, equals the built-in dipole; its
+    # Multiplier set per channel scales the channels; a value outside its range is refused.
+    m = ssslab.material("Skin1")
+    r = np.geomspace(1e-4, 1.0, 50)
+    path = os.path.join(SOURCE, "experiments", "bssrdf", "dipole.toml")
+    want, want_total = ssslab.diffusion_profile("dipole", m, r)
+    got, total = ssslab.diffusion_profile(path, m, r)
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+    np.testing.assert_allclose(total, want_total, rtol=1e-12)
+    scaled, _ = ssslab.diffusion_profile(path, m, r, parameters={"Multiplier": [1.0, 2.0, 0.5]})
+    np.testing.assert_allclose(scaled, want * np.array([[1.0], [2.0], [0.5]]), rtol=1e-12)
+    with pytest.raises(ValueError, match="outside"):
+        ssslab.diffusion_profile(path, m, r, parameters={"Multiplier": 11.0})
+    with pytest.raises(ValueError, match="no parameter"):
+        ssslab.diffusion_profile(path, m, r, parameters={"Gain": 1.0})
+    with pytest.raises(ValueError, match="no profile file"):
+        ssslab.diffusion_profile("nonesuch.toml", m, r)
+
+
 def test_kernel_scores():
     p = ssslab.mcml_profile(ssslab.material("Skin1"), photons=20000, seed=1)
     assert "svd" in ssslab.kernel_models() and "preintegration" in ssslab.kernel_models()

@@ -30,7 +30,7 @@ static GLuint compile(GLenum type, const std::string& source, const std::string&
         std::string log(static_cast<size_t>(std::max(len, 1)), '\0');
         glGetShaderInfoLog(s, len, nullptr, log.data());
         glDeleteShader(s);
-        throw std::runtime_error(name + " does not compile: " + log);
+        throw GlShaderError(name + " does not compile: " + log, log);
     }
     return s;
 }

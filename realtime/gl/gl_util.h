@@ -9,7 +9,9 @@
 #include <chrono>
 #include <cstdint>
 #include <span>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ssslab::realtime::gl {
@@ -18,8 +20,16 @@ namespace ssslab::realtime::gl {
 double ms_since(std::chrono::steady_clock::time_point t0);
 /// Throws std::runtime_error naming `what` if GL has recorded an error.
 void check_gl(const char* what);
-/// A linked program of a vertex and a fragment shader; a shader that does not compile or a
-/// program that does not link throws std::runtime_error with the compiler's log, named `name`.
+/// A shader that does not compile: the message names the shader, `log` is the compiler's own.
+struct GlShaderError : std::runtime_error {
+    GlShaderError(const std::string& what, std::string compiler_log)
+        : std::runtime_error(what), log(std::move(compiler_log)) {}
+    std::string log;
+};
+
+/// A linked program of a vertex and a fragment shader; a shader that does not compile throws
+/// GlShaderError, a program that does not link std::runtime_error, with the compiler's log,
+/// named `name`.
 GLuint link_program(const std::string& vert, const std::string& frag, const std::string& name);
 /// A w x h texture (nearest, clamp-to-edge, no mipmaps) of `internal` format from data (or
 /// uninitialised when null). The texture units' bindings are left as they were.
