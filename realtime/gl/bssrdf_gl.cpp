@@ -111,8 +111,29 @@ struct Program {
     }
 };
 
+/// The draw's objects: a w x h texture of radii in, one of RGBA results out and its framebuffer,
+/// an empty vertex array; released (and the default framebuffer bound) however the draw ends.
+struct Targets {
+    GLuint vao = 0, in = 0, out = 0;
+    GlFramebuffer fb;
+    Targets(int w, int h, const float* radii, const std::string& what) {
+        glGenVertexArrays(1, &vao);
+        in = make_texture(w, h, GL_R32F, GL_RED, GL_FLOAT, radii);
+        out = make_texture(w, h, GL_RGBA32F, GL_RGBA, GL_FLOAT, nullptr);
+        fb = make_framebuffer(w, h, {out}, false, what);
+    }
+    ~Targets() {
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        release_framebuffer(fb);
+        glDeleteTextures(1, &in);
+        glDeleteTextures(1, &out);
+        glDeleteVertexArrays(1, &vao);
+    }
+    Targets(const Targets&) = delete;
+    Targets& operator=(const Targets&) = delete;
+};
+
 GLuint compile_bssrdf(const BssrdfFile& file) {
-    approx::require_radial_profile(file);
     require_gl(3, 3, "a .bssrdf file's GLSL needs OpenGL 3.3");
     try {
         return link_program(shaders::fullscreen_vert, fragment_source(file), file.path);
@@ -154,13 +175,9 @@ BssrdfValues evaluate_bssrdf(const BssrdfFile& file, const approx::DiffusionMedi
     for (int i = 0; i < n; ++i)
         r[static_cast<size_t>(i)] = static_cast<float>(radii[static_cast<size_t>(i)]);
 
-    GLuint vao = 0;
-    glGenVertexArrays(1, &vao);
-    const GLuint in = make_texture(kWidth, h, GL_R32F, GL_RED, GL_FLOAT, r.data());
-    const GLuint out = make_texture(kWidth, h, GL_RGBA32F, GL_RGBA, GL_FLOAT, nullptr);
-    const GlFramebuffer fb = make_framebuffer(kWidth, h, {out}, false, file.path);
     std::vector<float> rgba(static_cast<size_t>(kWidth) * static_cast<size_t>(h) * 4);
-    try {
+    {
+        const Targets t(kWidth, h, r.data(), file.path);
         glUseProgram(prog.id);
         const auto loc = [&](const std::string& name) {
             return glGetUniformLocation(prog.id, name.c_str());
@@ -187,27 +204,16 @@ BssrdfValues evaluate_bssrdf(const BssrdfFile& file, const approx::DiffusionMedi
                 glUniform3f(loc(p.name), static_cast<float>(v[0]), static_cast<float>(v[1]),
                             static_cast<float>(v[2]));
         }
-        bind_texture(prog.id, "ssslab_radii", 0, in);
-        glBindFramebuffer(GL_FRAMEBUFFER, fb.fbo);
+        bind_texture(prog.id, "ssslab_radii", 0, t.in);
+        glBindFramebuffer(GL_FRAMEBUFFER, t.fb.fbo);
         glViewport(0, 0, kWidth, h);
         glDisable(GL_BLEND);
         glDisable(GL_DEPTH_TEST);
-        glBindVertexArray(vao);
+        glBindVertexArray(t.vao);
         glDrawArrays(GL_TRIANGLES, 0, 3);
         glReadPixels(0, 0, kWidth, h, GL_RGBA, GL_FLOAT, rgba.data());
         check_gl("evaluating a .bssrdf file");
-    } catch (...) {
-        release_framebuffer(fb);
-        glDeleteTextures(1, &in);
-        glDeleteTextures(1, &out);
-        glDeleteVertexArrays(1, &vao);
-        throw;
     }
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    release_framebuffer(fb);
-    glDeleteTextures(1, &in);
-    glDeleteTextures(1, &out);
-    glDeleteVertexArrays(1, &vao);
 
     BssrdfValues v;
     const auto at = [&](int i) {
