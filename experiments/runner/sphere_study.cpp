@@ -204,8 +204,15 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
     }
     if (auto pt = root.table("parameters")) registry.read_parameters(*pt);
     {
+        // A file from --models is recorded by its absolute path: the resolved configuration
+        // resolves paths relative to itself, not to the working directory of this run.
         std::string list;
-        for (const auto& n : models) list += (list.empty() ? "" : ",") + n;
+        for (const auto& n : models) {
+            const std::string entry = !a.models.empty() && ProfileModels::is_file_entry(n)
+                                          ? std::filesystem::absolute(n).string()
+                                          : n;
+            list += (list.empty() ? "" : ",") + entry;
+        }
         root.record("models", list.empty() ? std::string("none") : list);
     }
     job.models = registry.names();
