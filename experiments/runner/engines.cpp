@@ -1,7 +1,6 @@
 #include "experiments/runner/engines.h"
 
 #include "approx/diffusion.h"
-#include "approx/expression_profile.h"
 #include "core/stats.h"
 #include "experiments/runner/report.h"
 #include "volpath/pencil.h"
