@@ -50,6 +50,15 @@ int iz_to_layer(int iz, const RunSpec& run) {
     return i;
 }
 
+// out[j] = sum over i = 0, 1, ..., rows - 1 of m[i * cols + j], each sum in the order of i.
+void sum_columns(const double* __restrict m, int rows, int cols, double* __restrict out) {
+    for (int j = 0; j < cols; ++j) out[j] = 0.0;
+    for (int i = 0; i < rows; ++i) {
+        const double* __restrict row = m + static_cast<size_t>(i) * static_cast<size_t>(cols);
+        for (int j = 0; j < cols; ++j) out[j] += row[j];
+    }
+}
+
 }  // namespace
 
 void reduce(const RunSpec& run, double* v, const TallyLayout& L) {
@@ -61,7 +70,10 @@ void reduce(const RunSpec& run, double* v, const TallyLayout& L) {
         v[L.rd] = rd, v[L.tt] = tt, v[L.a] = a, v[L.energy] = rd + a + tt;
         return;
     }
-    // Sum2DRd / Sum2DTt
+    // Sum2DRd / Sum2DTt. The column sums run over the rows in the original's order (ir = 0, 1,
+    // ...), each into its own accumulator, so the sums are the original's bit for bit; walking
+    // the rows contiguously rather than the columns with a stride of a row keeps this per-batch
+    // pass at memory speed.
     auto sum2d = [&](size_t ra, size_t r, size_t a, size_t total) {
         double sum;
         for (int ir = 0; ir < nr; ir++) {
@@ -69,11 +81,7 @@ void reduce(const RunSpec& run, double* v, const TallyLayout& L) {
             for (int ia = 0; ia < na; ia++) sum += v[ra + static_cast<size_t>(ir * na + ia)];
             v[r + ir] = sum;
         }
-        for (int ia = 0; ia < na; ia++) {
-            sum = 0.0;
-            for (int ir = 0; ir < nr; ir++) sum += v[ra + static_cast<size_t>(ir * na + ia)];
-            v[a + ia] = sum;
-        }
+        sum_columns(v + ra, nr, na, v + a);
         sum = 0.0;
         for (int ir = 0; ir < nr; ir++) sum += v[r + ir];
         v[total] = sum;
@@ -81,14 +89,9 @@ void reduce(const RunSpec& run, double* v, const TallyLayout& L) {
     sum2d(L.rd_ra, L.rd_r, L.rd_a, L.rd);
     // Sum2DA
     {
-        double sum;
-        for (int iz = 0; iz < nz; iz++) {
-            sum = 0.0;
-            for (int ir = 0; ir < nr; ir++) sum += v[L.a_rz + static_cast<size_t>(ir * nz + iz)];
-            v[L.a_z + iz] = sum;
-        }
+        sum_columns(v + L.a_rz, nr, nz, v + L.a_z);
         for (int il = 0; il < L.nl + 2; ++il) v[L.a_l + il] = 0.0;
-        sum = 0.0;
+        double sum = 0.0;
         for (int iz = 0; iz < nz; iz++) {
             sum += v[L.a_z + iz];
             v[L.a_l + iz_to_layer(iz, run)] += v[L.a_z + iz];
