@@ -13,13 +13,7 @@ namespace {
 
 // The error a bad file raises: its line and message.
 InputError error_of(const std::string& text) {
-    try {
-        approx::parse_bssrdf(text, "bad.bssrdf");
-    } catch (const InputError& e) {
-        return e;
-    }
-    ADD_FAILURE() << "accepted:\n" << text;
-    return InputError({}, "", "");
+    return ssslab::testing::input_error_of([&] { approx::parse_bssrdf(text, "bad.bssrdf"); }, text);
 }
 
 const char* const kShader =

@@ -20,13 +20,8 @@ approx::ExpressionProfileDef shipped_dipole() {
 }
 
 InputError error_of(const std::string& text) {
-    try {
-        approx::parse_expression_profile(text, "bad.toml");
-    } catch (const InputError& e) {
-        return e;
-    }
-    ADD_FAILURE() << "accepted:\n" << text;
-    return InputError({}, "", "");
+    return ssslab::testing::input_error_of(
+        [&] { approx::parse_expression_profile(text, "bad.toml"); }, text);
 }
 
 }  // namespace

@@ -1,9 +1,13 @@
-// Helpers shared by the tests: paths, temporary directories, running the `ssslab` binary and
-// headless Chromium, reading gzipped reference data, the statistics the tests compare with, the
-// real-time tests' scene and the screen-space SSS tests' inputs.
+// Helpers shared by the tests: paths, temporary directories, the error a bad input raises,
+// running the `ssslab` binary and headless Chromium, reading gzipped reference data, the
+// statistics the tests compare with, the real-time tests' scene and the screen-space SSS tests'
+// inputs.
 #pragma once
 
+#include "core/error.h"
 #include "core/stats.h"
+
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
@@ -28,6 +32,19 @@ enum class SssEdgeMode;
 }  // namespace ssslab
 
 namespace ssslab::testing {
+
+/// The InputError that `f()` throws; if it throws none, a test failure saying `accepted` and
+/// what (`what`: the input, or its name) and an empty error.
+template <class F>
+InputError input_error_of(F&& f, const std::string& what) {
+    try {
+        f();
+    } catch (const InputError& e) {
+        return e;
+    }
+    ADD_FAILURE() << "accepted:\n" << what;
+    return InputError({}, "", "");
+}
 
 /// tests/data/<rel>
 std::string data_path(const std::string& rel);
