@@ -10,6 +10,7 @@
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -123,6 +124,14 @@ std::optional<Checkpoint> load_checkpoint(const std::string& path) {
 }
 
 }  // namespace
+
+std::int64_t default_batch_samples(const SampleBudget& budget, std::int64_t run_samples) {
+    const bool count_only = !budget.seconds && !budget.rel_error;
+    const std::int64_t n = budget.samples ? *budget.samples : (count_only ? run_samples : 0);
+    if (n <= 0) return 1000;
+    if (n >= 32000) return std::max<std::int64_t>(1000, (n + 999) / 1000);
+    return std::max<std::int64_t>(1, (n + 31) / 32);
+}
 
 const char* to_string(BatchStop s, const char* samples_word) {
     switch (s) {

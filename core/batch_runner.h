@@ -37,6 +37,13 @@ struct SampleBudget {
     bool any() const { return samples || seconds || rel_error; }
 };
 
+/// The default batch size of every engine on this driver (MCML's default engine, the pencil
+/// and the sphere): a count of n samples, from the budget or else `run_samples` when the budget
+/// holds neither time nor error, runs in batches of ceil(n / 1000) (at least 1000) from 32,000
+/// samples on and of ceil(n / 32) below, so that even a small run's standard error comes from
+/// 32 batches (with 2 batches it would be a guess); budgets of time or error alone: 1000.
+std::int64_t default_batch_samples(const SampleBudget& budget, std::int64_t run_samples = 0);
+
 enum class BatchStop { kSamples, kTime, kRelError, kInterrupted };
 /// The stop reason as a word; `samples_word` names what the engine counts (MCML: "photons").
 const char* to_string(BatchStop s, const char* samples_word = "samples");

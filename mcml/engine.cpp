@@ -84,11 +84,7 @@ const char* engine_version() {
 }
 
 std::int64_t default_batch_photons(const SampleBudget& budget, std::int64_t run_photons) {
-    const bool count_only = !budget.seconds && !budget.rel_error;
-    const std::int64_t n = budget.samples ? *budget.samples : (count_only ? run_photons : 0);
-    if (n <= 0) return 1000;
-    if (n >= 32000) return std::max<std::int64_t>(1000, (n + 999) / 1000);
-    return std::max<std::int64_t>(1, (n + 31) / 32);
+    return default_batch_samples(budget, run_photons);
 }
 
 std::string checkpoint_fingerprint(const RunSpec& run, const EngineOptions& o,

@@ -42,9 +42,10 @@ struct EngineOptions : RunControl {
 /// produces for a given seed (it is part of every checkpoint and cache key).
 const char* engine_version();
 
-/// Batch size used when none is given: depends only on the photon budget (never on threads), so
-/// results are reproducible: N/1000 photons (at least 1000) for N >= 32000; N/32 below; 1000 when
-/// the budget is a time or an error.
+/// Batch size used when none is given: core's default_batch_samples (the rule every engine on
+/// the batch driver shares). It depends only on the photon budget (never on threads), so results
+/// are reproducible: N/1000 photons (at least 1000) for N >= 32000; N/32 below; 1000 when the
+/// budget is a time or an error.
 std::int64_t default_batch_photons(const SampleBudget& budget, std::int64_t run_photons);
 
 /// Result of a run, in raw (unscaled) tally units.

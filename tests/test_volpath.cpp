@@ -383,6 +383,49 @@ TEST(VolpathRuns, BitIdenticalForAnyThreadCount) {
     }
 }
 
+TEST(VolpathRuns, SmallRunsReportStandardErrorsFrom32Batches) {
+    // The default batch size (core's default_batch_samples, MCML's rule): a run of n < 32,000
+    // paths has 32 batches, from 32,000 on batches of n / 1000.
+    EXPECT_EQ(default_batch_samples(SampleBudget{2000, {}, {}}), 63);
+    EXPECT_EQ(default_batch_samples(SampleBudget{31999, {}, {}}), 1000);
+    EXPECT_EQ(default_batch_samples(SampleBudget{32000, {}, {}}), 1000);
+    EXPECT_EQ(default_batch_samples(SampleBudget{10'000'000, {}, {}}), 10000);
+    EXPECT_EQ(default_batch_samples(SampleBudget{{}, 5.0, {}}), 1000);
+    EXPECT_EQ(default_batch_samples(SampleBudget{{}, {}, {}}, 640), 20);
+    EXPECT_EQ(default_batch_samples(SampleBudget{{}, 5.0, {}}, 640), 1000);
+    // What it is for: a 2,000-path run's standard error is worth its name. Chandrasekhar's
+    // isotropic half-space (albedo 0.8, index-matched, normal incidence: R = 1 - H(1) sqrt(1-a))
+    // in 60 seeded runs of 2,000 paths, three independent channels each: z = (Rd - R) / SE. With
+    // 32 batches z follows Student's t with 31 degrees of freedom, P(|z| > 3) = 0.0053, so more
+    // than 8 of 180 has probability 1e-6. With 2 batches (the engines' old default for this
+    // budget: batches of 1000) z is t with one degree of freedom, P(|z| > 3) = 0.205: fewer than
+    // 15 of 180 has probability below 1e-6, so the check below tells the two apart.
+    const double a = 0.8;
+    const Medium m = slab(1.0 - a, a, 0.0, 1.0, 1e8);
+    const double expected = 1 - testing::chandrasekhar_h(a, 1.0) * std::sqrt(1 - a);
+    auto count_beyond_3 = [&](std::int64_t batch_paths, std::int64_t expected_batches) {
+        int beyond = 0;
+        for (std::uint64_t seed = 1; seed <= 60; ++seed) {
+            PencilOptions o;
+            o.seed = seed;
+            o.budget.samples = 2000;
+            o.batch_paths = batch_paths;
+            const PencilRun r = simulate_pencil(m, {0.01, 50}, o);
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_EQ(r.runs[c].batches, static_cast<std::uint64_t>(expected_batches));
+                const double z = (r.profile.rd_total[c] - expected) / r.profile.rd_total_se[c];
+                beyond += std::fabs(z) > 3;
+            }
+        }
+        return beyond;
+    };
+    const int with_32 = count_beyond_3(0, 32), with_2 = count_beyond_3(1000, 2);
+    std::printf("|z| > 3 in 180 runs of 2,000 paths: %d with 32 batches, %d with 2\n", with_32,
+                with_2);
+    EXPECT_LE(with_32, 8) << "the default batch size";
+    EXPECT_GE(with_2, 15) << "two batches (the old default)";
+}
+
 TEST(VolpathRuns, ResumeFromCheckpointEqualsAnUninterruptedRun) {
     testing::TempDir dir;
     const Medium m = *find_material("Skin1");

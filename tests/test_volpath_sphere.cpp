@@ -501,6 +501,22 @@ TEST(VolpathSphereRuns, BitIdenticalForAnyThreadCount) {
     }
 }
 
+TEST(VolpathSphereRuns, SmallRunsHave32Batches) {
+    // core's default_batch_samples (tested with the pencil): 2,000 paths in 32 batches of 63
+    // (whole hero cycles: 32 of 63 as well, 63 = 3 x 21), not 2 of 1000.
+    const SphereScene s = scene(*find_material("Marble"), 0.5);
+    for (ChromaticMode mode : {ChromaticMode::kPerChannel, ChromaticMode::kHero}) {
+        SphereOptions o;
+        o.budget.samples = 2000;
+        o.mode = mode;
+        const SphereRun r = simulate_sphere(s, o);
+        for (const BatchRunResult& run : r.runs) {
+            EXPECT_EQ(run.batches, 32u);
+            EXPECT_EQ(run.samples, 2000u);
+        }
+    }
+}
+
 TEST(VolpathSphereRuns, ResumeFromCheckpointEqualsAnUninterruptedRun) {
     testing::TempDir dir;
     const SphereScene s = scene(*find_material("Skin1"), 0.5, 36, 16);

@@ -15,7 +15,7 @@ namespace ssslab::volpath {
 namespace {
 
 // Bump when a change alters the numbers produced for a given seed.
-constexpr const char* kEngineVersion = "volpath-pencil-2";
+constexpr const char* kEngineVersion = "volpath-pencil-3";
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -328,10 +328,7 @@ PencilRun simulate_pencil(const Medium& m, const PencilGrid& grid, const PencilO
     SampleBudget budget = o.budget;
     if (!budget.any()) budget.samples = 1'000'000;
     std::int64_t batch = o.batch_paths;
-    if (batch <= 0)
-        batch = budget.samples && !budget.seconds && !budget.rel_error
-                    ? std::max<std::int64_t>(1000, (*budget.samples + 999) / 1000)
-                    : 1000;
+    if (batch <= 0) batch = default_batch_samples(budget);
     if (o.mode == ChromaticMode::kHero) batch = (batch + 2) / 3 * 3;  // whole hero cycles
 
     Setup base;

@@ -18,7 +18,7 @@ namespace ssslab::volpath {
 namespace {
 
 // Bump when a change alters the numbers produced for a given seed.
-constexpr const char* kEngineVersion = "volpath-sphere-3";
+constexpr const char* kEngineVersion = "volpath-sphere-4";
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -390,7 +390,7 @@ SphereRun simulate_sphere(const SphereScene& scene, const SphereOptions& o) {
     std::int64_t batch = o.batch_paths;
     if (batch <= 0) {
         const bool fixed = budget.samples && !budget.seconds && !budget.rel_error;
-        batch = fixed ? std::max<std::int64_t>(1000, (*budget.samples + 999) / 1000) : 1000;
+        batch = default_batch_samples(budget);
         if (o.image) {
             const auto two_frames = static_cast<std::int64_t>(2 * out.layout.pixels());
             batch = std::max(
