@@ -4,6 +4,7 @@
 #include "approx/diffusion.h"
 
 #include "approx/diffusion_detail.h"
+#include "core/format.h"
 
 #include <cmath>
 #include <functional>
@@ -16,13 +17,6 @@ using diffusion_detail::kInf;
 using diffusion_detail::kPi;
 
 namespace {
-
-std::string number(double x) {
-    std::ostringstream s;
-    s.precision(17);
-    s << x;
-    return s.str();
-}
 
 // C_i = int_0^1 F(mu) mu^i dmu (i = 1, 2) by quadrature. For eta > 1 the total internal
 // reflection part [0, mu_c] is mu_c^{i+1}/(i+1) and the rest is integrated over the transmitted
@@ -72,16 +66,17 @@ void validate(const DiffusionMedium& m, FresnelMoments fresnel) {
         throw std::invalid_argument("diffusion medium: " + what);
     };
     if (!(m.sigma_a >= 0) || !std::isfinite(m.sigma_a))
-        fail("sigma_a must be finite and >= 0, got " + number(m.sigma_a));
+        fail("sigma_a must be finite and >= 0, got " + format_g(m.sigma_a, 17));
     if (!(m.sigma_s >= 0) || !std::isfinite(m.sigma_s))
-        fail("sigma_s must be finite and >= 0, got " + number(m.sigma_s));
+        fail("sigma_s must be finite and >= 0, got " + format_g(m.sigma_s, 17));
     if (!(m.sigma_a + m.sigma_s > 0)) fail("sigma_a + sigma_s must be > 0");
-    if (!(m.g > -1 && m.g < 1)) fail("g must be in (-1, 1), got " + number(m.g));
+    if (!(m.g > -1 && m.g < 1)) fail("g must be in (-1, 1), got " + format_g(m.g, 17));
     if (fresnel == FresnelMoments::fit && !(m.eta >= 0.25 && m.eta <= 2.5))
-        fail("eta must be in [0.25, 2.5] with the papers' Fresnel fits, got " + number(m.eta));
+        fail("eta must be in [0.25, 2.5] with the papers' Fresnel fits, got " +
+             format_g(m.eta, 17));
     if (fresnel == FresnelMoments::exact && !(m.eta > 0 && m.eta <= 10))
-        fail("eta must be in (0, 10] with exact Fresnel moments, got " + number(m.eta));
-    if (!(m.thickness > 0)) fail("thickness must be > 0, got " + number(m.thickness));
+        fail("eta must be in (0, 10] with exact Fresnel moments, got " + format_g(m.eta, 17));
+    if (!(m.thickness > 0)) fail("thickness must be > 0, got " + format_g(m.thickness, 17));
 }
 
 FresnelMomentPair fresnel_moments(double eta, FresnelMoments mode) {
@@ -116,7 +111,7 @@ double normal_incidence_transmittance(double eta) {
 
 double DiffusionProfile::rd(double r) const {
     if (!(r >= 0))
-        throw std::invalid_argument("diffusion profile: r must be >= 0, got " + number(r));
+        throw std::invalid_argument("diffusion profile: r must be >= 0, got " + format_g(r, 17));
     if (std::isinf(r)) return 0.0;
     return eval_rd(r);
 }
@@ -124,7 +119,7 @@ double DiffusionProfile::rd(double r) const {
 double DiffusionProfile::annulus_mean(double r0, double r1) const {
     if (!(r0 >= 0 && r1 > r0 && std::isfinite(r1)))
         throw std::invalid_argument("annulus_mean: need 0 <= r0 < r1 < inf, got r0 = " +
-                                    number(r0) + ", r1 = " + number(r1));
+                                    format_g(r0, 17) + ", r1 = " + format_g(r1, 17));
     // int 2 pi r R dr = int 2 pi r^2 R d(ln r): smooth in ln r for R ~ r^-p, p < 2.
     const double tol = std::max(1e-10, rd_accuracy());
     double integral;
@@ -231,7 +226,7 @@ NormalizedDiffusion::NormalizedDiffusion(const DiffusionMedium& m, BurleyFit fit
         a_ = *o.surface_albedo;
         if (!(a_ >= 0 && a_ <= 1))
             throw std::invalid_argument("burley: surface_albedo must be in [0, 1], got " +
-                                        number(a_));
+                                        format_g(a_, 17));
     } else {
         DiffusionOptions pbd = o;
         pbd.pbd_terms = PbdTerms::both;
@@ -352,7 +347,8 @@ double diffuse_mean_free_path(const DiffusionMedium& m, TransportDefinition def)
 DiffusionMedium invert_diffusion_parameters(const std::string& name, const InversionTarget& t,
                                             const DiffusionOptions& o, TransportDefinition def) {
     if (!(t.ld > 0) || !std::isfinite(t.ld))
-        throw std::invalid_argument("inversion: ld must be finite and > 0, got " + number(t.ld));
+        throw std::invalid_argument("inversion: ld must be finite and > 0, got " +
+                                    format_g(t.ld, 17));
     if (!std::isfinite(t.total_rd))
         throw std::invalid_argument("inversion: total_rd must be finite");
     // The medium of reduced albedo 1 - q, q = e^x: [Bitterli13 Eq. 3.3-3.5].
@@ -379,17 +375,18 @@ DiffusionMedium invert_diffusion_parameters(const std::string& name, const Inver
     for (double x : xs) rs.push_back(total(x));
     for (size_t k = 1; k < xs.size(); ++k) {
         if (rs[k] > rs[k - 1]) continue;
-        const std::string a0 = number(-std::expm1(xs[k - 1])), a1 = number(-std::expm1(xs[k]));
+        const std::string a0 = format_g(-std::expm1(xs[k - 1]), 17),
+                          a1 = format_g(-std::expm1(xs[k]), 17);
         throw std::domain_error("inversion: R_dr of model '" + name +
                                 "' is not strictly increasing in the reduced albedo: R_dr(" + a0 +
-                                ") = " + number(rs[k - 1]) + ", R_dr(" + a1 +
-                                ") = " + number(rs[k]) + "; the inversion would be ambiguous");
+                                ") = " + format_g(rs[k - 1], 17) + ", R_dr(" + a1 + ") = " +
+                                format_g(rs[k], 17) + "; the inversion would be ambiguous");
     }
     if (!(t.total_rd >= rs.front() && t.total_rd <= rs.back()))
         throw std::invalid_argument(
-            "inversion: total_rd = " + number(t.total_rd) + " is outside the range [" +
-            number(rs.front()) + ", " + number(rs.back()) + "] model '" + name +
-            "' attains for g = " + number(t.g) + ", eta = " + number(t.eta));
+            "inversion: total_rd = " + format_g(t.total_rd, 17) + " is outside the range [" +
+            format_g(rs.front(), 17) + ", " + format_g(rs.back(), 17) + "] model '" + name +
+            "' attains for g = " + format_g(t.g, 17) + ", eta = " + format_g(t.eta, 17));
     size_t k = 1;
     while (k + 1 < xs.size() && rs[k] < t.total_rd) ++k;
     const double x =

@@ -2,6 +2,7 @@
 #include "approx/sphere_bssrdf.h"
 
 #include "approx/diffusion.h"
+#include "core/format.h"
 #include "core/quadrature.h"
 
 #include <tbb/blocked_range.h>
@@ -21,13 +22,6 @@ namespace ssslab::approx {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-std::string number(double x) {
-    std::ostringstream s;
-    s.precision(17);
-    s << x;
-    return s.str();
-}
 
 // ---- Gauss-Kronrod 7/15 (QUADPACK qk15) -------------------------------------------------------
 
@@ -257,7 +251,7 @@ class RadialWeight {
         const double v = rd_(r);
         if (!std::isfinite(v))
             throw std::invalid_argument("sphere integration: the profile is not finite at r = " +
-                                        number(r));
+                                        format_g(r, 17));
         return 2 * kPi * jac * v;
     }
 

@@ -1,6 +1,7 @@
 #include "core/hash.h"
 
 #include "core/atomic_file.h"
+#include "core/format.h"
 
 #include <xxhash.h>
 
@@ -13,9 +14,7 @@ namespace ssslab {
 
 namespace {
 std::string number(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v == 0.0 ? 0.0 : v);  // -0 and 0 alike
-    return buf;
+    return format_g(v == 0.0 ? 0.0 : v, 17);  // -0 and 0 alike
 }
 }  // namespace
 
@@ -103,9 +102,7 @@ std::string shown(const std::string& v) {
         char* stop = nullptr;
         const double d = std::strtod(item.c_str(), &stop);
         if (!item.empty() && stop && *stop == '\0') {
-            char buf[32];
-            std::snprintf(buf, sizeof buf, "%.8g", d);
-            out += buf;
+            out += format_g(d, 8);
         } else {
             out += item;
         }

@@ -3,6 +3,7 @@
 #include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/material.h"
 #include "core/profile.h"
 #include "mcml/mci.h"
@@ -14,6 +15,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 
 namespace ssslab {
@@ -51,6 +54,28 @@ const char* kTemplate =
     "1.0\t\t\t\t\t\t# n for medium above.\n"
     "1.4\t10\t200\t0.70\t1.0E+8\t\t# layer 1\n"
     "1.0\t\t\t\t\t\t# n for medium below.\n";
+
+TEST(NumbersAsText, SeventeenDigitsReadBackAndFixedTextIsWhole) {
+    // printf's conversions (C11 7.21.6.1): %.17g of 0.1 shows the double's error; %.6g rounds.
+    EXPECT_EQ(format_g(0.1), "0.10000000000000001");
+    EXPECT_EQ(format_g(1234.5678, 6), "1234.57");
+    EXPECT_EQ(format_g(-2.5e-7, 3), "-2.5e-07");
+    // 17 significant digits identify every double (IEEE 754-2008 5.12.2): strtod gives it back,
+    // subnormals and the extremes included.
+    for (double v : {1.0 / 3, 4.9406564584124654e-324, 2.2250738585072014e-308,
+                     1.7976931348623157e308, -0.0, 3.141592653589793, 1e-300, 6.02214076e23}) {
+        const double back = std::strtod(format_g(v).c_str(), nullptr);
+        EXPECT_EQ(std::memcmp(&back, &v, sizeof v), 0) << format_g(v);
+    }
+    // Fixed notation: ties go to even in the binary value (0.125 is exact), and a long number
+    // keeps every digit: 1e300 with two decimals is 301 digits, the point and 2 more.
+    EXPECT_EQ(format_f(0.125, 2), "0.12");
+    EXPECT_EQ(format_f(-1.5, 0), "-2");
+    const std::string big = format_f(1e300, 2);
+    EXPECT_EQ(big.size(), 304u);
+    EXPECT_EQ(big.substr(big.size() - 3), ".00");
+    EXPECT_EQ(std::strtod(big.c_str(), nullptr), 1e300);
+}
 
 TEST(Mci, ParsesTheOriginalTemplate) {
     const mcml::MciFile f = mcml::parse_mci(kTemplate, "template.mci");

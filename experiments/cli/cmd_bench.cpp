@@ -18,6 +18,7 @@
 #include "core/build_info.h"
 #include "core/config.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/material.h"
 #include "core/provenance.h"
 #include "experiments/cli/bench_volpath.h"
@@ -331,18 +332,6 @@ struct MaterialTimes {
     std::vector<std::array<Timing, 3>> models;  ///< per timed_models() entry, per channel
 };
 
-std::string sig3(double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.3g", v);
-    return buf;
-}
-
-std::string num(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.8g", v);
-    return buf;
-}
-
 /// Ground truth, Kernel2D and every model for one material.
 MaterialTimes time_material(const MaterialPreset& preset,
                             const std::vector<approx::ModelSpec>& specs, std::int64_t photons,
@@ -442,12 +431,12 @@ int run_kernel_bench(const BenchArgs& a, int repeat) {
             const size_t cc = static_cast<size_t>(c);
             if (c == 0)
                 std::printf("%-10s %2s %5d %9s", t.name.c_str(), kChannelNames[c], t.n,
-                            sig3(t.h_mm).c_str());
+                            format_g(t.h_mm, 3).c_str());
             else
                 std::printf("%-10s %2s %5s %9s", "", kChannelNames[c], "", "");
-            std::printf(" %9s", sig3(t.kernel2d_seconds[cc]).c_str());
+            std::printf(" %9s", format_g(t.kernel2d_seconds[cc], 3).c_str());
             for (const auto& row : t.models)
-                std::printf(" %10s", row[cc].built ? sig3(row[cc].seconds).c_str() : "-");
+                std::printf(" %10s", row[cc].built ? format_g(row[cc].seconds, 3).c_str() : "-");
             std::printf("\n");
         }
 
@@ -485,8 +474,8 @@ int run_kernel_bench(const BenchArgs& a, int repeat) {
         kernel2d_total += k2d;
         models_total += sum;
         std::printf("%-10s %9.2f %10llu %9s %9s", t.name.c_str(), t.mcml_seconds,
-                    static_cast<unsigned long long>(t.photons[0]), sig3(k2d).c_str(),
-                    sig3(sum).c_str());
+                    static_cast<unsigned long long>(t.photons[0]), format_g(k2d, 3).c_str(),
+                    format_g(sum, 3).c_str());
         for (size_t i : guided_columns) {
             double err = 0;
             std::string its;
@@ -497,21 +486,21 @@ int run_kernel_bench(const BenchArgs& a, int repeat) {
                 its += (c ? "/" : "") + (it ? std::to_string(static_cast<long long>(*it)) : "-");
             }
             worst_error = std::max(worst_error, err);
-            std::printf(" %11s %16s", sig3(err).c_str(), its.c_str());
+            std::printf(" %11s %16s", format_g(err, 3).c_str(), its.c_str());
         }
         std::printf("\n");
     }
 
     std::printf("\nTotal build time: models %s s, Kernel2D %s s (%zu materials x 3 channels)\n",
-                sig3(models_total).c_str(), sig3(kernel2d_total).c_str(), all.size());
+                format_g(models_total, 3).c_str(), format_g(kernel2d_total, 3).c_str(), all.size());
     if (slowest.seconds >= 0)
         std::printf("Slowest kernel: %s, %s %s, %s s\n", slowest.model.c_str(),
                     slowest.material.c_str(), kChannelNames[slowest.channel],
-                    sig3(slowest.seconds).c_str());
-    std::printf("Largest guided constraint error |sum A - 1|: %s%s\n", sig3(worst_error).c_str(),
-                worst_error > 1e-6 ? "  (above 1e-6)" : "");
+                    format_g(slowest.seconds, 3).c_str());
+    std::printf("Largest guided constraint error |sum A - 1|: %s%s\n",
+                format_g(worst_error, 3).c_str(), worst_error > 1e-6 ? "  (above 1e-6)" : "");
     std::printf("MCML ground truth (not counted): %s s in all, %lld photons per channel%s\n",
-                sig3(mcml_total).c_str(), static_cast<long long>(photons),
+                format_g(mcml_total, 3).c_str(), static_cast<long long>(photons),
                 a.quick ? " (--quick: a fifth)" : "");
     std::printf(
         "Each time is the fastest of %d run%s (--repeat; default 1 with --kernels), wall time "
@@ -531,15 +520,16 @@ int run_kernel_bench(const BenchArgs& a, int repeat) {
             for (int c = 0; c < 3; ++c) {
                 const size_t cc = static_cast<size_t>(c);
                 csv << t.name << ',' << kChannelNames[c] << ",kernel2d," << t.n << ','
-                    << num(t.h_mm) << ',' << num(t.kernel2d_seconds[cc]) << ",,\n";
+                    << format_g(t.h_mm, 8) << ',' << format_g(t.kernel2d_seconds[cc], 8) << ",,\n";
                 for (size_t i = 0; i < t.models.size(); ++i) {
                     const Timing& x = t.models[i][cc];
                     if (!x.built) continue;
                     const auto err = x.get("constraint_error");
                     const auto it = x.get("iterations");
                     csv << t.name << ',' << kChannelNames[c] << ",\"" << models[i].spec << "\","
-                        << t.n << ',' << num(t.h_mm) << ',' << num(x.seconds) << ','
-                        << (err ? num(*err) : "") << ',' << (it ? num(*it) : "") << '\n';
+                        << t.n << ',' << format_g(t.h_mm, 8) << ',' << format_g(x.seconds, 8) << ','
+                        << (err ? format_g(*err, 8) : "") << ',' << (it ? format_g(*it, 8) : "")
+                        << '\n';
                 }
             }
         write_with_provenance(a.csv, csv.str(),

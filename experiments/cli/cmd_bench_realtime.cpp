@@ -17,6 +17,7 @@
 #include "core/atomic_file.h"
 #include "core/build_info.h"
 #include "core/config.h"
+#include "core/format.h"
 #include "core/image_compare.h"
 #include "core/material.h"
 #include "core/provenance.h"
@@ -93,12 +94,6 @@ Scene one_light(const Scene& scene) {
         break;
     }
     return s;
-}
-
-std::string num(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.6g", v);
-    return buf;
 }
 
 #if SSSLAB_HAVE_GL
@@ -435,8 +430,8 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
         o << "scene,width,height,backend,threads,pass,ms,floor_ms\n";
         for (const Row& r : rows)
             o << r.scene << ',' << width << ',' << height << ',' << r.backend << ',' << r.threads
-              << ',' << r.pass << ',' << num(r.ms) << ','
-              << (r.floor_ms >= 0 ? num(r.floor_ms) : "") << '\n';
+              << ',' << r.pass << ',' << format_g(r.ms, 6) << ','
+              << (r.floor_ms >= 0 ? format_g(r.floor_ms, 6) : "") << '\n';
         write_with_provenance(csv, o.str(),
                               "ssslab bench --realtime: provenance of " + csv +
                                   " (timings depend on the machine: see host_threads)");

@@ -3,6 +3,7 @@
 // and materials in world units, for another renderer to rebuild the scene (scripts/cycles_render.py
 // does so in Blender's Cycles for the side-by-side of README "Ground truth against Cycles").
 #include "core/atomic_file.h"
+#include "core/format.h"
 #include "core/hash.h"
 #include "core/provenance.h"
 #include "core/scene.h"
@@ -38,16 +39,11 @@ std::string json_string(const std::string& s) {
     return o + "\"";
 }
 
-std::string num(double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.17g", v);
-    return b;
-}
 std::string vec(const Vec3& v) {
-    return "[" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + "]";
+    return "[" + format_g(v.x, 17) + ", " + format_g(v.y, 17) + ", " + format_g(v.z, 17) + "]";
 }
 std::string rgb(const std::array<double, 3>& v) {
-    return "[" + num(v[0]) + ", " + num(v[1]) + ", " + num(v[2]) + "]";
+    return "[" + format_g(v[0], 17) + ", " + format_g(v[1], 17) + ", " + format_g(v[2], 17) + "]";
 }
 
 // The scene in world units, for other renderers: media coefficients per world unit, the
@@ -56,9 +52,10 @@ std::string rgb(const std::array<double, 3>& v) {
 std::string scene_json(const Scene& s) {
     std::ostringstream o;
     const SceneCamera& c = s.camera;
-    o << "{\n  \"scene\": " << json_string(s.name) << ",\n  \"unit_mm\": " << num(s.unit_mm)
+    o << "{\n  \"scene\": " << json_string(s.name)
+      << ",\n  \"unit_mm\": " << format_g(s.unit_mm, 17)
       << ",\n  \"camera\": {\"position\": " << vec(c.position) << ", \"target\": " << vec(c.target)
-      << ", \"up\": " << vec(c.up) << ", \"fov_y_deg\": " << num(c.fov_y_deg)
+      << ", \"up\": " << vec(c.up) << ", \"fov_y_deg\": " << format_g(c.fov_y_deg, 17)
       << ", \"width\": " << c.width << ", \"height\": " << c.height << "},\n  \"lights\": [";
     for (std::size_t i = 0; i < s.lights.size(); ++i) {
         const SceneLight& l = s.lights[i];
@@ -66,13 +63,14 @@ std::string scene_json(const Scene& s) {
         switch (l.type) {
             case LightType::kDirectional:
                 o << ", \"direction\": " << vec(l.direction) << ", \"irradiance\": " << rgb(l.color)
-                  << ", \"angular_radius_deg\": " << num(l.angular_radius_deg);
+                  << ", \"angular_radius_deg\": " << format_g(l.angular_radius_deg, 17);
                 break;
             case LightType::kPoint:
                 o << ", \"position\": " << vec(l.position) << ", \"intensity\": " << rgb(l.color);
                 break;
             case LightType::kSphere:
-                o << ", \"position\": " << vec(l.position) << ", \"radius\": " << num(l.radius)
+                o << ", \"position\": " << vec(l.position)
+                  << ", \"radius\": " << format_g(l.radius, 17)
                   << ", \"radiance\": " << rgb(l.color);
                 break;
             case LightType::kEnvironment:
@@ -98,7 +96,8 @@ std::string scene_json(const Scene& s) {
         }
         o << ", \"type\": \"medium\", \"sigma_a_per_unit\": " << rgb(sa)
           << ", \"sigma_s_per_unit\": " << rgb(ss) << ", \"g\": " << rgb(m.medium.g)
-          << ", \"eta\": " << num(m.medium.eta) << ", \"ggx_alpha\": " << num(m.roughness);
+          << ", \"eta\": " << format_g(m.medium.eta, 17)
+          << ", \"ggx_alpha\": " << format_g(m.roughness, 17);
         if (!m.density_file.empty())
             o << ", \"density_vdb\": " << json_string(m.density_file)
               << ", \"density_grid\": " << json_string(m.density_grid);

@@ -1,6 +1,7 @@
 #include "experiments/cli/common.h"
 
 #include "core/error.h"
+#include "core/format.h"
 #include "core/provenance.h"
 
 #include <unistd.h>
@@ -129,12 +130,6 @@ std::string shown(const std::string& s) {
     return "'" + s + "'";
 }
 
-std::string format_number(double x) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%g", x);
-    return buf;
-}
-
 CLI::Validator integer_check(std::int64_t lo, std::int64_t hi, const std::string& what,
                              const std::string& desc) {
     return CLI::Validator(
@@ -169,8 +164,8 @@ CLI::Validator nonnegative_integer() {
 }
 
 CLI::Validator number_in(double lo, double hi, bool open) {
-    const std::string range = std::string(open ? "(" : "[") + format_number(lo) + ", " +
-                              format_number(hi) + (open ? ")" : "]");
+    const std::string range = std::string(open ? "(" : "[") + format_g(lo, 6) + ", " +
+                              format_g(hi, 6) + (open ? ")" : "]");
     const std::string what = "a number in " + range;
     return CLI::Validator(
         [lo, hi, open, what](std::string& s) -> std::string {

@@ -2,6 +2,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/provenance.h"
 #include "core/stats.h"
 
@@ -14,16 +15,6 @@
 namespace ssslab::runner {
 
 namespace fs = std::filesystem;
-
-namespace {
-
-std::string g17(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    return buf;
-}
-
-}  // namespace
 
 fs::path baseline_path(const ExperimentRun& r, const CheckOptions& o) {
     return o.baselines / (r.exp.name + (r.quick ? ".quick" : "") + ".toml");
@@ -38,11 +29,11 @@ std::string baseline_toml(const ExperimentRun& r) {
        << "\"\ndate = \"" << utc_now() << "\"\n";
     for (const auto& m : r.metrics) {
         os << "\n[[metric]]\nname = \"" << m.name << "\"\nunit = \"" << m.unit
-           << "\"\nvalue = " << g17(m.value);
+           << "\"\nvalue = " << format_g(m.value, 17);
         if (m.stochastic)
-            os << "\nse = " << g17(m.se) << "\nkind = \"stochastic\"\n";
+            os << "\nse = " << format_g(m.se, 17) << "\nkind = \"stochastic\"\n";
         else
-            os << "\nkind = \"deterministic\"\ntolerance = " << g17(m.tolerance) << "\n";
+            os << "\nkind = \"deterministic\"\ntolerance = " << format_g(m.tolerance, 17) << "\n";
     }
     return os.str();
 }

@@ -1,6 +1,7 @@
 #include "experiments/runner/engines.h"
 
 #include "approx/diffusion.h"
+#include "core/format.h"
 #include "core/stats.h"
 #include "experiments/runner/report.h"
 #include "volpath/pencil.h"
@@ -14,12 +15,6 @@
 namespace ssslab::runner {
 
 namespace {
-
-std::string fmt(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.10g", v);
-    return buf;
-}
 
 // ---- display bins: the engines' bins merged into at most ~160 annuli --------------------------
 
@@ -156,15 +151,16 @@ std::string pencil_csv(const MaterialPencil& p, const std::vector<std::string>& 
     os << "\n";
     const double mm = 10.0, per_mm2 = 0.01;
     for (size_t k = 0; k < p.bins.size(); ++k) {
-        os << fmt(p.bins.lo(k) * mm) << ',' << fmt(p.bins.hi(k) * mm) << ','
-           << fmt(0.5 * (p.bins.lo(k) + p.bins.hi(k)) * mm);
+        os << format_g(p.bins.lo(k) * mm, 10) << ',' << format_g(p.bins.hi(k) * mm, 10) << ','
+           << format_g(0.5 * (p.bins.lo(k) + p.bins.hi(k)) * mm, 10);
         for (int c = 0; c < 3; ++c) {
             const Reference& f = p.ref[static_cast<size_t>(c)];
-            os << ',' << fmt(f.mcml[k] * per_mm2) << ',' << fmt(f.mcml_se[k] * per_mm2) << ','
-               << fmt(f.all[k] * per_mm2) << ',' << fmt(f.all_se[k] * per_mm2) << ','
-               << fmt(f.ms[k] * per_mm2);
+            os << ',' << format_g(f.mcml[k] * per_mm2, 10) << ','
+               << format_g(f.mcml_se[k] * per_mm2, 10) << ',' << format_g(f.all[k] * per_mm2, 10)
+               << ',' << format_g(f.all_se[k] * per_mm2, 10) << ','
+               << format_g(f.ms[k] * per_mm2, 10);
             for (const auto& m : p.models[static_cast<size_t>(c)])
-                os << ',' << (m.error.empty() ? fmt(m.v[k] * per_mm2) : "");
+                os << ',' << (m.error.empty() ? format_g(m.v[k] * per_mm2, 10) : "");
         }
         os << "\n";
     }
@@ -225,10 +221,10 @@ std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
             for (int c = 0; c < 3; ++c) {
                 const CrossRow x = crossval(vp, mc, c, e.crossval.max_rel_se);
                 sum << m.label << ',' << 1 + m.medium.lower_layers.size() << ',' << kChannelNames[c]
-                    << ',' << x.bins << ',' << fmt(x.chi2) << ',' << fmt(x.p) << ','
-                    << fmt(x.max_abs_z) << ',' << fmt(mc.rd_total[c]) << ','
-                    << fmt(mc.rd_total_se[c]) << ',' << fmt(vp.rd_total[c]) << ','
-                    << fmt(vp.rd_total_se[c]) << ',' << fmt(x.rd_z) << ',';
+                    << ',' << x.bins << ',' << format_g(x.chi2, 10) << ',' << format_g(x.p, 10)
+                    << ',' << format_g(x.max_abs_z, 10) << ',' << format_g(mc.rd_total[c], 10)
+                    << ',' << format_g(mc.rd_total_se[c], 10) << ',' << format_g(vp.rd_total[c], 10)
+                    << ',' << format_g(vp.rd_total_se[c], 10) << ',' << format_g(x.rd_z, 10) << ',';
                 // Transmittance of finite slabs (empty for half-spaces).
                 if (m.medium.total_thickness_cm() < 1e8) {
                     const mcml::RunResult& mr = find_node(r, m.label, c, "main")->result;
@@ -236,15 +232,16 @@ std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
                     const volpath::PencilLayout VL{vn->grid.nr};
                     const double tm = mr.mean(mr.layout.tt), tm_se = mr.se[mr.layout.tt];
                     const double tv = vn->vresult.mean[VL.tt()], tv_se = vn->vresult.se[VL.tt()];
-                    sum << fmt(tm) << ',' << fmt(tm_se) << ',' << fmt(tv) << ',' << fmt(tv_se)
-                        << ',' << fmt((tv - tm) / std::hypot(tm_se, tv_se)) << ',';
+                    sum << format_g(tm, 10) << ',' << format_g(tm_se, 10) << ',' << format_g(tv, 10)
+                        << ',' << format_g(tv_se, 10) << ','
+                        << format_g((tv - tm) / std::hypot(tm_se, tv_se), 10) << ',';
                 } else {
                     sum << ",,,,,";
                 }
                 sum << e.volpath.mode << '\n';
                 for (const auto& [rm, z] : x.z)
-                    zs << m.label << ',' << kChannelNames[c] << ',' << fmt(rm) << ',' << fmt(z)
-                       << '\n';
+                    zs << m.label << ',' << kChannelNames[c] << ',' << format_g(rm, 10) << ','
+                       << format_g(z, 10) << '\n';
             }
         }
         files["crossval/summary.csv"] = sum.str();
@@ -277,9 +274,11 @@ std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
                         m.label + "." + kChannelNames[c] + ".model." + mc.name + ".";
                     metrics.push_back({mb + "Rd", "1", mc.rd, 0, false, 1e-9});
                     metrics.push_back({mb + "rel_l2_rR", "1", l2, 0, false, 1e-4});
-                    err << ',' << fmt(l2) << ',' << fmt(rel_l2_rr(p.bins, plus, ref)) << ','
-                        << fmt(mc.rd) << ',' << fmt(rd) << ',' << fmt(rd_se) << ','
-                        << fmt((mc.rd - rd) / rd) << ',' << fmt((mc.rd - rd) / rd_se) << ",\n";
+                    err << ',' << format_g(l2, 10) << ','
+                        << format_g(rel_l2_rr(p.bins, plus, ref), 10) << ',' << format_g(mc.rd, 10)
+                        << ',' << format_g(rd, 10) << ',' << format_g(rd_se, 10) << ','
+                        << format_g((mc.rd - rd) / rd, 10) << ','
+                        << format_g((mc.rd - rd) / rd_se, 10) << ",\n";
                 }
             }
         }
@@ -297,16 +296,18 @@ std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
                     if (++b < 2 || !(p.value > 0)) continue;
                     const double rel = p.se / p.value;
                     os << "mcml," << kChannelNames[c] << ',' << b << ',' << p.samples << ','
-                       << fmt(p.seconds) << ',' << fmt(p.value) << ',' << fmt(p.se) << ','
-                       << fmt(rel) << ',' << fmt(1 / (rel * rel * p.seconds)) << '\n';
+                       << format_g(p.seconds, 10) << ',' << format_g(p.value, 10) << ','
+                       << format_g(p.se, 10) << ',' << format_g(rel, 10) << ','
+                       << format_g(1 / (rel * rel * p.seconds), 10) << '\n';
                 }
                 b = 0;
                 for (const auto& p : vp->vresult.history) {
                     if (++b < 2 || !(p.value > 0)) continue;
                     const double rel = p.se / p.value;
                     os << "volpath " << e.volpath.mode << ',' << kChannelNames[c] << ',' << b << ','
-                       << p.samples << ',' << fmt(p.seconds) << ',' << fmt(p.value) << ','
-                       << fmt(p.se) << ',' << fmt(rel) << ',' << fmt(1 / (rel * rel * p.seconds))
+                       << p.samples << ',' << format_g(p.seconds, 10) << ','
+                       << format_g(p.value, 10) << ',' << format_g(p.se, 10) << ','
+                       << format_g(rel, 10) << ',' << format_g(1 / (rel * rel * p.seconds), 10)
                        << '\n';
                 }
             }

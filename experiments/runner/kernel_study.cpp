@@ -4,6 +4,7 @@
 #include "approx/kernel2d.h"
 #include "approx/models.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/image_io.h"
 #include "core/material.h"
 
@@ -20,12 +21,6 @@ namespace ssslab::runner {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::string num(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.8g", v);
-    return buf;
-}
 
 // [Freude14 Table 6.3]: kernel-space RMS, normalised so that the table's largest entry
 // (Ketchup, manual, B) is 1.
@@ -81,12 +76,6 @@ double mass_radius(const std::vector<double>& half, double h, double fraction) {
     return static_cast<double>(half.size()) * h;
 }
 
-std::string num17(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    return buf;
-}
-
 std::string png_of(const approx::ImageRGB& img) {
     return encode_png_rgb8(img.width, img.height, approx::to_rgb8(img, true));
 }
@@ -105,8 +94,8 @@ std::string KernelStudySpec::canonical() const {
     for (const auto& m : models) os << m.cache_text() << ";";
     os << "\nsignals=";
     for (auto s : signals) os << approx::signal_name(s) << ",";
-    os << "\ntaps=" << taps << "\njitter=" << num(jitter) << "\npixels=" << pixels
-       << "\nfov_mm=" << num(fov_mm) << "\nrefine=" << refine << "\nimages=" << images
+    os << "\ntaps=" << taps << "\njitter=" << format_g(jitter, 8) << "\npixels=" << pixels
+       << "\nfov_mm=" << format_g(fov_mm, 8) << "\nrefine=" << refine << "\nimages=" << images
        << "\nkernel_plots=" << kernel_plots << "\nsingular_values=" << singular_values
        << "\ncompare=" << compare << "\nreference=" << reference << "\n";
     return os.str();
@@ -208,7 +197,7 @@ std::map<std::string, std::string> run_kernel_study(
     std::ostringstream metrics;
     metrics << "metric,unit,value,tolerance\n";
     auto metric = [&](const std::string& name, const char* unit, double v) {
-        metrics << name << ',' << unit << ',' << num17(v) << ",1e-4\n";
+        metrics << name << ',' << unit << ',' << format_g(v, 17) << ",1e-4\n";
     };
     const auto t0 = Clock::now();
 
@@ -225,7 +214,7 @@ std::map<std::string, std::string> run_kernel_study(
                     approx::singular_values(*k[static_cast<size_t>(c)], spec.singular_values);
                 for (size_t i = 0; i < sv.size(); ++i) {
                     singular << material << ',' << kChannelNames[c] << ',' << i + 1 << ','
-                             << num(sv[i]) << ',' << num(sv[i] / sv[0]) << '\n';
+                             << format_g(sv[i], 8) << ',' << format_g(sv[i] / sv[0], 8) << '\n';
                     if (i > 0 && i < 6)
                         metric(spec.name + "." + material + "." + kChannelNames[c] + ".sigma" +
                                    std::to_string(i + 1) + "_over_sigma1",
@@ -275,14 +264,15 @@ std::map<std::string, std::string> run_kernel_study(
                     approx::kernel_errors(*k[static_cast<size_t>(c)], x.kernel);
                 auto info = [&](const char* key) {
                     const auto it = x.info.find(key);
-                    return it == x.info.end() ? std::string() : num(it->second);
+                    return it == x.info.end() ? std::string() : format_g(it->second, 8);
                 };
                 kernels << material << ',' << kChannelNames[c] << ",\"" << m.text << "\","
                         << m.label() << ',' << x.kernel.rank() << ',' << x.kernel.convolutions_1d()
-                        << ',' << num(x.build_seconds) << ',' << num(e.rms) << ',' << num(e.max_abs)
-                        << ',' << num(x.kernel.sum()) << ',' << num(e.l1_error) << ','
-                        << num(e.radial_asymmetry) << ',' << info("constraint_error") << ','
-                        << info("iterations") << ',' << grid.n << ',' << num(grid.h_mm) << '\n';
+                        << ',' << format_g(x.build_seconds, 8) << ',' << format_g(e.rms, 8) << ','
+                        << format_g(e.max_abs, 8) << ',' << format_g(x.kernel.sum(), 8) << ','
+                        << format_g(e.l1_error, 8) << ',' << format_g(e.radial_asymmetry, 8) << ','
+                        << info("constraint_error") << ',' << info("iterations") << ',' << grid.n
+                        << ',' << format_g(grid.h_mm, 8) << '\n';
                 const std::string col = thesis_column(m);
                 if (!col.empty()) for_compare.push_back({material, col, m.text, c, e.rms});
                 Aggregate& g = agg[static_cast<size_t>(&m - spec.models.data())];
@@ -310,11 +300,11 @@ std::map<std::string, std::string> run_kernel_study(
                 auto emit = [&](const std::string& model, auto value) {
                     for (int i = 0; i < n; i += stride) {
                         slices << material << ',' << kChannelNames[c] << ',' << model << ",axis,"
-                               << num(std::sqrt((i + 0.5) * (i + 0.5) + 0.25) * h) << ','
-                               << num(value(i, 0) / area) << '\n';
+                               << format_g(std::sqrt((i + 0.5) * (i + 0.5) + 0.25) * h, 8) << ','
+                               << format_g(value(i, 0) / area, 8) << '\n';
                         slices << material << ',' << kChannelNames[c] << ',' << model
-                               << ",diagonal," << num((i + 0.5) * std::sqrt(2.0) * h) << ','
-                               << num(value(i, i) / area) << '\n';
+                               << ",diagonal," << format_g((i + 0.5) * std::sqrt(2.0) * h, 8) << ','
+                               << format_g(value(i, i) / area, 8) << '\n';
                     }
                 };
                 emit("ground_truth", [&](int i, int j) { return kc.at(i, j); });
@@ -351,10 +341,10 @@ std::map<std::string, std::string> run_kernel_study(
                     for (int c = 0; c < 3; ++c)
                         image << material << ',' << approx::signal_name(sig) << ",\"" << m.text
                               << "\"," << m.label() << ',' << sampling << ',' << kChannelNames[c]
-                              << ',' << num(ie.rms[static_cast<size_t>(c)]) << ','
-                              << num(ie.max_abs[static_cast<size_t>(c)]) << ','
-                              << num(ie.energy[static_cast<size_t>(c)]) << ',' << num(fov) << ','
-                              << spec.pixels << '\n';
+                              << ',' << format_g(ie.rms[static_cast<size_t>(c)], 8) << ','
+                              << format_g(ie.max_abs[static_cast<size_t>(c)], 8) << ','
+                              << format_g(ie.energy[static_cast<size_t>(c)], 8) << ','
+                              << format_g(fov, 8) << ',' << spec.pixels << '\n';
                 };
                 for (size_t mi = 0; mi < built.size(); ++mi) {
                     const auto& m = spec.models[mi];
@@ -382,8 +372,8 @@ std::map<std::string, std::string> run_kernel_study(
                         for (int c = 0; c < 3; ++c)
                             versus << material << ',' << approx::signal_name(sig) << ",\""
                                    << spec.models[mi].text << "\",\"" << spec.reference << "\","
-                                   << kChannelNames[c] << ',' << num(ie.rms[static_cast<size_t>(c)])
-                                   << '\n';
+                                   << kChannelNames[c] << ','
+                                   << format_g(ie.rms[static_cast<size_t>(c)], 8) << '\n';
                     }
                 }
                 if (spec.images) {
@@ -438,10 +428,12 @@ std::map<std::string, std::string> run_kernel_study(
             const double ours = s1 != svd1.end() && s1->second > 0 ? x.rms / s1->second : -1;
             const double theirs = thesis > 0 && t1 > 0 ? thesis / t1 : -1;
             cmp << x.material << ",\"" << x.spec << "\"," << x.column << ','
-                << kChannelNames[x.channel] << ',' << num(x.rms) << ',' << num(norm) << ','
-                << (thesis >= 0 ? num(thesis) : "") << ',' << (thesis > 0 ? num(norm / thesis) : "")
-                << ',' << (ours >= 0 ? num(ours) : "") << ',' << (theirs >= 0 ? num(theirs) : "")
-                << ',' << (ours >= 0 && theirs > 0 ? num(ours / theirs) : "") << '\n';
+                << kChannelNames[x.channel] << ',' << format_g(x.rms, 8) << ',' << format_g(norm, 8)
+                << ',' << (thesis >= 0 ? format_g(thesis, 8) : "") << ','
+                << (thesis > 0 ? format_g(norm / thesis, 8) : "") << ','
+                << (ours >= 0 ? format_g(ours, 8) : "") << ','
+                << (theirs >= 0 ? format_g(theirs, 8) : "") << ','
+                << (ours >= 0 && theirs > 0 ? format_g(ours / theirs, 8) : "") << '\n';
         }
         files["comparison.csv"] = cmp.str();
     }
@@ -456,10 +448,12 @@ std::map<std::string, std::string> run_kernel_study(
             pr << '"' << m.text << "\"," << m.label() << ',' << g.rank << ','
                << (g.rank == 1 ? "yes" : "no") << ',' << g.convolutions << ','
                << (m.closed_form() ? "yes" : "no") << ','
-               << num(g.kernels ? g.build_sum / g.kernels : 0) << ',' << num(g.build_max) << ','
-               << num(g.kernels ? g.kernel_rms_sum / g.kernels : 0) << ',' << num(g.l1_error_max)
-               << ',' << (g.images ? num(g.image_rms_sum / g.images) : "") << ','
-               << (g.taps_images ? num(g.taps_rms_sum / g.taps_images) : "") << '\n';
+               << format_g(g.kernels ? g.build_sum / g.kernels : 0, 8) << ','
+               << format_g(g.build_max, 8) << ','
+               << format_g(g.kernels ? g.kernel_rms_sum / g.kernels : 0, 8) << ','
+               << format_g(g.l1_error_max, 8) << ','
+               << (g.images ? format_g(g.image_rms_sum / g.images, 8) : "") << ','
+               << (g.taps_images ? format_g(g.taps_rms_sum / g.taps_images, 8) : "") << '\n';
         }
         files["properties.csv"] = pr.str();
     }

@@ -6,6 +6,7 @@
 #include "core/build_info.h"
 #include "core/error.h"
 #include "core/film_image.h"
+#include "core/format.h"
 #include "core/image_compare.h"
 #include "core/image_io.h"
 #include "core/scene.h"
@@ -516,11 +517,13 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         auto approximation_row = [&](const std::string& method, const std::string& family,
                                      const Score& sc, double seconds) {
             const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
-            approximations << scene.name << "," << csv_field(method) << "," << num(vp_rgb.rms)
-                           << "," << num(vp_rgb.rms_se) << "," << num(seconds) << "," << family
-                           << "," << num(ref_rgb.rms) << "," << num(ref_rgb.rms_se) << ","
-                           << num(sc.bias_vs_volpath.value) << "," << num(sc.bias_vs_volpath.se)
-                           << "," << num(sc.bias_vs_reference.value) << "\n";
+            approximations << scene.name << "," << csv_field(method) << ","
+                           << format_g(vp_rgb.rms, 6) << "," << format_g(vp_rgb.rms_se, 6) << ","
+                           << format_g(seconds, 6) << "," << family << ","
+                           << format_g(ref_rgb.rms, 6) << "," << format_g(ref_rgb.rms_se, 6) << ","
+                           << format_g(sc.bias_vs_volpath.value, 6) << ","
+                           << format_g(sc.bias_vs_volpath.se, 6) << ","
+                           << format_g(sc.bias_vs_reference.value, 6) << "\n";
         };
         {
             Score sc;
@@ -535,9 +538,10 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         auto sweep_row = [&](const Score& sc) {
             const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
             sweep << scene.name << "," << csv_field(sc.model) << "," << sc.label << "," << sc.taps
-                  << "," << num(sc.jitter) << "," << (sc.rotate ? 1 : 0) << "," << num(ref_rgb.rms)
-                  << "," << num(ref_rgb.rms_se) << "," << num(vp_rgb.rms) << ","
-                  << num(vp_rgb.rms_se) << "," << num(sc.sss_ms) << "," << num(sc.frame_ms) << "\n";
+                  << "," << format_g(sc.jitter, 6) << "," << (sc.rotate ? 1 : 0) << ","
+                  << format_g(ref_rgb.rms, 6) << "," << format_g(ref_rgb.rms_se, 6) << ","
+                  << format_g(vp_rgb.rms, 6) << "," << format_g(vp_rgb.rms_se, 6) << ","
+                  << format_g(sc.sss_ms, 6) << "," << format_g(sc.frame_ms, 6) << "\n";
         };
         for (const Score& sc : ss.scores) sweep_row(sc);
         // Variants of the sweep: (jitter, rotate).
@@ -581,17 +585,19 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                 std::string variant = approx::munoz_label(mo);  // spaces for commas
                 std::replace(variant.begin(), variant.end(), ',', ' ');
                 munoz << scene.name << "," << variant << "," << mo.layers << ","
-                      << num(mo.threshold) << "," << mo.downsample << ","
-                      << approx::split_name(mo.split) << "," << num(ref_rgb.rms) << ","
-                      << num(ref_rgb.rms_se) << "," << num(vp_rgb.rms) << "," << num(vp_rgb.rms_se)
-                      << "," << num(mf.stats.seconds) << "," << mf.stats.convolutions << ","
-                      << mf.stats.skipped_threshold << "," << mf.stats.skipped_invisible << ","
+                      << format_g(mo.threshold, 6) << "," << mo.downsample << ","
+                      << approx::split_name(mo.split) << "," << format_g(ref_rgb.rms, 6) << ","
+                      << format_g(ref_rgb.rms_se, 6) << "," << format_g(vp_rgb.rms, 6) << ","
+                      << format_g(vp_rgb.rms_se, 6) << "," << format_g(mf.stats.seconds, 6) << ","
+                      << mf.stats.convolutions << "," << mf.stats.skipped_threshold << ","
+                      << mf.stats.skipped_invisible << ","
                       << (mo.kernel == approx::MunozKernel::point ? "point" : "average") << ","
                       << (mo.skip_invisible ? "skip" : "all") << "\n";
                 // Under regression like the models: scene.munoz_l<layers>_t<t>_d<downsample>
                 // [_linear][_all][_avg].rms_vs_volpath, the RGB error.
                 const std::string id = "munoz_l" + std::to_string(mo.layers) + "_t" +
-                                       num(mo.threshold) + "_d" + std::to_string(mo.downsample) +
+                                       format_g(mo.threshold, 6) + "_d" +
+                                       std::to_string(mo.downsample) +
                                        (mo.split == approx::MunozSplit::equal
                                             ? std::string()
                                             : std::string("_") + approx::split_name(mo.split)) +
@@ -637,19 +643,21 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                 const double seconds = cloud.seconds() + jf.query_seconds;
                 std::string variant = approx::jensen_buhler_label(jo);
                 std::replace(variant.begin(), variant.end(), ',', ' ');
-                jb << scene.name << "," << num(jo.max_solid_angle) << "," << cloud.points << ","
-                   << num(vp_rgb.rms) << "," << num(vp_rgb.rms_se) << "," << num(seconds) << ","
-                   << variant << "," << num(jo.points_per_mm2) << ","
-                   << (jo.conservative ? "box" : "centre") << "," << jo.profile << ","
-                   << num(ref_rgb.rms) << "," << num(ref_rgb.rms_se) << "," << num(jf.query_seconds)
-                   << "," << num(cloud.seconds()) << "," << num(cloud.light_seconds) << ","
+                jb << scene.name << "," << format_g(jo.max_solid_angle, 6) << "," << cloud.points
+                   << "," << format_g(vp_rgb.rms, 6) << "," << format_g(vp_rgb.rms_se, 6) << ","
+                   << format_g(seconds, 6) << "," << variant << ","
+                   << format_g(jo.points_per_mm2, 6) << "," << (jo.conservative ? "box" : "centre")
+                   << "," << jo.profile << "," << format_g(ref_rgb.rms, 6) << ","
+                   << format_g(ref_rgb.rms_se, 6) << "," << format_g(jf.query_seconds, 6) << ","
+                   << format_g(cloud.seconds(), 6) << "," << format_g(cloud.light_seconds, 6) << ","
                    << jf.stats.nodes_visited << "," << jf.stats.clusters << "," << jf.stats.points
                    << "\n";
                 // Under regression: scene.jb_d<density>_t<threshold>[_box][_<profile>]
                 // [_c<candidates>].rms_vs_volpath, the RGB error.
                 const std::string id =
-                    "jb_d" + num(jo.points_per_mm2) + "_t" + num(jo.max_solid_angle) +
-                    (jo.conservative ? "_box" : "") + (jo.profile == "mc" ? "" : "_" + jo.profile) +
+                    "jb_d" + format_g(jo.points_per_mm2, 6) + "_t" +
+                    format_g(jo.max_solid_angle, 6) + (jo.conservative ? "_box" : "") +
+                    (jo.profile == "mc" ? "" : "_" + jo.profile) +
                     (jo.candidates_per_point == 5 ? ""
                                                   : "_c" + std::to_string(jo.candidates_per_point));
                 metrics.push_back({scene.name + "." + metric_label(id) + ".rms_vs_volpath", "1",
@@ -680,13 +688,13 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
             const NoiseCorrectedRms total =
                 score(first.image, "radiance", vp->image, "radiance", mask, c, vp_dof);
             decomposition << scene.name << "," << kChannelNames[c] << "," << mask.size() << ","
-                          << num(ss.signal[static_cast<size_t>(c)]) << ","
+                          << format_g(ss.signal[static_cast<size_t>(c)], 6) << ","
                           << csv_field(ss.scores[0].model) << ","
-                          << num(ss.scores[0].vs_reference[static_cast<size_t>(c)].rms) << ","
-                          << num(scr.rms) << "," << num(scr.rms_se) << "," << num(spec_err.rms)
-                          << "," << num(spec_err.rms_se) << "," << num(surf.rms) << ","
-                          << num(surf.rms_se) << "," << num(total.rms) << "," << num(total.rms_se)
-                          << "\n";
+                          << format_g(ss.scores[0].vs_reference[static_cast<size_t>(c)].rms, 6)
+                          << "," << format_g(scr.rms, 6) << "," << format_g(scr.rms_se, 6) << ","
+                          << format_g(spec_err.rms, 6) << "," << format_g(spec_err.rms_se, 6) << ","
+                          << format_g(surf.rms, 6) << "," << format_g(surf.rms_se, 6) << ","
+                          << format_g(total.rms, 6) << "," << format_g(total.rms_se, 6) << "\n";
             const std::string base = scene.name + ".reference." + kChannelNames[c];
             metrics.push_back({base + ".rms_vs_volpath", "1", scr.rms, scr.rms_se, true, 0});
         }
@@ -798,13 +806,13 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                     const double sig = ss.signal[static_cast<size_t>(c)];
                     table << ss.scene << "," << csv_field(sc.model) << "," << sc.label << ","
                           << sc.taps << "," << kChannelNames[c] << "," << ss.pixels << ","
-                          << num(r.rms) << "," << num(r.rms_se) << ","
-                          << num(table_max > 0 ? r.rms / table_max : 0) << ","
-                          << num(scene_max > 0 ? r.rms / scene_max : 0) << ","
-                          << num(sig > 0 ? r.rms / sig : 0) << "," << num(v.rms) << ","
-                          << num(v.rms_se) << "," << num(v.raw_rms) << "," << num(v.noise_rms)
-                          << "," << num(sc.sss_ms) << "," << num(sc.frame_ms) << ","
-                          << num(sc.build_s) << "\n";
+                          << format_g(r.rms, 6) << "," << format_g(r.rms_se, 6) << ","
+                          << format_g(table_max > 0 ? r.rms / table_max : 0, 6) << ","
+                          << format_g(scene_max > 0 ? r.rms / scene_max : 0, 6) << ","
+                          << format_g(sig > 0 ? r.rms / sig : 0, 6) << "," << format_g(v.rms, 6)
+                          << "," << format_g(v.rms_se, 6) << "," << format_g(v.raw_rms, 6) << ","
+                          << format_g(v.noise_rms, 6) << "," << format_g(sc.sss_ms, 6) << ","
+                          << format_g(sc.frame_ms, 6) << "," << format_g(sc.build_s, 6) << "\n";
                     sum_norm += table_max > 0 ? r.rms / table_max : 0;
                     const std::string base =
                         ss.scene + "." + metric_label(sc.label) + "." + kChannelNames[c];
@@ -821,12 +829,12 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                     for (int c = 0; c < 3; ++c)
                         ours_vs_thesis
                             << "<td>"
-                            << num(sc.vs_reference[static_cast<size_t>(c)].rms / table_max, 3)
+                            << format_g(sc.vs_reference[static_cast<size_t>(c)].rms / table_max, 3)
                             << "</td>";
-                    ours_vs_thesis << "<td><b>" << num(sum_norm, 3) << "</b></td><td>"
-                                   << num(t.r, 3) << "</td><td>" << num(t.g, 3) << "</td><td>"
-                                   << num(t.b, 3) << "</td><td><b>" << num(t.sum, 3)
-                                   << "</b></td></tr>\n";
+                    ours_vs_thesis << "<td><b>" << format_g(sum_norm, 3) << "</b></td><td>"
+                                   << format_g(t.r, 3) << "</td><td>" << format_g(t.g, 3)
+                                   << "</td><td>" << format_g(t.b, 3) << "</td><td><b>"
+                                   << format_g(t.sum, 3) << "</b></td></tr>\n";
                 }
         }
     }
@@ -864,7 +872,7 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                    "separability error), right against the path tracer (noise-corrected, error "
                    "bars +-1 standard error). A line per swept model through its tap counts "
                    "(points labelled by taps), solid without jitter, dashed with jitter "
-                << num(spec.jitter, 3)
+                << format_g(spec.jitter, 3)
                 << (spec.rotate ? ", dash-dotted with the pass axes rotated per pixel" : "")
                 << "; the table's models of one family at " << spec.taps
                 << " taps (SVD ranks, d'Eon's numbers of Gaussians) joined by a dotted line, "
@@ -971,10 +979,10 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                 "<th>B</th><th>sss ms</th><th>frame ms</th></tr>\n";
         for (const Score& sc : ss.scores) {
             html << "<tr><td class=\"l\"><code>" << esc(sc.model) << "</code></td>";
-            for (const auto& e : sc.vs_reference) html << "<td>" << num(e.rms, 3) << "</td>";
+            for (const auto& e : sc.vs_reference) html << "<td>" << format_g(e.rms, 3) << "</td>";
             for (const auto& e : sc.vs_volpath)
                 html << "<td>" << with_error(e.rms, e.rms_se) << "</td>";
-            html << "<td>" << num(sc.sss_ms, 3) << "</td><td>" << num(sc.frame_ms, 4)
+            html << "<td>" << format_g(sc.sss_ms, 3) << "</td><td>" << format_g(sc.frame_ms, 4)
                  << "</td></tr>\n";
         }
         html << "</table>\n";

@@ -3,6 +3,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/film_image.h"
+#include "core/format.h"
 #include "core/hash.h"
 #include "core/provenance.h"
 #include "core/scene.h"
@@ -25,16 +26,6 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* kKind = "render";
-
-// %.<digits>g, or with `fixed` %.<digits>f.
-std::string fmt(double v, int digits = 6, bool fixed = false) {
-    char b[64];
-    if (fixed)
-        std::snprintf(b, sizeof b, "%.*f", digits, v);
-    else
-        std::snprintf(b, sizeof b, "%.*g", digits, v);
-    return b;
-}
 
 struct RenderNode {
     std::string scene_path, role;  // role: "main" | "reference"
@@ -114,7 +105,7 @@ Rendered compute(const RenderNode& n, const RenderStudyContext& ctx, const Artif
                 l.pixels()[i * 3 + static_cast<size_t>(c)] = static_cast<float>(
                     s.mean[i * volpath::RenderLayout::kPerPixel + static_cast<size_t>(c)]);
         snaps +=
-            (snaps.empty() ? "" : ",") + std::to_string(s.samples) + ":" + fmt(s.seconds, 4, true);
+            (snaps.empty() ? "" : ",") + std::to_string(s.samples) + ":" + format_f(s.seconds, 4);
     }
     r.image.metadata()["ssslab.snapshots"] = snaps;
     r.image.metadata()["ssslab.rays"] = std::to_string(r.rays);
@@ -122,7 +113,7 @@ Rendered compute(const RenderNode& n, const RenderStudyContext& ctx, const Artif
     m << "[artifact]\nkind = \"render\"\nkey = \"" << n.key << "\"\nscene = \"" << n.scene.name
       << "\"\nrole = \"" << n.role << "\"\nengine = \"" << volpath::render_engine_version()
       << "\"\nseed = " << o.seed << "\nspp = " << r.spp << "\nrays = " << r.rays
-      << "\nseconds = " << fmt(r.seconds, 4, true)
+      << "\nseconds = " << format_f(r.seconds, 4)
       << "\nresumed = " << (r.run.resumed ? "true" : "false") << "\nrevision = \"" << git_revision()
       << "\"\ndate_utc = \"" << utc_now() << "\"\n";
     std::istringstream kt(n.key_text);
@@ -193,7 +184,7 @@ std::optional<Rendered> render_node(RenderNode& n, const RenderStudyContext& ctx
                     n.options.width, n.options.height,
                     n.options.budget.samples
                         ? (std::to_string(*n.options.budget.samples) + " spp").c_str()
-                        : (fmt(*n.options.budget.seconds) + " s").c_str());
+                        : (format_g(*n.options.budget.seconds, 6) + " s").c_str());
         std::fflush(stdout);
     }
     bool interrupted = false;
@@ -348,14 +339,15 @@ RenderStudyResult run_render_study(const RenderStudySpec& spec, const RenderStud
         const double mrays = R.seconds > 0 ? static_cast<double>(R.rays) / R.seconds * 1e-6 : 0;
         const double paths = R.seconds > 0 ? npix * static_cast<double>(R.spp) / R.seconds : 0;
         std::ostringstream row;
-        row << scene.name << "," << w << "," << h << "," << R.spp << "," << fmt(R.seconds) << ","
-            << (ctx.threads > 0 ? std::to_string(ctx.threads) : std::string("all")) << "," << R.rays
-            << "," << fmt(mrays) << "," << fmt(paths);
+        row << scene.name << "," << w << "," << h << "," << R.spp << "," << format_g(R.seconds, 6)
+            << "," << (ctx.threads > 0 ? std::to_string(ctx.threads) : std::string("all")) << ","
+            << R.rays << "," << format_g(mrays, 6) << "," << format_g(paths, 6);
         for (int c = 0; c < 3; ++c)
-            row << "," << fmt(mean[static_cast<size_t>(c)]) << ","
-                << fmt(se[static_cast<size_t>(c)]);
-        row << "," << fmt(image_rel_se) << "," << fmt(median_rel_se) << ","
-            << fmt(t_1pct(R.seconds, image_rel_se)) << "," << fmt(t_1pct(R.seconds, median_rel_se));
+            row << "," << format_g(mean[static_cast<size_t>(c)], 6) << ","
+                << format_g(se[static_cast<size_t>(c)], 6);
+        row << "," << format_g(image_rel_se, 6) << "," << format_g(median_rel_se, 6) << ","
+            << format_g(t_1pct(R.seconds, image_rel_se), 6) << ","
+            << format_g(t_1pct(R.seconds, median_rel_se), 6);
         std::string conv = "spp,seconds,rel_rmse,rel_rmse_corrected\n";
         if (done.size() > 1) {
             // The final image against the reference: volpath::measured_error (the image RMS
@@ -370,15 +362,16 @@ RenderStudyResult run_render_study(const RenderStudySpec& spec, const RenderStud
             };
             for (const auto& [spp, secs] : R.snapshots) {
                 const double e = rel_rms(R.image.layer(snapshot_layer(spp)), RL);
-                conv += std::to_string(spp) + "," + fmt(secs) + "," + fmt(e) + "," +
-                        fmt(corrected(e)) + "\n";
+                conv += std::to_string(spp) + "," + format_g(secs, 6) + "," + format_g(e, 6) + "," +
+                        format_g(corrected(e), 6) + "\n";
             }
-            conv += std::to_string(R.spp) + "," + fmt(R.seconds) + "," + fmt(me.rel_rmse) + "," +
-                    fmt(me.rel_rmse_corrected) + "\n";
-            row << "," << F.spp << "," << fmt(me.rel_rmse) << "," << fmt(ref_rel_se) << ","
-                << fmt(me.rel_rmse_corrected) << ","
-                << fmt(t_1pct(R.seconds, me.rel_rmse_corrected)) << "," << fmt(me.median_pixel)
-                << "," << fmt(me.z2_median_ratio) << "," << fmt(t_1pct(R.seconds, me.median_pixel));
+            conv += std::to_string(R.spp) + "," + format_g(R.seconds, 6) + "," +
+                    format_g(me.rel_rmse, 6) + "," + format_g(me.rel_rmse_corrected, 6) + "\n";
+            row << "," << F.spp << "," << format_g(me.rel_rmse, 6) << "," << format_g(ref_rel_se, 6)
+                << "," << format_g(me.rel_rmse_corrected, 6) << ","
+                << format_g(t_1pct(R.seconds, me.rel_rmse_corrected), 6) << ","
+                << format_g(me.median_pixel, 6) << "," << format_g(me.z2_median_ratio, 6) << ","
+                << format_g(t_1pct(R.seconds, me.median_pixel), 6);
             write_file_atomic(stage / "render" / (scene.name + "_convergence.csv"), conv);
         } else {
             row << ",,,,,,,,";
@@ -386,9 +379,10 @@ RenderStudyResult run_render_study(const RenderStudySpec& spec, const RenderStud
         summary << row.str() << "\n";
         table_rows += "<tr><td>" + esc(scene.name) + "</td><td>" + std::to_string(w) + " x " +
                       std::to_string(h) + "</td><td>" + std::to_string(R.spp) + "</td><td>" +
-                      fmt(R.seconds, 1, true) + "</td><td>" + fmt(mrays, 2, true) + "</td><td>" +
-                      fmt(image_rel_se, 3) + "</td><td>" + fmt(t_1pct(R.seconds, image_rel_se), 3) +
-                      "</td><td>" + fmt(t_1pct(R.seconds, median_rel_se), 3) + "</td></tr>\n";
+                      format_f(R.seconds, 1) + "</td><td>" + format_f(mrays, 2) + "</td><td>" +
+                      format_g(image_rel_se, 3) + "</td><td>" +
+                      format_g(t_1pct(R.seconds, image_rel_se), 3) + "</td><td>" +
+                      format_g(t_1pct(R.seconds, median_rel_se), 3) + "</td></tr>\n";
         html << "<figure><img src=\"render/" << esc(scene.name) << ".png\" alt=\""
              << esc(scene.name) << "\" style=\"max-width:256px\"><figcaption>" << esc(scene.name)
              << ", " << R.spp << " spp</figcaption></figure>\n";

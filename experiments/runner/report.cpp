@@ -1,5 +1,6 @@
 #include "experiments/runner/report.h"
 
+#include "core/format.h"
 #include "core/provenance.h"
 #include "experiments/runner/engines.h"
 #include "experiments/runner/kernel_study.h"
@@ -37,12 +38,6 @@ std::string esc(const std::string& s) {
         }
     }
     return o;
-}
-
-std::string num(double v, int digits) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-    return buf;
 }
 
 std::string csv_field(const std::string& v) {
@@ -155,7 +150,7 @@ std::string cell_num(const std::string& v, int digits = 4) {
     if (v.empty()) return "";
     char* end = nullptr;
     const double x = std::strtod(v.c_str(), &end);
-    return *end == '\0' ? num(x, digits) : esc(v);
+    return *end == '\0' ? format_g(x, digits) : esc(v);
 }
 
 // Rows grouped by a key with one value per channel: "key -> R, G, B".
@@ -197,7 +192,7 @@ void channel_table(std::ostringstream& os, const std::string& csv,
         os << "<tr>";
         for (const auto& kc : key_cells[key]) os << "<td class=\"l\">" << esc(kc) << "</td>";
         for (const auto& x : vals[key]) os << "<td>" << cell_num(x) << "</td>";
-        for (double x : sums[key]) os << "<td>" << num(x, 3) << "</td>";
+        for (double x : sums[key]) os << "<td>" << format_g(x, 3) << "</td>";
         os << "</tr>\n";
     }
     os << "</table></div>\n";
@@ -320,7 +315,7 @@ void study_section(std::ostringstream& os, const StudyOutput& so, const PlotResu
 }  // namespace
 
 std::string with_error(double value, double se) {
-    if (!(se > 0) || !std::isfinite(se)) return num(value);
+    if (!(se > 0) || !std::isfinite(se)) return format_g(value, 6);
     const int digits = std::max(0, 1 - static_cast<int>(std::floor(std::log10(se))));
     char buf[80];
     if (digits > 12)
@@ -413,13 +408,13 @@ void metrics_tables(std::ostringstream& os, const std::vector<Metric>& ms) {
     auto value = [](const Metric* m) {
         if (!m) return std::string("<td></td>");
         return "<td title=\"" + esc(m->name) + "\">" +
-               (m->stochastic ? with_error(m->value, m->se) : num(m->value, 10)) + "</td>";
+               (m->stochastic ? with_error(m->value, m->se) : format_g(m->value, 10)) + "</td>";
     };
     auto kind = [](const std::vector<const Metric*>& v) {
         std::vector<std::string> kinds;
         for (const Metric* m : v) {
-            std::string k =
-                m->stochastic ? "&plusmn; standard error" : "rel. tol. " + num(m->tolerance);
+            std::string k = m->stochastic ? "&plusmn; standard error"
+                                          : "rel. tol. " + format_g(m->tolerance, 6);
             if (std::find(kinds.begin(), kinds.end(), k) == kinds.end()) kinds.push_back(k);
         }
         std::string o;
@@ -527,14 +522,15 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
     os << "<h1>" << esc(e.title) << "</h1>\n<p class=\"meta\">experiment <code>" << esc(e.name)
        << "</code> from <code>" << esc(e.source) << "</code> &middot; "
        << (r.quick ? "<b>--quick</b> (budgets &times; " +
-                         num(!e.materials.empty() ? e.mcml.quick_factor
-                             : e.realtime.enabled ? e.realtime.quick_factor
-                             : e.render.enabled   ? e.render.quick_factor
-                                                  : e.stiff.quick_factor) +
+                         format_g(!e.materials.empty() ? e.mcml.quick_factor
+                                  : e.realtime.enabled ? e.realtime.quick_factor
+                                  : e.render.enabled   ? e.render.quick_factor
+                                                       : e.stiff.quick_factor,
+                                  6) +
                          ")"
                    : "full budgets")
        << " &middot; seed " << e.seed << " &middot; revision <code>" << esc(git_revision())
-       << "</code> &middot; " << esc(utc_now()) << " &middot; " << num(r.seconds, 3)
+       << "</code> &middot; " << esc(utc_now()) << " &middot; " << format_g(r.seconds, 3)
        << " s &middot; " << r.computed << " artifacts computed, " << r.reused
        << " reused from the cache</p>\n";
     const std::string head = os.str();
@@ -581,12 +577,12 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
                                      "</a>"
                                : "")
                    << "</td><td class=\"ch\">" << kChannelNames[ch] << "</td><td>"
-                   << num(m.medium.mfp_cm(ch) * 10, 4) << "</td><td>" << num(m.medium.albedo(ch), 6)
-                   << "</td><td>" << num(x.rsp, 4) << "</td><td>"
-                   << with_error(x.mean(L.rd), x.se[L.rd]) << "</td><td>"
+                   << format_g(m.medium.mfp_cm(ch) * 10, 4) << "</td><td>"
+                   << format_g(m.medium.albedo(ch), 6) << "</td><td>" << format_g(x.rsp, 4)
+                   << "</td><td>" << with_error(x.mean(L.rd), x.se[L.rd]) << "</td><td>"
                    << with_error(x.mean(beyond), x.se[beyond]) << "</td><td>"
                    << with_error(x.mean(L.a), x.se[L.a]) << "</td><td>" << x.photons << "</td><td>"
-                   << n->grid.nr << " &times; " << num(n->grid.dr_cm * 10, 4)
+                   << n->grid.nr << " &times; " << format_g(n->grid.dr_cm * 10, 4)
                    << " mm</td><td class=\"l\"><a href=\"#a-" << n->key.substr(0, 16) << "\"><code>"
                    << n->key.substr(0, 12) << "</code></a></td></tr>\n";
             }
@@ -599,7 +595,7 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
               "estimate and standard error after every batch, and their whole profile after 4, "
               "8, 16, &hellip; batches; each is compared with an independent reference run (other "
               "random streams) of "
-           << num(e.convergence.reference_factor) << " times the photons. Tables: ";
+           << format_g(e.convergence.reference_factor, 6) << " times the photons. Tables: ";
         for (const auto& m : e.convergence.materials)
             os << "<a href=\"convergence/" << esc(m) << "_history.csv\">" << esc(m)
                << "_history.csv</a>, <a href=\"convergence/" << esc(m) << "_snapshots.csv\">"
@@ -687,7 +683,7 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
         cell(0);
         cell(1);
         os << "<td>" << p.photons << "</td><td>" << p.batches << "</td><td>" << p.seed
-           << "</td><td>" << num(p.seconds, 4) << "</td>";
+           << "</td><td>" << format_g(p.seconds, 4) << "</td>";
         cell(2);
         cell(3);
         os << "<td class=\"l w\">" << esc(date) << "</td><td class=\"l\">"

@@ -39,8 +39,6 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c);
 std::string esc(const std::string& s);
 /// The figures of one report section.
 void figures(std::ostringstream& os, const PlotResult& p, const std::string& section);
-/// A number as %.<digits>g.
-std::string num(double v, int digits = 6);
 /// A CSV field: quoted where it holds a comma, a quote or a line break (model specs and
 /// messages do: "manual:table_a1,unit=mm"); line breaks become spaces.
 std::string csv_field(const std::string& v);

@@ -5,6 +5,7 @@
 #include "core/crash_point.h"
 #include "core/distributed.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/hash.h"
 #include "core/provenance.h"
 #include "experiments/runner/engines.h"
@@ -182,12 +183,6 @@ Provenance read_manifest(const fs::path& file, const std::string& key) {
     return pv;
 }
 
-std::string fmt(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.10g", v);
-    return buf;
-}
-
 // ---- tables ---------------------------------------------------------------------------------
 
 std::string summary_csv(const ExperimentRun& r) {
@@ -199,12 +194,14 @@ std::string summary_csv(const ExperimentRun& r) {
             const ChannelNode* n = find_node(r, m.label, c, "main");
             const mcml::RunResult& x = n->result;
             const auto& L = x.layout;
-            os << m.label << ',' << kChannelNames[c] << ',' << fmt(m.medium.mfp_cm(c) * 10) << ','
-               << fmt(m.medium.albedo(c)) << ',' << fmt(x.rsp) << ',' << fmt(x.mean(L.rd)) << ','
-               << fmt(x.se[L.rd]) << ',' << fmt(x.mean(L.rd_r + static_cast<size_t>(L.nr))) << ','
-               << fmt(x.se[L.rd_r + static_cast<size_t>(L.nr)]) << ',' << fmt(x.mean(L.a)) << ','
-               << fmt(x.se[L.a]) << ',' << fmt(x.mean(L.tt)) << ',' << fmt(x.se[L.tt]) << ','
-               << x.photons << ',' << fmt(n->grid.dr_cm * 10) << ',' << n->grid.nr << '\n';
+            os << m.label << ',' << kChannelNames[c] << ',' << format_g(m.medium.mfp_cm(c) * 10, 10)
+               << ',' << format_g(m.medium.albedo(c), 10) << ',' << format_g(x.rsp, 10) << ','
+               << format_g(x.mean(L.rd), 10) << ',' << format_g(x.se[L.rd], 10) << ','
+               << format_g(x.mean(L.rd_r + static_cast<size_t>(L.nr)), 10) << ','
+               << format_g(x.se[L.rd_r + static_cast<size_t>(L.nr)], 10) << ','
+               << format_g(x.mean(L.a), 10) << ',' << format_g(x.se[L.a], 10) << ','
+               << format_g(x.mean(L.tt), 10) << ',' << format_g(x.se[L.tt], 10) << ',' << x.photons
+               << ',' << format_g(n->grid.dr_cm * 10, 10) << ',' << n->grid.nr << '\n';
         }
     return os.str();
 }
@@ -217,9 +214,10 @@ std::string artifacts_csv(const ExperimentRun& r) {
         const Provenance& p = n.provenance;
         os << n.material << ',' << kChannelNames[n.channel] << ',' << n.role << ',' << n.key << ','
            << p.engine << ',' << p.engine_version << ",\"" << p.budget << "\"," << p.photons << ','
-           << p.batches << ',' << p.seed << ',' << fmt(p.seconds) << ',' << p.stop_reason << ','
-           << p.revision << ',' << p.date_utc << ',' << (p.computed_now ? "computed" : "reused")
-           << ',' << (p.resumed ? "resumed" : "fresh") << '\n';
+           << p.batches << ',' << p.seed << ',' << format_g(p.seconds, 10) << ',' << p.stop_reason
+           << ',' << p.revision << ',' << p.date_utc << ','
+           << (p.computed_now ? "computed" : "reused") << ',' << (p.resumed ? "resumed" : "fresh")
+           << '\n';
     }
     return os.str();
 }
@@ -263,8 +261,9 @@ std::string metrics_csv(const std::vector<Metric>& ms) {
     std::ostringstream os;
     os << "metric,unit,value,se,kind,tolerance\n";
     for (const auto& m : ms)
-        os << m.name << ',' << m.unit << ',' << fmt(m.value) << ',' << fmt(m.se) << ','
-           << (m.stochastic ? "stochastic" : "deterministic") << ',' << fmt(m.tolerance) << '\n';
+        os << m.name << ',' << m.unit << ',' << format_g(m.value, 10) << ',' << format_g(m.se, 10)
+           << ',' << (m.stochastic ? "stochastic" : "deterministic") << ','
+           << format_g(m.tolerance, 10) << '\n';
     return os.str();
 }
 
@@ -299,11 +298,12 @@ void convergence_tables(const ExperimentRun& r, const std::string& material, std
             ++b;
             if (b < 2) continue;  // a standard error needs two batches
             const double rel_se = p.se / p.value;
-            h << kChannelNames[c] << ',' << b << ',' << p.samples << ',' << fmt(p.seconds) << ','
-              << fmt(p.value) << ',' << fmt(p.se) << ',' << fmt(rd_ref) << ',' << fmt(rd_ref_se)
-              << ',' << fmt(std::fabs(p.value - rd_ref)) << ','
-              << fmt(std::fabs(p.value - rd_ref) / rd_ref) << ',' << fmt(rel_se) << ','
-              << fmt(1.0 / (rel_se * rel_se * p.seconds)) << '\n';
+            h << kChannelNames[c] << ',' << b << ',' << p.samples << ',' << format_g(p.seconds, 10)
+              << ',' << format_g(p.value, 10) << ',' << format_g(p.se, 10) << ','
+              << format_g(rd_ref, 10) << ',' << format_g(rd_ref_se, 10) << ','
+              << format_g(std::fabs(p.value - rd_ref), 10) << ','
+              << format_g(std::fabs(p.value - rd_ref) / rd_ref, 10) << ',' << format_g(rel_se, 10)
+              << ',' << format_g(1.0 / (rel_se * rel_se * p.seconds), 10) << '\n';
         }
         // The reference's own noise: the distance between two independent estimates with the
         // reference's standard errors, sqrt(sum se^2 / sum ref^2).
@@ -316,9 +316,9 @@ void convergence_tables(const ExperimentRun& r, const std::string& material, std
         const double floor = den > 0 ? std::sqrt(num / den) : 0.0;
         for (const auto& sn : m.snapshots)
             s << kChannelNames[c] << ',' << sn.batches << ',' << sn.samples << ','
-              << fmt(sn.seconds) << ','
-              << fmt(rel_l2(sn.mean, f.values, f.layout.rd_r, f.layout.nr)) << ',' << fmt(floor)
-              << '\n';
+              << format_g(sn.seconds, 10) << ','
+              << format_g(rel_l2(sn.mean, f.values, f.layout.rd_r, f.layout.nr), 10) << ','
+              << format_g(floor, 10) << '\n';
     }
     history = h.str();
     snapshots = s.str();

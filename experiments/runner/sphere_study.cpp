@@ -1,6 +1,7 @@
 #include "experiments/runner/sphere_study.h"
 
 #include "core/error.h"
+#include "core/format.h"
 #include "core/material.h"
 #include "core/provenance.h"
 #include "experiments/runner/profile_models.h"
@@ -27,20 +28,15 @@ std::array<double, 3> direction(double deg) {
     return {std::sin(a), 0.0, std::cos(a)};
 }
 
-std::string fmt(double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.9g", v);
-    return buf;
-}
-
 // A number from the command line or the config (same key semantics as ConfigTable::number).
 double flag_or_config(ConfigTable& t, const std::string& key, const std::optional<double>& flag,
                       const std::string& flag_name, double fallback, const Range& range) {
     const double v = t.number(key, fallback, range);
     if (!flag) return v;
     if (!std::isfinite(*flag) || !range.contains(*flag))
-        throw InputError({kCommandLine, 0, 0}, flag_name,
-                         "expected a number in " + range.describe() + ", got " + fmt(*flag));
+        throw InputError(
+            {kCommandLine, 0, 0}, flag_name,
+            "expected a number in " + range.describe() + ", got " + format_g(*flag, 9));
     t.record(key, *flag);
     return *flag;
 }
@@ -117,7 +113,8 @@ void check_same_camera(const volpath::SphereScene& sc, const approx::SphereView&
         }
     if (!(worst < 1e-9))
         throw std::logic_error("sphere: the analytic image's camera differs from volpath's by " +
-                               fmt(worst) + " R (approx::resolve_view vs volpath::sphere_camera)");
+                               format_g(worst, 9) +
+                               " R (approx::resolve_view vs volpath::sphere_camera)");
 }
 
 // Model against volpath over the beta bins: relative L2 errors (zone-area weighted) over the lit
@@ -224,7 +221,7 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
                              "give the radius either with --radius-mm or in [sphere], not both");
         if (!std::isfinite(*a.radius_mm) || !(*a.radius_mm > 0))
             throw InputError({kCommandLine, 0, 0}, "--radius-mm",
-                             "expected a finite radius > 0 [mm], got " + fmt(*a.radius_mm));
+                             "expected a finite radius > 0 [mm], got " + format_g(*a.radius_mm, 9));
         sc.radius_cm = *a.radius_mm / 10.0;
         sp.record("radius_mm", *a.radius_mm);
     } else if (auto r = optional_length_cm(sp, "radius", Range::positive())) {
@@ -377,7 +374,7 @@ SphereStudy run_sphere_study(SphereJob& job, volpath::SphereOptions so,
         for (const auto& n : job.models) list += (list.empty() ? "" : ",") + n;
         img.metadata()["ssslab.models"] = list;
         img.metadata()["ssslab.material"] = sc.medium.name;
-        img.metadata()["ssslab.radius_cm"] = fmt(sc.radius_cm);
+        img.metadata()["ssslab.radius_cm"] = format_g(sc.radius_cm, 9);
         img.metadata()["ssslab.entry"] = approx::to_string(job.integration.entry);
     }
 
@@ -443,16 +440,19 @@ SphereStudy run_sphere_study(SphereJob& job, volpath::SphereOptions so,
     csv += "\n";
     for (int j = 0; j < sc.beta_bins; ++j) {
         const size_t jj = static_cast<size_t>(j);
-        csv += fmt(run.beta_edge(j) * 180.0 / kPi) + "," + fmt(run.beta_edge(j + 1) * 180.0 / kPi);
+        csv += format_g(run.beta_edge(j) * 180.0 / kPi, 9) + "," +
+               format_g(run.beta_edge(j + 1) * 180.0 / kPi, 9);
         for (int ch = 0; ch < 3; ++ch) {
             const size_t c3 = static_cast<size_t>(ch);
             const double v = bins_mc[c3][jj], se = bins_se[c3][jj];
-            csv += "," + fmt(v) + "," + fmt(se) + "," + fmt(run.exitance_single[c3][jj]) + "," +
-                   fmt(run.exitance_single_se[c3][jj]);
+            csv += "," + format_g(v, 9) + "," + format_g(se, 9) + "," +
+                   format_g(run.exitance_single[c3][jj], 9) + "," +
+                   format_g(run.exitance_single_se[c3][jj], 9);
             for (size_t k = 0; k < job.models.size(); ++k) {
                 const double m = tables[k][c3].bin_mean[jj];
                 const double ref = reference(k, c3)[jj];
-                csv += "," + fmt(m) + "," + (se > 0 ? fmt((m - ref) / se) : std::string("nan"));
+                csv += "," + format_g(m, 9) + "," +
+                       (se > 0 ? format_g((m - ref) / se, 9) : std::string("nan"));
             }
         }
         csv += "\n";

@@ -7,6 +7,7 @@
 #include "approx/separable.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/material.h"
 #include "core/profile.h"
 #include "core/scene.h"
@@ -117,13 +118,16 @@ std::vector<Case> media_cases() {
     v.push_back(
         make_case("albedo", "1-1e-6, half-space 1e5 cm", 1 - 1e-6, kBaseG, kBaseEta, 1e5, 1));
     for (double g : {-0.999999, -0.99, 0.0, 0.99, 0.999999})
-        v.push_back(make_case("g", num(g), kBaseAlbedo, g, kBaseEta, kBaseThickness, 1));
+        v.push_back(make_case("g", format_g(g, 6), kBaseAlbedo, g, kBaseEta, kBaseThickness, 1));
     for (double eta : {0.5, 0.8, 1.0, 1.33, 2.0, 2.5})
-        v.push_back(make_case("eta", num(eta), kBaseAlbedo, kBaseG, eta, kBaseThickness, 1));
+        v.push_back(
+            make_case("eta", format_g(eta, 6), kBaseAlbedo, kBaseG, eta, kBaseThickness, 1));
     for (double s : {1e-7, 1e-3, 1e3, 1e5})
-        v.push_back(make_case("scale", num(s), kBaseAlbedo, kBaseG, kBaseEta, kBaseThickness, s));
+        v.push_back(
+            make_case("scale", format_g(s, 6), kBaseAlbedo, kBaseG, kBaseEta, kBaseThickness, s));
     for (double t : {1e-7, 1e-3, 1e5})
-        v.push_back(make_case("thickness", num(t) + " cm", kBaseAlbedo, kBaseG, kBaseEta, t, 1));
+        v.push_back(
+            make_case("thickness", format_g(t, 6) + " cm", kBaseAlbedo, kBaseG, kBaseEta, t, 1));
     return v;
 }
 
@@ -613,11 +617,12 @@ std::string sweep_csv(const std::vector<Row>& rows) {
     for (const Row& r : rows)
         os << csv_field(r.engine) << "," << csv_field(r.axis) << "," << csv_field(r.value) << ","
            << csv_field(r.quantity) << "," << csv_field(test_name(r.test)) << ","
-           << num(r.estimate, 10) << "," << num(r.se, 4) << "," << num(r.expected, 10) << ","
-           << num(r.expected_se, 4) << "," << num(r.upper, 4) << "," << num(r.allowance, 3) << ","
-           << num(r.z, 3) << "," << r.nonfinite << "," << r.out_of_range << "," << num(r.seconds, 3)
-           << "," << (r.ended ? 1 : 0) << "," << (r.refused ? 1 : 0) << "," << (r.pass ? 1 : 0)
-           << "," << csv_field(r.note) << "\n";
+           << format_g(r.estimate, 10) << "," << format_g(r.se, 4) << ","
+           << format_g(r.expected, 10) << "," << format_g(r.expected_se, 4) << ","
+           << format_g(r.upper, 4) << "," << format_g(r.allowance, 3) << "," << format_g(r.z, 3)
+           << "," << r.nonfinite << "," << r.out_of_range << "," << format_g(r.seconds, 3) << ","
+           << (r.ended ? 1 : 0) << "," << (r.refused ? 1 : 0) << "," << (r.pass ? 1 : 0) << ","
+           << csv_field(r.note) << "\n";
     return os.str();
 }
 
@@ -724,7 +729,8 @@ StiffStudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyCo
     sum << "engine,axis,checks,passed,refused,nonfinite,worst_abs_z,longest_seconds\n";
     for (const auto& [k, x] : sums)
         sum << k.first << "," << k.second << "," << x.checks << "," << x.passed << "," << x.refused
-            << "," << x.nonfinite << "," << num(x.worst_z, 3) << "," << num(x.longest, 3) << "\n";
+            << "," << x.nonfinite << "," << format_g(x.worst_z, 3) << "," << format_g(x.longest, 3)
+            << "\n";
     const std::string sweep = sweep_csv(s.rows);
     write_file_atomic(stage / "stiff" / "sweep.csv", sweep);
     write_file_atomic(stage / "stiff" / "summary.csv", sum.str());
@@ -746,10 +752,10 @@ StiffStudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyCo
       << " refused with a message; " << s.photons << " photons per Monte Carlo run, " << s.spp
       << " samples per pixel per furnace render. A check passes when nothing it produced is NaN "
          "or Inf, the run ended by its budget (not by the time cap of "
-      << num(spec.seconds_cap)
+      << format_g(spec.seconds_cap, 6)
       << " s), and its energy agrees with physics (z-tests at "
          "family-wise alpha "
-      << num(spec.alpha)
+      << format_g(spec.alpha, 6)
       << ", Sidak). See the header of experiments/runner/stiff_study.h for "
          "what each check compares with.</p>\n";
     csv_table(h, sum.str(), "Per engine and axis (stiff/summary.csv)");
@@ -757,9 +763,9 @@ StiffStudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyCo
     for (const Row& r : s.rows)
         if (!r.refused && !r.pass)
             failing += r.engine + "," + r.axis + "," + csv_field(r.value) + "," +
-                       csv_field(r.quantity) + "," + num(r.estimate) + "," + num(r.se, 3) + "," +
-                       num(r.expected) + "," + num(r.z, 3) + "," + std::to_string(r.nonfinite) +
-                       "," + csv_field(r.note) + "\n";
+                       csv_field(r.quantity) + "," + format_g(r.estimate, 6) + "," +
+                       format_g(r.se, 3) + "," + format_g(r.expected, 6) + "," + format_g(r.z, 3) +
+                       "," + std::to_string(r.nonfinite) + "," + csv_field(r.note) + "\n";
     if (res.failed) csv_table(h, failing, "Failed checks");
     std::string refusals = "engine,axis,value,message\n";
     for (const Row& r : s.rows)
