@@ -632,7 +632,7 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
     std::map<std::string, std::string> engine_files;
     if (r.exp.crossval.enabled || r.exp.pencil.enabled || r.exp.efficiency.enabled) {
         ContentKey key("engine-tables");
-        key.add("version", "engine-tables-1")
+        key.add("version", "engine-tables-2")  // 2: rel_l2_rR with its standard error
             .add("crossval", r.exp.crossval.enabled)
             .add("max_rel_se", r.exp.crossval.max_rel_se)
             .add("volpath_mode", r.exp.volpath.mode);
