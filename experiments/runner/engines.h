@@ -25,8 +25,8 @@ namespace ssslab::runner {
 /// (relative to results/<name>/) -> content, and their metrics for `ssslab check` appended to
 /// `metrics`: the path tracer's total diffuse reflectance and its single-scattering part per
 /// material and channel (stochastic), each model's total (deterministic, analytic) and its
-/// relative L2 error of r R(r) against the path tracer (deterministic given the seeds). Needs
-/// executed nodes.
+/// relative L2 error of r R(r) against the path tracer (stochastic: its standard error is what
+/// the reference's noise gives it). Needs executed nodes.
 std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
                                                  std::vector<Metric>& metrics);
 
