@@ -8,7 +8,6 @@
 
 #include <cmath>
 #include <functional>
-#include <sstream>
 #include <stdexcept>
 
 namespace ssslab::approx {

@@ -14,7 +14,6 @@
 #include <cmath>
 #include <limits>
 #include <queue>
-#include <sstream>
 #include <stdexcept>
 
 namespace ssslab::approx {

@@ -83,10 +83,6 @@ const char* engine_version() {
     return kEngineVersion;
 }
 
-std::int64_t default_batch_photons(const SampleBudget& budget, std::int64_t run_photons) {
-    return default_batch_samples(budget, run_photons);
-}
-
 std::string checkpoint_fingerprint(const RunSpec& run, const EngineOptions& o,
                                    std::int64_t batch_photons) {
     // Everything the tallies depend on, by name (the photon budget may change between a run
@@ -122,7 +118,7 @@ RunResult run_default(const RunSpec& run, const EngineOptions& opt) {
     const TallyLayout& layout = res.layout;
     res.rsp = specular_reflectance(run.layers);
     res.batch_photons =
-        opt.batch_photons > 0 ? opt.batch_photons : default_batch_photons(opt.budget, run.photons);
+        opt.batch_photons > 0 ? opt.batch_photons : default_batch_samples(opt.budget, run.photons);
 
     BatchRunOptions bo;
     opt.apply(bo);
@@ -168,7 +164,7 @@ RunResult run_compat(const RunSpec& run, Ran3& rng, const SampleBudget& budget,
     res.rsp = specular_reflectance(run.layers);
     res.threads = 1;
     const std::int64_t total = budget.samples ? *budget.samples : run.photons;
-    res.batch_photons = default_batch_photons(SampleBudget{total, {}, {}}, total);
+    res.batch_photons = default_batch_samples(SampleBudget{total, {}, {}}, total);
 
     RawTally global(layout), batch(layout);
     FullSink<true> sink(run, layout, global.v.data(), batch.v.data());

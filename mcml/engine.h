@@ -24,7 +24,7 @@ class Ran3;
 struct EngineOptions : RunControl {
     /// Stream domain: runs sharing a seed must differ here (e.g. the RGB channel).
     std::uint64_t stream = 0;
-    std::int64_t batch_photons = 0;  ///< 0: default_batch_photons()
+    std::int64_t batch_photons = 0;  ///< 0: default_batch_samples (core/batch_runner.h)
     TallyMode mode = TallyMode::kFull;
     /// Resume from and save to this file (empty: no checkpoints). A checkpoint is written every
     /// `checkpoint_seconds`, and when the run is interrupted; it is removed when the run ends.
@@ -41,12 +41,6 @@ struct EngineOptions : RunControl {
 /// Version of the default engine's numbers: it changes whenever a change alters what the engine
 /// produces for a given seed (it is part of every checkpoint and cache key).
 const char* engine_version();
-
-/// Batch size used when none is given: core's default_batch_samples (the rule every engine on
-/// the batch driver shares). It depends only on the photon budget (never on threads), so results
-/// are reproducible: N/1000 photons (at least 1000) for N >= 32000; N/32 below; 1000 when the
-/// budget is a time or an error.
-std::int64_t default_batch_photons(const SampleBudget& budget, std::int64_t run_photons);
 
 /// Result of a run, in raw (unscaled) tally units.
 struct RunResult {

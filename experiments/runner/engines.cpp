@@ -62,38 +62,35 @@ void merge(const RadialProfile& p, int c, const Bins& b, std::vector<double>& v,
     }
 }
 
-// Relative L2 distance of r R(r) over the display bins: sqrt(sum dr_k (r_k (m_k - ref_k))^2 /
-// sum dr_k (r_k ref_k)^2), r_k the bin's mid radius.
-double rel_l2_rr(const Bins& b, const std::vector<double>& m, const std::vector<double>& ref) {
+// Relative L2 distance of r R(r) over the display bins, E = sqrt(N / D) with
+// N = sum dr_k (r_k (m_k - ref_k))^2 and D = sum dr_k (r_k ref_k)^2, r_k the bin's mid radius;
+// with `ref_se`, also the standard error that the reference's noise gives E (the model curve has
+// none), by the delta method over independent bins: dE/dref_k = -dr_k r_k^2 ((m_k - ref_k) +
+// E^2 ref_k) / (E D). (The bins of one run are slightly correlated, which this neglects.)
+struct RelL2 {
+    double value = 0, se = 0;
+};
+RelL2 rel_l2_rr(const Bins& b, const std::vector<double>& m, const std::vector<double>& ref,
+                const std::vector<double>& ref_se = {}) {
+    auto width = [&](size_t k) { return b.hi(k) - b.lo(k); };
+    auto mid = [&](size_t k) { return 0.5 * (b.lo(k) + b.hi(k)); };
     double num = 0, den = 0;
     for (size_t k = 0; k < b.size(); ++k) {
-        const double w = b.hi(k) - b.lo(k), r = 0.5 * (b.lo(k) + b.hi(k));
-        num += w * std::pow(r * (m[k] - ref[k]), 2);
-        den += w * std::pow(r * ref[k], 2);
+        num += width(k) * std::pow(mid(k) * (m[k] - ref[k]), 2);
+        den += width(k) * std::pow(mid(k) * ref[k], 2);
     }
-    return den > 0 ? std::sqrt(num / den) : 0.0;
-}
-
-// The standard error that the reference's noise gives rel_l2_rr (the model curve has none), by the
-// delta method over independent bins: E = sqrt(N / D) with N = sum w (r (m - f))^2 and
-// D = sum w (r f)^2 has dE/df_k = -w r^2 ((m_k - f_k) + E^2 f_k) / (E D). (The bins of one run
-// are slightly correlated, which this neglects.)
-double rel_l2_rr_se(const Bins& b, const std::vector<double>& m, const std::vector<double>& ref,
-                    const std::vector<double>& ref_se) {
-    const double e = rel_l2_rr(b, m, ref);
-    double den = 0;
-    for (size_t k = 0; k < b.size(); ++k) {
-        const double w = b.hi(k) - b.lo(k), r = 0.5 * (b.lo(k) + b.hi(k));
-        den += w * std::pow(r * ref[k], 2);
-    }
-    if (!(e > 0) || !(den > 0)) return 0.0;
+    RelL2 out;
+    if (!(den > 0)) return out;
+    out.value = std::sqrt(num / den);
+    if (ref_se.empty() || !(out.value > 0)) return out;
     double var = 0;
     for (size_t k = 0; k < b.size(); ++k) {
-        const double w = b.hi(k) - b.lo(k), r = 0.5 * (b.lo(k) + b.hi(k));
-        const double d = -w * r * r * ((m[k] - ref[k]) + e * e * ref[k]) / (e * den);
+        const double d = -width(k) * mid(k) * mid(k) *
+                         ((m[k] - ref[k]) + out.value * out.value * ref[k]) / (out.value * den);
         var += d * d * ref_se[k] * ref_se[k];
     }
-    return std::sqrt(var);
+    out.se = std::sqrt(var);
+    return out;
 }
 
 // What every model is compared with, per material and channel.
@@ -291,18 +288,17 @@ std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
                     }
                     std::vector<double> plus(ref.size());
                     for (size_t k = 0; k < ref.size(); ++k) plus[k] = ref[k] + rse[k];
-                    const double l2 = rel_l2_rr(p.bins, mc.v, ref);
+                    const RelL2 l2 = rel_l2_rr(p.bins, mc.v, ref, rse);
                     const std::string mb =
                         m.label + "." + kChannelNames[c] + ".model." + mc.name + ".";
                     metrics.push_back({mb + "Rd", "1", mc.rd, 0, false, 1e-9});
                     // Stochastic: the reference is a Monte Carlo estimate, so a reseeded
                     // reference moves the error by about this standard error.
-                    metrics.push_back(
-                        {mb + "rel_l2_rR", "1", l2, rel_l2_rr_se(p.bins, mc.v, ref, rse), true, 0});
-                    err << ',' << format_g(l2, 10) << ','
-                        << format_g(rel_l2_rr(p.bins, plus, ref), 10) << ',' << format_g(mc.rd, 10)
-                        << ',' << format_g(rd, 10) << ',' << format_g(rd_se, 10) << ','
-                        << format_g((mc.rd - rd) / rd, 10) << ','
+                    metrics.push_back({mb + "rel_l2_rR", "1", l2.value, l2.se, true, 0});
+                    err << ',' << format_g(l2.value, 10) << ','
+                        << format_g(rel_l2_rr(p.bins, plus, ref).value, 10) << ','
+                        << format_g(mc.rd, 10) << ',' << format_g(rd, 10) << ','
+                        << format_g(rd_se, 10) << ',' << format_g((mc.rd - rd) / rd, 10) << ','
                         << format_g((mc.rd - rd) / rd_se, 10) << ",\n";
                 }
             }
