@@ -114,43 +114,49 @@ TEST(Render, WhiteFurnaceWithAMediumBehindADielectricBoundary) {
     // Albedo 1 inside, constant radiance outside: the radiance field is L everywhere outside,
     // whatever the boundary's index (radiance is compressed by eta^2 going in and restored
     // going out). Smooth boundaries with eta 1.5 and 1 (index-matched), chromatic scattering
-    // with a different g per channel (hero MIS), 4 mfp across.
-    for (const char* eta : {"1.5", "1.0"}) {
-        SCOPED_TRACE(eta);
-        const std::string m = std::string(
-                                  "[[materials]]\nname = \"m\"\nsigma_a_per_mm = 0\n"
-                                  "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = [0.0, 0.5, 0.9]\n"
-                                  "eta = ") +
-                              eta + "\n";
-        const Scene s = parse_scene(
-            scene_text(m, "[[lights]]\ntype = \"environment\"\nradiance = 1\n"), "t.toml", ".");
-        const RenderResult r = render(s, options(144));  // 48 batches: SEs that are nearly exact
-        const ImageLayer& L = r.image.layer("radiance");
-        const ImageLayer& E = r.image.layer("radiance.stderr");
-        // A z with the standard error of B batch means is Student-t with B - 1 degrees of
-        // freedom (heavier tails than the normal's at B = 48).
-        const double zc = testing::student_t_quantile(1 - 0.0005 / (24 * 24 * 3),
-                                                      static_cast<double>(r.run.batches - 1));
-        double worst = 0;
-        int tested = 0;
-        for (int y = 0; y < 24; ++y)
-            for (int x = 0; x < 24; ++x)
-                for (int c = 0; c < 3; ++c) {
-                    if (!(E.at(x, y, c) > 0)) {
-                        EXPECT_EQ(L.at(x, y, c), 1.0f) << x << "," << y;  // background
-                        continue;
+    // with a different g per channel (hero MIS), 4 mfp across; absorption analog and weighted
+    // (their spectral weights differ even where nothing is absorbed).
+    for (const Absorption absorption : {Absorption::kAnalog, Absorption::kWeighted})
+        for (const char* eta : {"1.5", "1.0"}) {
+            SCOPED_TRACE(std::string(eta) +
+                         (absorption == Absorption::kWeighted ? " weighted" : ""));
+            const std::string m = std::string(
+                                      "[[materials]]\nname = \"m\"\nsigma_a_per_mm = 0\n"
+                                      "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = [0.0, 0.5, 0.9]\n"
+                                      "eta = ") +
+                                  eta + "\n";
+            const Scene s = parse_scene(
+                scene_text(m, "[[lights]]\ntype = \"environment\"\nradiance = 1\n"), "t.toml", ".");
+            RenderOptions o = options(144);  // 48 batches: SEs that are nearly exact
+            o.absorption = absorption;
+            const RenderResult r = render(s, o);
+            const ImageLayer& L = r.image.layer("radiance");
+            const ImageLayer& E = r.image.layer("radiance.stderr");
+            // A z with the standard error of B batch means is Student-t with B - 1 degrees of
+            // freedom (heavier tails than the normal's at B = 48).
+            const double zc = testing::student_t_quantile(1 - 0.0005 / (24 * 24 * 3),
+                                                          static_cast<double>(r.run.batches - 1));
+            double worst = 0;
+            int tested = 0;
+            for (int y = 0; y < 24; ++y)
+                for (int x = 0; x < 24; ++x)
+                    for (int c = 0; c < 3; ++c) {
+                        if (!(E.at(x, y, c) > 0)) {
+                            EXPECT_EQ(L.at(x, y, c), 1.0f) << x << "," << y;  // background
+                            continue;
+                        }
+                        const double z = (L.at(x, y, c) - 1.0) / E.at(x, y, c);
+                        worst = std::max(worst, std::fabs(z));
+                        ++tested;
+                        EXPECT_LT(std::fabs(z), zc)
+                            << x << "," << y << " c" << c << " " << L.at(x, y, c);
                     }
-                    const double z = (L.at(x, y, c) - 1.0) / E.at(x, y, c);
-                    worst = std::max(worst, std::fabs(z));
-                    ++tested;
-                    EXPECT_LT(std::fabs(z), zc)
-                        << x << "," << y << " c" << c << " " << L.at(x, y, c);
-                }
-        std::printf("  [measured] furnace eta %s: %d pixel-channels, worst |z| %.2f\n", eta, tested,
-                    worst);
-        EXPECT_GT(tested, 200);
-        EXPECT_GT(r.image.layer("subsurface").at(12, 12, 1), 0.5f);
-    }
+            std::printf(
+                "  [measured] furnace eta %s, %s absorption: %d pixel-channels, worst |z| %.2f\n",
+                eta, absorption == Absorption::kWeighted ? "weighted" : "analog", tested, worst);
+            EXPECT_GT(tested, 200);
+            EXPECT_GT(r.image.layer("subsurface").at(12, 12, 1), 0.5f);
+        }
 }
 
 TEST(Render, IndexMatchedMediaAreLitThroughTheirBoundaryByNextEventEstimation) {
@@ -237,39 +243,46 @@ translate = [0, -200, 0]
 material = "m"
 )";
     const Scene s = parse_scene(text, "ss.toml", ".");
-    const RenderResult r = render(s, options(192));
-    const SceneCamera& cam = s.camera;
-    const Vec3 f = normalize(cam.target - cam.position), rt = normalize(cross(f, cam.up)),
-               up = cross(rt, f);
-    const double th = std::tan(0.5 * cam.fov_y_deg * std::numbers::pi / 180);
-    const ImageLayer& L = r.image.layer("radiance");
-    const ImageLayer& E = r.image.layer("radiance.stderr");
-    double chi2 = 0, worst = 0;
-    int n = 0;
-    for (int y = 0; y < 16; ++y)
-        for (int x = 0; x < 16; ++x)
-            for (int c = 0; c < 3; ++c) {
-                const double sa[3] = {1.0, 0.5, 2.0};
-                const double ratio = 1e-4 / (sa[c] + 1e-4);
-                double ref = 0;
-                for (int a = 0; a < 8; ++a)
-                    for (int b = 0; b < 8; ++b) {
-                        const double ndx = (2 * (x + (a + 0.5) / 8) / 16 - 1) * th;
-                        const double ndy = (1 - 2 * (y + (b + 0.5) / 8) / 16) * th;
-                        const Vec3 d = normalize(f + rt * ndx + up * ndy);
-                        ref += ratio * 10000 / (4 * std::numbers::pi) / (1 - d.y) / 64;
-                    }
-                const double z = (L.at(x, y, c) - ref) / E.at(x, y, c);
-                chi2 += z * z;
-                worst = std::max(worst, std::fabs(z));
-                ++n;
-            }
-    std::printf(
-        "  [measured] analytic single scattering: chi-square %.1f over %d pixel-channels, "
-        "worst |z| %.2f\n",
-        chi2, n, worst);
-    EXPECT_LT(chi2, testing::chi2_critical(n, 0.001));
-    EXPECT_LT(worst, testing::normal_quantile(1 - 0.0005 / n));
+    // The medium's albedo (1e-4) makes its walks analog; weighted absorption carries the albedo
+    // in the weights and does NEE at every collision with them.
+    for (const Absorption absorption : {Absorption::kAnalog, Absorption::kWeighted}) {
+        SCOPED_TRACE(absorption == Absorption::kWeighted ? "weighted" : "analog");
+        RenderOptions o = options(192);
+        o.absorption = absorption;
+        const RenderResult r = render(s, o);
+        const SceneCamera& cam = s.camera;
+        const Vec3 f = normalize(cam.target - cam.position), rt = normalize(cross(f, cam.up)),
+                   up = cross(rt, f);
+        const double th = std::tan(0.5 * cam.fov_y_deg * std::numbers::pi / 180);
+        const ImageLayer& L = r.image.layer("radiance");
+        const ImageLayer& E = r.image.layer("radiance.stderr");
+        double chi2 = 0, worst = 0;
+        int n = 0;
+        for (int y = 0; y < 16; ++y)
+            for (int x = 0; x < 16; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    const double sa[3] = {1.0, 0.5, 2.0};
+                    const double ratio = 1e-4 / (sa[c] + 1e-4);
+                    double ref = 0;
+                    for (int a = 0; a < 8; ++a)
+                        for (int b = 0; b < 8; ++b) {
+                            const double ndx = (2 * (x + (a + 0.5) / 8) / 16 - 1) * th;
+                            const double ndy = (1 - 2 * (y + (b + 0.5) / 8) / 16) * th;
+                            const Vec3 d = normalize(f + rt * ndx + up * ndy);
+                            ref += ratio * 10000 / (4 * std::numbers::pi) / (1 - d.y) / 64;
+                        }
+                    const double z = (L.at(x, y, c) - ref) / E.at(x, y, c);
+                    chi2 += z * z;
+                    worst = std::max(worst, std::fabs(z));
+                    ++n;
+                }
+        std::printf(
+            "  [measured] analytic single scattering, %s absorption: chi-square %.1f over %d "
+            "pixel-channels, worst |z| %.2f\n",
+            absorption == Absorption::kWeighted ? "weighted" : "analog", chi2, n, worst);
+        EXPECT_LT(chi2, testing::chi2_critical(n, 0.001));
+        EXPECT_LT(worst, testing::normal_quantile(1 - 0.0005 / n));
+    }
 }
 
 TEST(Render, BitIdenticalForAnyThreadCountAndResumable) {
@@ -594,39 +607,71 @@ roughness = 0.3
 TEST(Render, VolpathRender4EstimatorsAgreeWithTheLegacyOne) {
     // volpath-render-4 samples every light at each NEE and draws the first numbers of a path
     // from scrambled Sobol points; volpath-render-3's estimator (one light chosen uniformly,
-    // the stream alone) stays an option. All four combinations estimate the same image: their
-    // block means agree with the legacy image's by chi-square (batch standard errors on both
-    // sides), and the image means by z.
+    // the stream alone) stays an option, and so does volpath-render-4's analog absorption, which
+    // volpath-render-5 weights in media of albedo >= 0.9. Every combination estimates the same
+    // image: their block means agree with the legacy image's by chi-square (batch standard errors
+    // on both sides), and the image means by z.
     const Scene s = estimator_scene(32);
     RenderOptions legacy = options(192);
     legacy.nee_all_lights = false;
     legacy.sampler = RenderSampler::kIndependent;
     legacy.batch_spp = 3;
+    legacy.absorption = Absorption::kAnalog;
     legacy.seed = 5;
     const RenderResult ref = render(s, legacy);
     const ImageEstimate b = estimate_with_stderr(ref.image, "radiance", "legacy");
-    const double alpha = 0.001 / 9;  // three images, three channels
-    for (const bool all_lights : {false, true})
-        for (const RenderSampler sampler : {RenderSampler::kIndependent, RenderSampler::kSobol}) {
-            if (!all_lights && sampler == RenderSampler::kIndependent) continue;
-            RenderOptions o = options(192);
-            o.nee_all_lights = all_lights;
-            o.sampler = sampler;
-            o.seed = 6;
-            const RenderResult r = render(s, o);
-            const ImageComparison c =
-                compare_images(estimate_with_stderr(r.image, "radiance", "v4"), b, 4);
-            for (int ch = 0; ch < 3; ++ch) {
-                std::printf(
-                    "  [measured] all lights %d, sobol %d, channel %d: chi2 %.1f over %d "
-                    "blocks, p %.3g, image mean z %.2f\n",
-                    all_lights, sampler == RenderSampler::kSobol, ch, c.chi2[ch], c.dof[ch],
-                    c.p[ch], c.z_mean[ch]);
-                EXPECT_GT(c.p[ch], alpha) << all_lights << " " << ch;
-                EXPECT_LT(std::fabs(c.z_mean[ch]), testing::normal_quantile(1 - alpha / 2));
-            }
-            EXPECT_EQ(c.deterministic_differences, 0);
+    const double alpha = 0.001 / 12;  // four images, three channels
+    struct Variant {
+        bool all_lights;
+        RenderSampler sampler;
+        Absorption absorption;
+    };
+    // volpath-render-5's default weights the absorption of this medium (albedo 0.95-0.98);
+    // volpath-render-4's was analog.
+    for (const Variant v : {Variant{false, RenderSampler::kSobol, Absorption::kWeighted},
+                            Variant{true, RenderSampler::kIndependent, Absorption::kWeighted},
+                            Variant{true, RenderSampler::kSobol, Absorption::kWeighted},
+                            Variant{true, RenderSampler::kSobol, Absorption::kAnalog}}) {
+        RenderOptions o = options(192);
+        o.nee_all_lights = v.all_lights;
+        o.sampler = v.sampler;
+        o.seed = 6;
+        o.absorption = v.absorption;
+        const RenderResult r = render(s, o);
+        const ImageComparison c =
+            compare_images(estimate_with_stderr(r.image, "radiance", "new"), b, 4);
+        for (int ch = 0; ch < 3; ++ch) {
+            std::printf(
+                "  [measured] all lights %d, sobol %d, weighted %d, channel %d: chi2 %.1f "
+                "over %d blocks, p %.3g, image mean z %.2f\n",
+                v.all_lights, v.sampler == RenderSampler::kSobol,
+                v.absorption == Absorption::kWeighted, ch, c.chi2[ch], c.dof[ch], c.p[ch],
+                c.z_mean[ch]);
+            EXPECT_GT(c.p[ch], alpha) << v.all_lights << " " << ch;
+            EXPECT_LT(std::fabs(c.z_mean[ch]), testing::normal_quantile(1 - alpha / 2));
         }
+        EXPECT_EQ(c.deterministic_differences, 0);
+    }
+}
+
+TEST(Render, MediaOfHighAlbedoWeightTheirAbsorption) {
+    // Single-scattering albedos sigma_s / sigma_t of Freude14 Table 6.2's media (sigma_a,
+    // sigma_s' per mm): whole milk 0.9996, 0.9993, 0.9963 (weighted), ketchup 0.747, 0.067,
+    // 0.020 (analog), skin1 0.959, 0.838, 0.678 (analog: one channel below 0.9). A requested
+    // policy wins.
+    const double milk_s[3] = {25.5, 32.1, 37.7}, milk_t[3] = {25.511, 32.124, 37.84};
+    const double ketchup_s[3] = {1.8, 0.7, 0.3}, ketchup_t[3] = {2.41, 10.4, 14.8};
+    const double skin_s[3] = {7.4, 8.8, 10.1}, skin_t[3] = {7.72, 10.5, 14.9};
+    EXPECT_EQ(render_absorption(milk_s, milk_t, std::nullopt), Absorption::kWeighted);
+    EXPECT_EQ(render_absorption(ketchup_s, ketchup_t, std::nullopt), Absorption::kAnalog);
+    EXPECT_EQ(render_absorption(skin_s, skin_t, std::nullopt), Absorption::kAnalog);
+    EXPECT_EQ(render_absorption(milk_s, milk_t, Absorption::kAnalog), Absorption::kAnalog);
+    EXPECT_EQ(render_absorption(ketchup_s, ketchup_t, Absorption::kWeighted),
+              Absorption::kWeighted);
+    // The boundary: exactly 0.9 is weighted; a medium that does not scatter is analog.
+    const double edge_s[3] = {0.9, 0.9, 0.9}, edge_t[3] = {1, 1, 1}, zero[3] = {0, 0, 0};
+    EXPECT_EQ(render_absorption(edge_s, edge_t, std::nullopt), Absorption::kWeighted);
+    EXPECT_EQ(render_absorption(zero, edge_t, std::nullopt), Absorption::kAnalog);
 }
 
 TEST(Render, SobolPointsAndAllLightsLowerTheVarianceOfDirectLighting) {

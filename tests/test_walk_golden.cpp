@@ -184,9 +184,10 @@ TEST(WalkGolden, SphereEngineVolpathSphere3) {
 }
 
 // legacy: the estimator of volpath-render-3 (one light per NEE, the stream alone, batches of 3
-// spp), which volpath-render-4 keeps as options; otherwise the defaults.
-std::vector<double> render_pin(const std::string& material, const std::string& lights,
-                               bool legacy) {
+// spp), which volpath-render-4 keeps as options; otherwise the defaults. `absorption`: as the
+// pinned version had it (volpath-render-5 chooses per medium).
+std::vector<double> render_pin(const std::string& material, const std::string& lights, bool legacy,
+                               std::optional<Absorption> absorption = Absorption::kAnalog) {
     const std::string text = R"(
 [scene]
 name = "golden"
@@ -216,6 +217,7 @@ material = "floor"
     RenderOptions o;
     o.seed = 11;
     o.budget.samples = 12;
+    o.absorption = absorption;
     if (legacy) {
         o.nee_all_lights = false;
         o.sampler = RenderSampler::kIndependent;
@@ -252,8 +254,11 @@ TEST(WalkGolden, RenderEngineVolpathRender3) {
                    474.01936307189078, 109261.200065072, 393.32288467583055, 90046.734797785});
 }
 
+// volpath-render-5 is volpath-render-4 but for the absorption of its media's walks (weighted
+// where every albedo is at least 0.9, render_absorption): with analog absorption it draws the
+// same numbers, so these are volpath-render-4's pins (its agreement with the weighted walk:
+// Render.VolpathRender4EstimatorsAgreeWithTheLegacyOne).
 TEST(WalkGolden, RenderEngineVolpathRender4) {
-    ASSERT_STREQ(render_engine_version(), "volpath-render-4");
     expect_pinned("render rough boundary (v4)",
                   render_pin(kCoefficients + "eta = 1.3\nroughness = 0.3\n", kLights, false),
                   {27.855950336647098, 7406.6490545976976, 231.97887627451863, 64399.288648467897,
@@ -266,6 +271,25 @@ TEST(WalkGolden, RenderEngineVolpathRender4) {
                   render_pin(kCoefficients + "eta = 1.0\n", kLights, false),
                   {28.408467319011226, 7618.883561319185, 234.60399920953105, 65286.672987870283,
                    478.91099537733146, 109458.99530109798, 394.40887916438766, 90353.727664208753});
+}
+
+// volpath-render-5's defaults: the pinned medium (albedo 0.95, 0.97, 0.98) walks with weighted
+// absorption.
+TEST(WalkGolden, RenderEngineVolpathRender5) {
+    ASSERT_STREQ(render_engine_version(), "volpath-render-5");
+    expect_pinned(
+        "render rough boundary (v5)",
+        render_pin(kCoefficients + "eta = 1.3\nroughness = 0.3\n", kLights, false, std::nullopt),
+        {27.97014198895122, 7451.2615582350882, 230.32031164332454, 64241.195112279049,
+         471.84428794045914, 108282.49985762463, 393.15142932853041, 90064.735900840635});
+    expect_pinned("render smooth boundary (v5)",
+                  render_pin(kCoefficients + "eta = 1.4\n", kLights, false, std::nullopt),
+                  {28.053839481561855, 7480.3173980212523, 229.72658859410461, 63956.014011176245,
+                   472.52447189954341, 108540.90928203831, 394.01521504742345, 90096.719131332633});
+    expect_pinned("render index-matched (v5)",
+                  render_pin(kCoefficients + "eta = 1.0\n", kLights, false, std::nullopt),
+                  {28.295791636106738, 7574.4269660904647, 235.71566090027196, 65405.938255536159,
+                   476.16211871901999, 109182.7097059786, 394.53140262361507, 90287.734681607966});
 }
 
 }  // namespace

@@ -22,8 +22,9 @@ namespace ssslab::volpath {
 namespace {
 
 // 3: NEE off the first rough boundary is "specular"; 4: NEE samples every light, Sobol points,
-// sphere lights block the shadow rays of other lights.
-constexpr const char* kEngineVersion = "volpath-render-4";
+// sphere lights block the shadow rays of other lights; 5: absorption weighted in media whose
+// every albedo is at least 0.9 (render_absorption).
+constexpr const char* kEngineVersion = "volpath-render-5";
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
 constexpr int kMaxBatchSpp = 3 * 1024;  // the largest automatic batch (RenderOptions::batch_spp)
@@ -33,8 +34,9 @@ struct MediumData {
     RGB sigma_t{}, sigma_s{}, g{};  // per world unit (scaled by the density, if any)
     bool same_g = true;
     double eta = 1, alpha = 0;
-    std::shared_ptr<const DensityGrid> density;  // heterogeneous media (OpenVDB)
-    WalkRegion region;                           // the walk's view of the above
+    Absorption absorption = Absorption::kAnalog;  // of its walks (render_absorption)
+    std::shared_ptr<const DensityGrid> density;   // heterogeneous media (OpenVDB)
+    WalkRegion region;                            // the walk's view of the above
 };
 
 double power(double a, double b) {
@@ -84,6 +86,7 @@ struct Renderer {
                 md.g[i] = m.medium.g[i];
             }
             md.same_g = md.g[0] == md.g[1] && md.g[1] == md.g[2];
+            md.absorption = render_absorption(md.sigma_s.data(), md.sigma_t.data(), o.absorption);
             md.eta = m.medium.eta;
             if (!m.density_file.empty()) {
                 try {
@@ -454,6 +457,7 @@ struct Renderer {
                 geo.inside = media[static_cast<size_t>(medium)].region;
                 if (!shape_balls.empty())
                     geo.balls = shape_balls[static_cast<size_t>(medium_shape)].get();
+                rules.absorption = media[static_cast<size_t>(medium)].absorption;
                 const std::uint64_t before = ws.queries;
                 const WalkEnd end = walk(geo, ws, rules, rng, hooks);
                 rays += ws.queries - before;
@@ -513,6 +517,14 @@ std::size_t radiance_element(std::size_t i) {
 }
 
 }  // namespace
+
+Absorption render_absorption(const double sigma_s[3], const double sigma_t[3],
+                             std::optional<Absorption> requested) {
+    if (requested) return *requested;
+    for (int c = 0; c < 3; ++c)
+        if (!(sigma_s[c] >= kWeightedAbsorptionAlbedo * sigma_t[c])) return Absorption::kAnalog;
+    return Absorption::kWeighted;
+}
 
 const char* render_engine_version() {
     return kEngineVersion;
@@ -618,6 +630,8 @@ std::string fingerprint_with_batch(const Scene& scene, const RenderOptions& o, i
         .add("sampler", o.sampler == RenderSampler::kSobol ? "sobol" : "independent");
     // Only when set, so that the keys of existing checkpoints stay what they were.
     if (o.max_depth != 0) k.add("max_depth", o.max_depth);
+    if (o.absorption)
+        k.add("absorption", *o.absorption == Absorption::kWeighted ? "weighted" : "analog");
     add_to_key(k, scene);
     return k.text();
 }

@@ -241,7 +241,8 @@ struct WalkRules {
 /// Hooks an engine may leave out: the defaults do nothing.
 struct WalkHooks {
     /// Whether NEE is done at this scattering vertex; the analog absorption roulette then waits
-    /// until after `at_vertex`, which gets the survival probability to carry instead.
+    /// until after `at_vertex`, which gets the survival probability to carry instead (weighted
+    /// absorption: `at_vertex` before the roulette on the weights, survival 1).
     template <class S>
     bool vertex_nee(const S&) const {
         return false;
@@ -382,6 +383,9 @@ WalkEnd walk(const Geometry& geo, WalkState<NC>& s, const WalkRules& rules, RngS
         ++s.events;
         if (rules.absorption == Absorption::kWeighted) {
             wt.scatter(*R, travelled, Absorption::kWeighted);
+            // NEE with the weights that hold the albedo, before the roulette on them (after
+            // it, a strongly absorbing medium would collect light at the few survivors only).
+            if (hooks.vertex_nee(s)) hooks.at_vertex(s, 1.0, rng);
             const double m = wt.max_beta();
             if (m < kWeightRouletteThreshold) {
                 const double survive = m / kWeightRouletteThreshold;

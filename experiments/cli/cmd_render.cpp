@@ -36,6 +36,7 @@ struct RenderArgs {
     std::string error_of = "median-pixel";
     int batch_spp = 0;
     std::string sampler = "sobol";
+    std::string absorption = "auto";
     CommonOptions common;
 };
 
@@ -55,6 +56,7 @@ std::string render_toml(const RenderArgs& a, const Scene& scene, const volpath::
     st.record("seed", static_cast<std::int64_t>(o.seed));
     st.record("sampler",
               std::string(o.sampler == volpath::RenderSampler::kSobol ? "sobol" : "independent"));
+    st.record("absorption", a.absorption);
     st.record("batch_spp", static_cast<std::int64_t>(r.batch_spp));
     st.record("width", static_cast<std::int64_t>(r.width));
     st.record("height", static_cast<std::int64_t>(r.height));
@@ -114,6 +116,9 @@ int run_render(const RenderArgs& a) {
     o.batch_spp = a.batch_spp;
     o.sampler = a.sampler == "independent" ? volpath::RenderSampler::kIndependent
                                            : volpath::RenderSampler::kSobol;
+    if (a.absorption != "auto")
+        o.absorption = a.absorption == "weighted" ? volpath::Absorption::kWeighted
+                                                  : volpath::Absorption::kAnalog;
     o.error_measure = a.error_of == "image-mean" ? volpath::RenderErrorMeasure::kImageMean
                                                  : volpath::RenderErrorMeasure::kMedianPixel;
     o.width = a.width;
@@ -273,6 +278,12 @@ void register_render(CLI::App& app, std::function<int()>& action) {
                     "The first random numbers of a path: sobol (default; Owen-scrambled Sobol "
                     "points, scrambled anew in every batch) or independent (the stream alone)")
         ->check(one_of({"sobol", "independent"}));
+    sub->add_option("--absorption", a->absorption,
+                    "Absorption inside media: auto (default; weighted where every channel's "
+                    "albedo is at least 0.9, else analog), analog (the hero's roulette with its "
+                    "albedo) or weighted (the albedos in the path's weights, Russian roulette on "
+                    "small weights)")
+        ->check(one_of({"auto", "analog", "weighted"}));
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
 
