@@ -153,7 +153,7 @@ TEST(Render, WhiteFurnaceWithAMediumBehindADielectricBoundary) {
                     }
             std::printf(
                 "  [measured] furnace eta %s, %s absorption: %d pixel-channels, worst |z| %.2f\n",
-                eta, absorption == Absorption::kWeighted ? "weighted" : "analog", tested, worst);
+                eta, to_string(absorption), tested, worst);
             EXPECT_GT(tested, 200);
             EXPECT_GT(r.image.layer("subsurface").at(12, 12, 1), 0.5f);
         }
@@ -246,7 +246,7 @@ material = "m"
     // The medium's albedo (1e-4) makes its walks analog; weighted absorption carries the albedo
     // in the weights and does NEE at every collision with them.
     for (const Absorption absorption : {Absorption::kAnalog, Absorption::kWeighted}) {
-        SCOPED_TRACE(absorption == Absorption::kWeighted ? "weighted" : "analog");
+        SCOPED_TRACE(to_string(absorption));
         RenderOptions o = options(192);
         o.absorption = absorption;
         const RenderResult r = render(s, o);
@@ -279,7 +279,7 @@ material = "m"
         std::printf(
             "  [measured] analytic single scattering, %s absorption: chi-square %.1f over %d "
             "pixel-channels, worst |z| %.2f\n",
-            absorption == Absorption::kWeighted ? "weighted" : "analog", chi2, n, worst);
+            to_string(absorption), chi2, n, worst);
         EXPECT_LT(chi2, testing::chi2_critical(n, 0.001));
         EXPECT_LT(worst, testing::normal_quantile(1 - 0.0005 / n));
     }

@@ -163,7 +163,7 @@ std::string fingerprint(const Medium& m, const PencilGrid& grid, const PencilOpt
     ContentKey k("pencil-checkpoint");
     k.add("engine", kEngineVersion)
         .add("mode", to_string(o.mode))
-        .add("absorption", o.absorption == Absorption::kWeighted ? "weighted" : "analog")
+        .add("absorption", to_string(o.absorption))
         .add("run", run)
         .add("seed", o.seed)
         .add("batch_paths", batch)

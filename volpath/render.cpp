@@ -630,8 +630,7 @@ std::string fingerprint_with_batch(const Scene& scene, const RenderOptions& o, i
         .add("sampler", o.sampler == RenderSampler::kSobol ? "sobol" : "independent");
     // Only when set, so that the keys of existing checkpoints stay what they were.
     if (o.max_depth != 0) k.add("max_depth", o.max_depth);
-    if (o.absorption)
-        k.add("absorption", *o.absorption == Absorption::kWeighted ? "weighted" : "analog");
+    if (o.absorption) k.add("absorption", to_string(*o.absorption));
     add_to_key(k, scene);
     return k.text();
 }

@@ -47,6 +47,11 @@ enum class Absorption {
     kWeighted,
 };
 
+/// "analog" or "weighted": the policy's name in keys, settings and reports.
+inline const char* to_string(Absorption a) {
+    return a == Absorption::kWeighted ? "weighted" : "analog";
+}
+
 /// What happens to the sampled free path when it reaches the boundary and is reflected.
 enum class FlightRule {
     /// Travel the rest of the sampled free path after the reflection [Bitterli13 Alg. 1, line 8].
