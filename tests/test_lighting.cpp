@@ -797,7 +797,8 @@ TEST(Lighting, RowShadowTestsEqualTheGeneralPass) {
         // The row path for 1 and 2 threads.
         GBuffer one;
         tbb::task_arena arena(1);
-        arena.execute([&] { one = render_rt(s, w, w, ss, o).g; });
+        const int size = w, spp = ss;  // (a lambda may not capture a structured binding in C++20)
+        arena.execute([&] { one = render_rt(s, size, size, spp, o).g; });
         EXPECT_TRUE(same(rows.g.irradiance, one.irradiance)) << w;
         EXPECT_TRUE(same(rows.g.surface, one.surface)) << w;
         EXPECT_TRUE(same(rows.g.specular, one.specular)) << w;

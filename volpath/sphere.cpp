@@ -20,8 +20,6 @@ namespace {
 // Bump when a change alters the numbers produced for a given seed.
 constexpr const char* kEngineVersion = "volpath-sphere-4";
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
 // Largest tally per batch, in doubles (1 GiB).
 constexpr std::size_t kMaxTally = std::size_t(1) << 27;
 
