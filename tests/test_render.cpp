@@ -417,6 +417,25 @@ TEST(Render, CommandWritesTheLayeredExrAndPreviewOrNothing) {
                           "specular", "specular.stderr", "depth", "normal"})
         EXPECT_TRUE(img.has_layer(l)) << l;
     EXPECT_EQ(img.metadata().at("ssslab.spp"), "3");  // a multiple of three
+    // The settings record what "auto" came to in the medium: Skin1's blue albedo (0.68) is
+    // below 0.9, so its walks are analog; a requested policy is what the medium gets.
+    auto media_policy = [&](const char* file) {
+        const std::string toml = testing::read_text(dir / file);
+        const auto table = toml.find("[render.media_absorption]");
+        const auto entry = toml.find("m = '", table);
+        return table == std::string::npos || entry == std::string::npos
+                   ? std::string("(none) in:\n") + toml
+                   : toml.substr(entry + 5, toml.find('\'', entry + 5) - entry - 5);
+    };
+    EXPECT_NE(testing::read_text(dir / "o.exr.toml").find("absorption = 'auto'"),
+              std::string::npos);
+    EXPECT_EQ(media_policy("o.exr.toml"), "analog");
+    const auto w =
+        testing::run_ssslab({"render", "s.toml", "--spp", "2", "--width", "8", "--height", "6",
+                             "--out", "w.exr", "-q", "--absorption", "weighted"},
+                            dir.path());
+    ASSERT_EQ(w.exit_code, 0) << w.err;
+    EXPECT_EQ(media_policy("w.exr.toml"), "weighted");
     // Bad arguments: exit 2, nothing written.
     testing::TempDir bad;
     bad.write("s.toml",

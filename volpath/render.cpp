@@ -647,6 +647,14 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
     RenderResult out;
     out.width = R.width;
     out.height = R.height;
+    for (std::size_t i = 0; i < scene.shapes.size(); ++i) {
+        const int m = R.shape_medium[i];
+        const std::string& name =
+            scene.materials[static_cast<size_t>(scene.shapes[i].material)].name;
+        if (m >= 0 && std::none_of(out.media_absorption.begin(), out.media_absorption.end(),
+                                   [&](const auto& e) { return e.first == name; }))
+            out.media_absorption.emplace_back(name, R.media[static_cast<size_t>(m)].absorption);
+    }
     const std::size_t pixels =
         static_cast<std::size_t>(R.width) * static_cast<std::size_t>(R.height);
     BatchRunOptions bo;

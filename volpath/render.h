@@ -38,6 +38,8 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace ssslab::volpath {
 
@@ -150,6 +152,9 @@ struct RenderResult {
     bool interrupted = false;
     /// hash_hex of render_fingerprint: what the checkpoint was keyed by (set when checkpointing).
     std::string content_key;
+    /// The absorption policy each medium material's walks used (render_absorption), by the
+    /// material's name, in the order the scene's shapes first use them.
+    std::vector<std::pair<std::string, Absorption>> media_absorption;
 };
 
 /// Checks what the renderer supports beyond Scene's own validation: throws InputError (located

@@ -57,6 +57,10 @@ std::string render_toml(const RenderArgs& a, const Scene& scene, const volpath::
     st.record("sampler",
               std::string(o.sampler == volpath::RenderSampler::kSobol ? "sobol" : "independent"));
     st.record("absorption", a.absorption);
+    // What "auto" (or the requested policy) came to in each medium.
+    ConfigTable media = st.table_or_empty("media_absorption");
+    for (const auto& [name, policy] : r.media_absorption)
+        media.record(name, std::string(volpath::to_string(policy)));
     st.record("batch_spp", static_cast<std::int64_t>(r.batch_spp));
     st.record("width", static_cast<std::int64_t>(r.width));
     st.record("height", static_cast<std::int64_t>(r.height));
