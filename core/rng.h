@@ -50,6 +50,12 @@ class RngStream {
             --prefix_left_;
             return *prefix_++;
         }
+        return stream_uniform();
+    }
+
+    /// uniform() from the stream itself, past a prefix (which stays for the next uniform()
+    /// calls): for a choice that is not to take one of the quasi-random dimensions.
+    double stream_uniform() {
         // The value fits a signed 64-bit integer: one cvtsi2sd instead of the slow unsigned
         // 64-bit conversion.
         return static_cast<double>(static_cast<std::int64_t>((next_u64() >> 11) | 1)) * 0x1p-53;

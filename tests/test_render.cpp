@@ -77,36 +77,57 @@ int coverage(int x, int y, int n, double r_in, double r_out) {
 }
 
 TEST(Render, ConvexDiffuseObjectReflectsAlbedoTimesTheEnvironment) {
+    // A convex diffuse object under a constant environment reflects albedo x L. With the
+    // environment sampled over the sphere (before volpath-render-6) each pixel is an estimate
+    // within its standard error; sampled about the normal by cos(theta), as the BSDF samples,
+    // NEE and BSDF sampling each carry half of albedo x L in every sample (power heuristic of
+    // equal densities), so the image is exact up to float rounding, without noise.
     const Scene s = parse_scene(
         scene_text("[[materials]]\nname = \"m\"\ntype = \"diffuse\"\nalbedo = [0.8, 0.6, 0.3]\n",
                    kEnv),
         "t.toml", ".");
-    const RenderResult r = render(s, options(64));
-    const ImageLayer& L = r.image.layer("radiance");
-    const ImageLayer& E = r.image.layer("radiance.stderr");
     const double env[3] = {1.0, 0.5, 0.25}, albedo[3] = {0.8, 0.6, 0.3};
-    int inside = 0, outside = 0;
-    double worst = 0;
     const double zc = testing::normal_quantile(1 - 0.0005 / (24 * 24 * 3));
-    for (int y = 0; y < 24; ++y)
-        for (int x = 0; x < 24; ++x) {
-            const int cov = coverage(x, y, 24, 1.5 * 0.995, 1.5);  // the icosphere's inradius
-            for (int c = 0; c < 3; ++c) {
-                if (cov == 0) {
-                    EXPECT_EQ(L.at(x, y, c), static_cast<float>(env[c]));
-                    ++outside;
-                } else if (cov == 1) {
-                    const double z = (L.at(x, y, c) - albedo[c] * env[c]) / E.at(x, y, c);
-                    worst = std::max(worst, std::fabs(z));
-                    EXPECT_LT(std::fabs(z), zc) << x << "," << y << " c" << c;
-                    ++inside;
+    RenderResult r;
+    for (const bool cosine : {false, true}) {
+        SCOPED_TRACE(cosine ? "cosine" : "sphere");
+        RenderOptions o = options(64);
+        o.environment_cosine = cosine;
+        r = render(s, o);
+        const ImageLayer& L = r.image.layer("radiance");
+        const ImageLayer& E = r.image.layer("radiance.stderr");
+        int inside = 0, outside = 0;
+        double worst = 0;
+        for (int y = 0; y < 24; ++y)
+            for (int x = 0; x < 24; ++x) {
+                const int cov = coverage(x, y, 24, 1.5 * 0.995, 1.5);  // the icosphere's inradius
+                for (int c = 0; c < 3; ++c) {
+                    if (cov == 0) {
+                        EXPECT_EQ(L.at(x, y, c), static_cast<float>(env[c]));
+                        ++outside;
+                    } else if (cov == 1) {
+                        const double expect = albedo[c] * env[c];
+                        ++inside;
+                        if (cosine) {
+                            worst = std::max(worst, std::fabs(L.at(x, y, c) / expect - 1));
+                            EXPECT_NEAR(L.at(x, y, c), expect, 1e-6 * expect) << x << "," << y;
+                            EXPECT_LT(E.at(x, y, c), 1e-6 * expect) << x << "," << y;
+                            continue;
+                        }
+                        const double z = (L.at(x, y, c) - expect) / E.at(x, y, c);
+                        worst = std::max(worst, std::fabs(z));
+                        EXPECT_LT(std::fabs(z), zc) << x << "," << y << " c" << c;
+                    }
                 }
             }
-        }
-    std::printf("  [measured] diffuse sphere: %d pixel-channels on it, worst |z| %.2f\n", inside,
-                worst);
-    EXPECT_GT(inside, 100);
-    EXPECT_GT(outside, 100);
+        std::printf(
+            "  [measured] diffuse sphere, environment sampled %s: %d pixel-channels on "
+            "it, worst %s %.3g\n",
+            cosine ? "by cos(theta)" : "over the sphere", inside, cosine ? "relative error" : "|z|",
+            worst);
+        EXPECT_GT(inside, 100);
+        EXPECT_GT(outside, 100);
+    }
     // Nothing entered a medium, nothing was a dielectric reflection.
     EXPECT_EQ(r.image.layer("subsurface").at(12, 12, 0), 0.0f);
     EXPECT_GT(r.image.layer("depth").at(12, 12), 8.0f);
@@ -174,18 +195,36 @@ TEST(Render, IndexMatchedMediaAreLitThroughTheirBoundaryByNextEventEstimation) {
                radius + "\nradiance = " + radiance +
                "\n[[lights]]\ntype = \"environment\"\nradiance = 0.05\n";
     };
-    auto both = [&](const Scene& s, double spp_nee, double spp_plain) {
+    auto both = [&](const Scene& s, double spp_nee, double spp_plain,
+                    RenderHero hero = RenderHero::kUniform) {
         RenderOptions with = options(spp_nee), without = options(spp_plain);
+        with.hero = hero;
         without.index_matched_nee = false;
+        without.hero = RenderHero::kUniform;
         without.seed = 2;
         const RenderResult a = render(s, with), b = render(s, without);
         return compare_images(estimate_with_stderr(a.image, "radiance", "NEE"),
                               estimate_with_stderr(b.image, "radiance", "no NEE"), 4);
     };
-    const ImageComparison c =
-        both(parse_scene(scene_text(m, lights("1.5", "3")), "t.toml", "."), 256, 1024);
+    const Scene large = parse_scene(scene_text(m, lights("1.5", "3")), "t.toml", ".");
+    const ImageComparison c = both(large, 256, 1024, RenderHero::kUniform);
     for (size_t k = 0; k < 3; ++k) EXPECT_LT(std::fabs(c.z_mean[k]), 4.0) << k;
     EXPECT_GT(c.p_min_corrected(), 1e-3);
+    // The hero chosen at the medium's entry by throughput x albedo, in a medium whose albedos
+    // differ (0.95, 0.5, 0.17: hero probabilities 0.59, 0.31, 0.10) and with g per channel, so
+    // that the MIS of NEE against phase sampling needs the hero probabilities.
+    const std::string chromatic =
+        "[[materials]]\nname = \"m\"\nsigma_a_per_mm = [0.05, 3.0, 40.0]\n"
+        "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = [0.0, 0.5, 0.9]\neta = 1.0\n";
+    const Scene strong = parse_scene(scene_text(chromatic, lights("1.5", "3")), "c.toml", ".");
+    const ImageComparison ta = both(strong, 256, 1024, RenderHero::kThroughputAlbedo);
+    for (size_t k = 0; k < 3; ++k) EXPECT_LT(std::fabs(ta.z_mean[k]), 4.0) << k;
+    EXPECT_GT(ta.p_min_corrected(), 1e-3);
+    std::printf(
+        "  [measured] index-matched NEE, hero by throughput x albedo, vs none: block chi2 "
+        "%.1f/%d %.1f/%d %.1f/%d, image-mean z %.2f %.2f %.2f\n",
+        ta.chi2[0], ta.dof[0], ta.chi2[1], ta.dof[1], ta.chi2[2], ta.dof[2], ta.z_mean[0],
+        ta.z_mean[1], ta.z_mean[2]);
     const ImageComparison small =
         both(parse_scene(scene_text(m, lights("0.3", "75")), "s.toml", "."), 64, 1024);
     double ratio[3];
@@ -266,33 +305,36 @@ material = "m"
                     }
             }
     // The medium's albedo (1e-4) makes its walks analog; weighted absorption carries the albedo
-    // in the weights and does NEE at every collision with them.
-    for (const Absorption absorption : {Absorption::kAnalog, Absorption::kWeighted}) {
-        SCOPED_TRACE(to_string(absorption));
-        RenderOptions o = options(192);
-        o.absorption = absorption;
-        const RenderResult r = render(s, o);
-        const ImageLayer& L = r.image.layer("radiance");
-        const ImageLayer& E = r.image.layer("radiance.stderr");
-        double chi2 = 0, worst = 0;
-        int n = 0;
-        for (int y = 0; y < 16; ++y)
-            for (int x = 0; x < 16; ++x)
-                for (int c = 0; c < 3; ++c) {
-                    const double z =
-                        (L.at(x, y, c) - ref[static_cast<size_t>((y * 16 + x) * 3 + c)]) /
-                        E.at(x, y, c);
-                    chi2 += z * z;
-                    worst = std::max(worst, std::fabs(z));
-                    ++n;
-                }
-        std::printf(
-            "  [measured] analytic single scattering, %s absorption: chi-square %.1f over %d "
-            "pixel-channels, worst |z| %.2f\n",
-            to_string(absorption), chi2, n, worst);
-        EXPECT_LT(chi2, testing::chi2_critical(n, 0.001));
-        EXPECT_LT(worst, testing::normal_quantile(1 - 0.0005 / n));
-    }
+    // in the weights and does NEE at every collision with them. Either with the hero chosen
+    // uniformly or by throughput x albedo (probabilities 0.29, 0.57, 0.14 here).
+    for (const RenderHero hero : {RenderHero::kUniform, RenderHero::kThroughputAlbedo})
+        for (const Absorption absorption : {Absorption::kAnalog, Absorption::kWeighted}) {
+            SCOPED_TRACE(std::string(to_string(absorption)) + " " + to_string(hero));
+            RenderOptions o = options(192);
+            o.absorption = absorption;
+            o.hero = hero;
+            const RenderResult r = render(s, o);
+            const ImageLayer& L = r.image.layer("radiance");
+            const ImageLayer& E = r.image.layer("radiance.stderr");
+            double chi2 = 0, worst = 0;
+            int n = 0;
+            for (int y = 0; y < 16; ++y)
+                for (int x = 0; x < 16; ++x)
+                    for (int c = 0; c < 3; ++c) {
+                        const double z =
+                            (L.at(x, y, c) - ref[static_cast<size_t>((y * 16 + x) * 3 + c)]) /
+                            E.at(x, y, c);
+                        chi2 += z * z;
+                        worst = std::max(worst, std::fabs(z));
+                        ++n;
+                    }
+            std::printf(
+                "  [measured] analytic single scattering, %s absorption, %s hero: chi-square %.1f "
+                "over %d pixel-channels, worst |z| %.2f\n",
+                to_string(absorption), to_string(hero), chi2, n, worst);
+            EXPECT_LT(chi2, testing::chi2_critical(n, 0.001));
+            EXPECT_LT(worst, testing::normal_quantile(1 - 0.0005 / n));
+        }
 }
 
 TEST(Render, BitIdenticalForAnyThreadCountAndResumable) {
@@ -631,49 +673,64 @@ roughness = 0.3
 )");
 }
 
-TEST(Render, VolpathRender4EstimatorsAgreeWithTheLegacyOne) {
+TEST(Render, NewerEstimatorsAgreeWithTheLegacyOne) {
     // volpath-render-4 samples every light at each NEE and draws the first numbers of a path
-    // from scrambled Sobol points; volpath-render-3's estimator (one light chosen uniformly,
-    // the stream alone) stays an option, and so does volpath-render-4's analog absorption, which
-    // volpath-render-5 weights in media of albedo >= 0.9. Every combination estimates the same
-    // image: their block means agree with the legacy image's by chi-square (batch standard errors
-    // on both sides), and the image means by z.
+    // from scrambled Sobol points; volpath-render-5 weights absorption in media of albedo
+    // >= 0.9; volpath-render-6 chooses the hero at every entry into a medium by throughput x
+    // albedo and samples the environment about a surface's normal by cos(theta).
+    // volpath-render-3's estimator (one light chosen uniformly, the stream alone, analog, the
+    // hero in turn, the environment over the sphere) stays an option, and so does each step.
+    // Every combination estimates the same image: their block means agree with the legacy
+    // image's by chi-square (batch standard errors on both sides), and the image means by z.
     const Scene s = estimator_scene(32);
     RenderOptions legacy = options(192);
     legacy.nee_all_lights = false;
     legacy.sampler = RenderSampler::kIndependent;
     legacy.batch_spp = 3;
     legacy.absorption = Absorption::kAnalog;
+    legacy.hero = RenderHero::kUniform;
+    legacy.environment_cosine = false;
     legacy.seed = 5;
     const RenderResult ref = render(s, legacy);
     const ImageEstimate b = estimate_with_stderr(ref.image, "radiance", "legacy");
-    const double alpha = 0.001 / 12;  // four images, three channels
     struct Variant {
         bool all_lights;
         RenderSampler sampler;
         Absorption absorption;
+        RenderHero hero;
+        bool env_cosine;
     };
+    constexpr auto kSobol = RenderSampler::kSobol;
+    constexpr auto kUniform = RenderHero::kUniform, kTA = RenderHero::kThroughputAlbedo;
     // volpath-render-5's default weights the absorption of this medium (albedo 0.95-0.98);
     // volpath-render-4's was analog.
-    for (const Variant v : {Variant{false, RenderSampler::kSobol, Absorption::kWeighted},
-                            Variant{true, RenderSampler::kIndependent, Absorption::kWeighted},
-                            Variant{true, RenderSampler::kSobol, Absorption::kWeighted},
-                            Variant{true, RenderSampler::kSobol, Absorption::kAnalog}}) {
+    const Variant variants[] = {
+        {false, kSobol, Absorption::kWeighted, kUniform, false},
+        {true, RenderSampler::kIndependent, Absorption::kWeighted, kUniform, false},
+        {true, kSobol, Absorption::kWeighted, kUniform, false},
+        {true, kSobol, Absorption::kAnalog, kUniform, false},
+        {true, kSobol, Absorption::kAnalog, kTA, false},
+        {true, kSobol, Absorption::kWeighted, kUniform, true},
+        {true, kSobol, Absorption::kWeighted, kTA, true},  // volpath-render-6
+    };
+    const double alpha = 0.001 / (3.0 * std::size(variants));
+    for (const Variant& v : variants) {
         RenderOptions o = options(192);
         o.nee_all_lights = v.all_lights;
         o.sampler = v.sampler;
         o.seed = 6;
         o.absorption = v.absorption;
+        o.hero = v.hero;
+        o.environment_cosine = v.env_cosine;
         const RenderResult r = render(s, o);
         const ImageComparison c =
             compare_images(estimate_with_stderr(r.image, "radiance", "new"), b, 4);
         for (int ch = 0; ch < 3; ++ch) {
             std::printf(
-                "  [measured] all lights %d, sobol %d, weighted %d, channel %d: chi2 %.1f "
-                "over %d blocks, p %.3g, image mean z %.2f\n",
-                v.all_lights, v.sampler == RenderSampler::kSobol,
-                v.absorption == Absorption::kWeighted, ch, c.chi2[ch], c.dof[ch], c.p[ch],
-                c.z_mean[ch]);
+                "  [measured] all lights %d, sobol %d, weighted %d, hero %s, cosine env %d, "
+                "channel %d: chi2 %.1f over %d blocks, p %.3g, image mean z %.2f\n",
+                v.all_lights, v.sampler == kSobol, v.absorption == Absorption::kWeighted,
+                to_string(v.hero), v.env_cosine, ch, c.chi2[ch], c.dof[ch], c.p[ch], c.z_mean[ch]);
             EXPECT_GT(c.p[ch], alpha) << v.all_lights << " " << ch;
             EXPECT_LT(std::fabs(c.z_mean[ch]), testing::normal_quantile(1 - alpha / 2));
         }

@@ -6,7 +6,7 @@
 // named beside them (volpath-pencil-2, volpath-sphere-3, volpath-render-3, whose estimator
 // volpath-render-4 keeps as options) before the walk was moved, MCML's by mcml-default-3 with its
 // own driver before it moved onto the shared one, volpath-render-4's by itself when it was made
-// (its agreement with the old estimator: Render.VolpathRender4EstimatorsAgreeWithTheLegacyOne), and
+// (its agreement with the old estimator: Render.NewerEstimatorsAgreeWithTheLegacyOne), and
 // are compared with a relative tolerance of 1e-9 (a different random-number order moves them by
 // ~1e-3; rounding by ~1e-15). Correctness is what the closed-form and cross-engine tests show. An
 // engine change that alters the numbers bumps the engine's version and re-pins here, after showing
@@ -185,9 +185,12 @@ TEST(WalkGolden, SphereEngineVolpathSphere3) {
 
 // legacy: the estimator of volpath-render-3 (one light per NEE, the stream alone, batches of 3
 // spp), which volpath-render-4 keeps as options; otherwise the defaults. `absorption`: as the
-// pinned version had it (volpath-render-5 chooses per medium).
+// pinned version had it (volpath-render-5 chooses per medium). Before volpath-render-6 (v6
+// false): the hero in turn and the environment sampled over the sphere, as those versions had
+// them.
 std::vector<double> render_pin(const std::string& material, const std::string& lights, bool legacy,
-                               std::optional<Absorption> absorption = Absorption::kAnalog) {
+                               std::optional<Absorption> absorption = Absorption::kAnalog,
+                               bool v6 = false) {
     const std::string text = R"(
 [scene]
 name = "golden"
@@ -218,6 +221,10 @@ material = "floor"
     o.seed = 11;
     o.budget.samples = 12;
     o.absorption = absorption;
+    if (!v6) {
+        o.hero = RenderHero::kUniform;
+        o.environment_cosine = false;
+    }
     if (legacy) {
         o.nee_all_lights = false;
         o.sampler = RenderSampler::kIndependent;
@@ -257,7 +264,7 @@ TEST(WalkGolden, RenderEngineVolpathRender3) {
 // volpath-render-5 is volpath-render-4 but for the absorption of its media's walks (weighted
 // where every albedo is at least 0.9, render_absorption): with analog absorption it draws the
 // same numbers, so these are volpath-render-4's pins (its agreement with the weighted walk:
-// Render.VolpathRender4EstimatorsAgreeWithTheLegacyOne).
+// Render.NewerEstimatorsAgreeWithTheLegacyOne).
 TEST(WalkGolden, RenderEngineVolpathRender4) {
     expect_pinned("render rough boundary (v4)",
                   render_pin(kCoefficients + "eta = 1.3\nroughness = 0.3\n", kLights, false),
@@ -276,7 +283,6 @@ TEST(WalkGolden, RenderEngineVolpathRender4) {
 // volpath-render-5's defaults: the pinned medium (albedo 0.95, 0.97, 0.98) walks with weighted
 // absorption.
 TEST(WalkGolden, RenderEngineVolpathRender5) {
-    ASSERT_STREQ(render_engine_version(), "volpath-render-5");
     expect_pinned(
         "render rough boundary (v5)",
         render_pin(kCoefficients + "eta = 1.3\nroughness = 0.3\n", kLights, false, std::nullopt),
@@ -290,6 +296,27 @@ TEST(WalkGolden, RenderEngineVolpathRender5) {
                   render_pin(kCoefficients + "eta = 1.0\n", kLights, false, std::nullopt),
                   {28.295791636106738, 7574.4269660904647, 235.71566090027196, 65405.938255536159,
                    476.16211871901999, 109182.7097059786, 394.53140262361507, 90287.734681607966});
+}
+
+// volpath-render-6's defaults: the hero chosen at the medium's entry by throughput x albedo
+// (one number from the stream there), the environment sampled about a surface's normal by
+// cos(theta) (its agreement with the old estimators: Render.NewerEstimatorsAgreeWithTheLegacyOne;
+// with closed forms: Render's furnace, single-scattering and diffuse-sphere tests).
+TEST(WalkGolden, RenderEngineVolpathRender6) {
+    ASSERT_STREQ(render_engine_version(), "volpath-render-6");
+    expect_pinned("render rough boundary (v6)",
+                  render_pin(kCoefficients + "eta = 1.3\nroughness = 0.3\n", kLights, false,
+                             std::nullopt, true),
+                  {27.805747460520845, 7387.8575108956702, 234.451369146753, 65245.493445825065,
+                   472.0116359470772, 108280.93026447114, 393.61408007044338, 90024.986383101903});
+    expect_pinned("render smooth boundary (v6)",
+                  render_pin(kCoefficients + "eta = 1.4\n", kLights, false, std::nullopt, true),
+                  {28.043737496565321, 7477.247000560681, 233.26143068851755, 65337.363309710025,
+                   473.2315479619192, 108583.41246994091, 392.39764589655545, 89920.493967366841});
+    expect_pinned("render index-matched (v6)",
+                  render_pin(kCoefficients + "eta = 1.0\n", kLights, false, std::nullopt, true),
+                  {28.244254199450861, 7553.7591880419795, 237.26293554810593, 65581.808404076481,
+                   476.77173663734123, 109340.08712605348, 394.36662711691463, 90314.026273336305});
 }
 
 }  // namespace

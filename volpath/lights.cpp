@@ -27,7 +27,7 @@ Vec3 sample_cone(const Vec3& axis, double cos_max, double u1, double u2) {
     return Frame(axis).world({sn * std::cos(phi), sn * std::sin(phi), c});
 }
 
-LightSample sample_light(const Light& l, const Vec3& p, double u1, double u2) {
+LightSample sample_light(const Light& l, const Vec3& p, double u1, double u2, const Vec3* n) {
     LightSample s;
     switch (l.type) {
         case LightType::kSphere: {
@@ -44,10 +44,17 @@ LightSample sample_light(const Light& l, const Vec3& p, double u1, double u2) {
             return s;
         }
         case LightType::kEnvironment: {
+            s.value = l.L;
+            if (n) {
+                const Vec3 w = sample_cosine_hemisphere(u1, u2);
+                s.wi = Frame(*n).world(w);
+                s.pdf = w.z / kPi;
+                s.ok = w.z > 0;
+                return s;
+            }
             const double z = 1 - 2 * u1, r = std::sqrt(std::max(0.0, 1 - z * z)),
                          phi = 2 * kPi * u2;
             s.wi = {r * std::cos(phi), r * std::sin(phi), z};
-            s.value = l.L;
             s.pdf = 1 / (4 * kPi);
             s.ok = true;
             return s;
@@ -76,7 +83,7 @@ LightSample sample_light(const Light& l, const Vec3& p, double u1, double u2) {
     return s;
 }
 
-double light_pdf(const Light& l, const Vec3& p, const Vec3& wi) {
+double light_pdf(const Light& l, const Vec3& p, const Vec3& wi, const Vec3* n) {
     switch (l.type) {
         case LightType::kSphere: {
             const Vec3 pc = l.pos - p;
@@ -87,7 +94,7 @@ double light_pdf(const Light& l, const Vec3& p, const Vec3& wi) {
             return 1 / (2 * kPi * (1 - cos_max));
         }
         case LightType::kEnvironment:
-            return 1 / (4 * kPi);
+            return n ? std::max(0.0, dot(wi, *n)) / kPi : 1 / (4 * kPi);
         case LightType::kDirectional:
             if (l.cos_max < 1 && dot(wi, l.dir) >= l.cos_max)
                 return 1 / (2 * kPi * (1 - l.cos_max));

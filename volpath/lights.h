@@ -37,12 +37,17 @@ struct LightSample {
     bool ok = false;
 };
 
-/// A direction towards light `l` from p for uniform u1, u2.
-LightSample sample_light(const Light& l, const Vec3& p, double u1, double u2);
+/// A direction towards light `l` from p for uniform u1, u2. `n`: the unit normal of a surface
+/// at p whose outer hemisphere alone receives light (null inside a medium): the environment is
+/// then sampled in proportion to cos(theta) about n, which a diffuse surface under a constant
+/// sky integrates without noise (the uniform sphere wasted half of its samples below the
+/// surface and weighted the rest by 4 pi cos(theta)); other lights ignore n.
+LightSample sample_light(const Light& l, const Vec3& p, double u1, double u2,
+                         const Vec3* n = nullptr);
 
 /// Solid-angle density with which sample_light picks direction wi from p (0 for delta lights
-/// and directions it never picks).
-double light_pdf(const Light& l, const Vec3& p, const Vec3& wi);
+/// and directions it never picks), for the same n.
+double light_pdf(const Light& l, const Vec3& p, const Vec3& wi, const Vec3* n = nullptr);
 
 /// A direction uniform in the cone of directions within acos(cos_max) of the unit `axis`.
 Vec3 sample_cone(const Vec3& axis, double cos_max, double u1, double u2);

@@ -23,8 +23,10 @@ namespace {
 
 // 3: NEE off the first rough boundary is "specular"; 4: NEE samples every light, Sobol points,
 // sphere lights block the shadow rays of other lights; 5: absorption weighted in media whose
-// every albedo is at least 0.9 (render_absorption).
-constexpr const char* kEngineVersion = "volpath-render-5";
+// every albedo is at least 0.9 (render_absorption); 6: the hero chosen at every entry into a
+// medium by throughput x albedo (RenderHero), the environment sampled about a surface's normal
+// by cos(theta) (RenderOptions::environment_cosine).
+constexpr const char* kEngineVersion = "volpath-render-6";
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
 constexpr int kMaxBatchSpp = 3 * 1024;  // the largest automatic batch (RenderOptions::batch_spp)
@@ -115,6 +117,11 @@ struct Renderer {
         aspect = static_cast<double>(width) / height;
     }
 
+    // The normal the environment is sampled about at a surface (null: the whole sphere).
+    const Vec3* env_normal(const Vec3* surface_normal) const {
+        return opt.environment_cosine ? surface_normal : nullptr;
+    }
+
     // Whether shadow and path rays pass through medium mi's boundary unchanged: an
     // index-matched homogeneous medium (its transmittance is then known in closed form).
     bool passable(int mi) const {
@@ -178,7 +185,7 @@ struct Renderer {
                    const double* beta, F& f_of, P& pdf_of, RGB& out, std::uint64_t& rays,
                    int medium) const {
         const double u1 = rng.uniform(), u2 = rng.uniform();
-        const LightSample ls = sample_light(light, p, u1, u2);
+        const LightSample ls = sample_light(light, p, u1, u2, env_normal(offset));
         if (!ls.ok) return;
         if (offset && !(dot(ls.wi, *offset) > 0)) return;
         const RGB fc = f_of(ls.wi);
@@ -215,13 +222,14 @@ struct Renderer {
 
     // Emission seen by a ray that left `from` in direction d and escaped (no geometry, no sphere
     // light): environment and disc lights, weighted against light sampling if NEE was done.
-    void add_escape(const Vec3& from, const Vec3& d, bool prev_nee, double prev_pdf,
-                    const double* beta, RGB& out) const {
+    void add_escape(const Vec3& from, const Vec3* from_normal, const Vec3& d, bool prev_nee,
+                    double prev_pdf, const double* beta, RGB& out) const {
         for (const Light& l : lights) {
             if (l.type == LightType::kEnvironment ||
                 (l.type == LightType::kDirectional && l.cos_max < 1 &&
                  dot(d, l.dir) >= l.cos_max)) {
-                const double w = prev_nee ? power(prev_pdf, sel * light_pdf(l, from, d)) : 1.0;
+                const double w =
+                    prev_nee ? power(prev_pdf, sel * light_pdf(l, from, d, from_normal)) : 1.0;
                 for (int c = 0; c < 3; ++c)
                     out[static_cast<size_t>(c)] += beta[c] * l.L[static_cast<size_t>(c)] * w;
             }
@@ -249,8 +257,10 @@ struct Renderer {
         int medium_shape = -1;
         bool prev_nee = false, entered = false, specular_path = false;
         double prev_pdf = 0;
-        Vec3 nee_pos;   // where NEE was last done (MIS of a light hit found by sampling)
-        int depth = 0;  // surface vertices (medium events do not count)
+        Vec3 nee_pos;     // where NEE was last done (MIS of a light hit found by sampling)
+        Vec3 nee_normal;  // and there the normal of the lit side, if on a surface
+        bool nee_on_surface = false;  // (the environment is sampled about it: sample_light)
+        int depth = 0;                // surface vertices (medium events do not count)
         auto flush = [&](const RGB& contribution) {
             for (int c = 0; c < 3; ++c) {
                 const double v = contribution[static_cast<size_t>(c)];
@@ -284,13 +294,13 @@ struct Renderer {
                     [&](const Vec3& wi) { return std::max(0.0, dot(wi, n)) / kPi; }, c, rays);
                 flush(c);
                 const double u1 = rng.uniform(), u2 = rng.uniform();
-                const double r = std::sqrt(u1), phi = 2 * kPi * u2;
-                const Vec3 wl{r * std::cos(phi), r * std::sin(phi),
-                              std::sqrt(std::max(0.0, 1 - u1))};
+                const Vec3 wl = sample_cosine_hemisphere(u1, u2);
                 d = Frame(n).world(wl);
                 prev_pdf = wl.z / kPi;
                 prev_nee = true;
                 nee_pos = p;
+                nee_normal = n;
+                nee_on_surface = true;
                 for (int k = 0; k < 3; ++k) beta[k] *= m.albedo[static_cast<size_t>(k)];
                 o = p + n * eps;
                 on_surface = false;
@@ -342,6 +352,8 @@ struct Renderer {
                     prev_pdf = smp->pdf;
                     prev_nee = true;
                     nee_pos = p;
+                    nee_normal = n;
+                    nee_on_surface = true;
                     reflected = smp->reflection;
                     transmitted = !smp->reflection;
                 }
@@ -350,6 +362,21 @@ struct Renderer {
                     if (medium < 0) {
                         medium = mi;
                         medium_shape = static_cast<int>(shape);
+                        if (opt.hero == RenderHero::kThroughputAlbedo) {
+                            std::array<double, 3> p{};
+                            double sum = 0;
+                            for (int k = 0; k < 3; ++k)
+                                sum += p[static_cast<size_t>(k)] =
+                                    beta[k] * md.region.albedo[static_cast<size_t>(k)];
+                            if (sum > 0)
+                                for (double& v : p) v /= sum;
+                            else
+                                p = {1.0 / 3, 1.0 / 3, 1.0 / 3};
+                            // From the stream, not a Sobol dimension: the walk's first
+                            // numbers keep the pairs they had.
+                            const double u = rng.stream_uniform();
+                            ws.weights.choose_hero(p, entered ? u : (hero + u) / 3);
+                        }
                         entered = true;
                     } else {
                         medium = -1;
@@ -395,22 +422,26 @@ struct Renderer {
             double& prev_pdf;
             bool& prev_nee;
             Vec3& nee_pos;
+            bool& nee_on_surface;
             std::uint64_t& rays;
             decltype(flush)& add;
             // The density with which phase sampling picks a direction, as the hero MIS sees
-            // it: the mixture of the channels' phase functions weighted by their path densities
-            // so far (q), which does not depend on the hero; the MIS weights of NEE against
-            // phase sampling use it, so that they sum to one whichever channel is the hero
-            // (with per-channel g too).
+            // it: the mixture of the channels' phase functions weighted by their probabilities
+            // to be the hero times their path densities so far (prob x q), which does not
+            // depend on the hero; the MIS weights of NEE against phase sampling use it, so that
+            // they sum to one whichever channel is the hero (with per-channel g too).
             double phase_mix(const WalkState<3>& s, double mu_l) const {
                 const MediumData& md = R.media[static_cast<size_t>(medium)];
                 if (md.same_g) return hg_pdf(md.g[0], mu_l);
                 const double* qq = s.weights.q;
-                const double qs = qq[0] + qq[1] + qq[2];
-                double v = 0;
-                for (int c = 0; c < 3; ++c)
-                    v += qq[c] / qs * hg_pdf(md.g[static_cast<size_t>(c)], mu_l);
-                return v;
+                const auto& pr = s.weights.prob;
+                double v = 0, sum = 0;
+                for (int c = 0; c < 3; ++c) {
+                    const double wc = pr[static_cast<size_t>(c)] * qq[c];
+                    sum += wc;
+                    v += wc * hg_pdf(md.g[static_cast<size_t>(c)], mu_l);
+                }
+                return v / sum;
             }
             BoundaryAction boundary(WalkState<3>& s, const WalkBoundary& b, RngStream&) {
                 if (!at_surface(s.p, b.n, b.shape)) return BoundaryAction::kEnd;
@@ -442,9 +473,11 @@ struct Renderer {
                 prev_pdf = phase_mix(s, mu);
                 prev_nee = R.passable(medium);
                 nee_pos = s.p;
+                nee_on_surface = false;
             }
         };
-        Hooks hooks{{}, vertex, *this, medium, prev_pdf, prev_nee, nee_pos, rays, flush};
+        Hooks hooks{{},       vertex,  *this,          medium, prev_pdf,
+                    prev_nee, nee_pos, nee_on_surface, rays,   flush};
         WalkRules rules;
         rules.flight = FlightRule::kResample;
         rules.long_events = opt.long_path_events;
@@ -489,7 +522,8 @@ struct Renderer {
             }
             if (!hit.hit()) {
                 RGB c{};
-                add_escape(nee_pos, d, prev_nee, prev_pdf, beta, c);
+                add_escape(nee_pos, env_normal(nee_on_surface ? &nee_normal : nullptr), d, prev_nee,
+                           prev_pdf, beta, c);
                 flush(c);
                 return rays;
             }
@@ -541,6 +575,10 @@ void check_renderable(const Scene& scene) {
                                  "tracer (it would render that medium black): give the medium a "
                                  "roughness (e.g. 0.05), the light an angular_radius_deg, or use a "
                                  "sphere light");
+}
+
+const char* to_string(RenderHero h) {
+    return h == RenderHero::kUniform ? "uniform" : "throughput-albedo";
 }
 
 const char* to_string(RenderErrorMeasure m) {
@@ -631,6 +669,8 @@ std::string fingerprint_with_batch(const Scene& scene, const RenderOptions& o, i
     // Only when set, so that the keys of existing checkpoints stay what they were.
     if (o.max_depth != 0) k.add("max_depth", o.max_depth);
     if (o.absorption) k.add("absorption", to_string(*o.absorption));
+    if (o.hero != RenderHero::kThroughputAlbedo) k.add("hero", to_string(o.hero));
+    if (!o.environment_cosine) k.add("environment_cosine", false);
     add_to_key(k, scene);
     return k.text();
 }

@@ -69,6 +69,17 @@ enum class RenderSampler {
 };
 inline constexpr int kSobolPairs = 8;
 
+/// How the hero channel of a camera path's walks is chosen.
+enum class RenderHero {
+    /// R, G and B in turn at the path's start (stratified in a batch), for all its walks.
+    kUniform,
+    /// Anew at every entry into a medium, with probability proportional to the path's
+    /// throughput times the medium's albedo in each channel (as Cycles chooses its channel);
+    /// the first entry stratified by the path's third of the batch.
+    kThroughputAlbedo,
+};
+const char* to_string(RenderHero h);
+
 /// Run control: RunControl (core/batch_runner.h); the budget is samples per pixel (batch_spp per
 /// batch), seconds, or a relative error (error_measure). Snapshots keep the image after 4, 8,
 /// 16, ... batches (RenderResult::run.snapshots), for error against time; each holds the whole
@@ -104,6 +115,13 @@ struct RenderOptions : RunControl {
     /// weights, Russian roulette below kWeightRouletteThreshold). Unset (the default since
     /// volpath-render-5): per medium, `render_absorption`.
     std::optional<Absorption> absorption;
+    /// How a camera path's hero channel is chosen (volpath/walk.h SpectralWeights); the default
+    /// since volpath-render-6, kUniform before.
+    RenderHero hero = RenderHero::kThroughputAlbedo;
+    /// NEE at a surface samples the environment in proportion to cos(theta) about the lit
+    /// side's normal (volpath/lights.h sample_light) instead of uniformly over the sphere (half
+    /// of whose samples fell below the surface). Off: as before volpath-render-6.
+    bool environment_cosine = true;
     /// Samples per pixel in a batch, a multiple of 3 (each channel the hero equally often).
     /// 0: 3 x 2^m, the largest with at least 32 batches in a sample budget (3 when there is a
     /// time or an error budget); a render resumed from a checkpoint keeps the size it started

@@ -28,6 +28,13 @@ struct Frame {
     Vec3 world(const Vec3& v) const { return s * v.x + t * v.y + n * v.z; }
 };
 
+/// A direction on the hemisphere of +z with density cos(theta) / pi (Malley's method: a uniform
+/// point on the unit disc lifted onto the hemisphere), for uniform u1, u2.
+inline Vec3 sample_cosine_hemisphere(double u1, double u2) {
+    const double r = std::sqrt(u1), phi = 2 * kPi * u2;
+    return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1 - u1))};
+}
+
 /// The direction with cosine `mu` to `w` and azimuth `phi` about it (w a unit vector).
 inline Vec3 rotate(const Vec3& w, double mu, double phi) {
     Vec3 s, t;

@@ -112,6 +112,20 @@ struct SpectralWeights {
             q[c] = 1.0;
         }
     }
+    /// A new hero for the rest of the path (NC = 3), drawn with probabilities `p` (summing to
+    /// one) by the inverse of their distribution at u in [0, 1): the balance-heuristic MIS
+    /// starts afresh (every q = 1), which is the one-sample MIS of the walk from here on over
+    /// the mixture sum_k p_k (channel k's density), unbiased given what came before whatever p
+    /// is, so p may depend on the path so far (as Cycles chooses its channel by throughput x
+    /// albedo at every step).
+    void choose_hero(const std::array<double, 3>& p, double u) {
+        if constexpr (NC == 3) {
+            prob = p;
+            hero = u < p[0] ? 0 : u < p[0] + p[1] || p[2] <= 0 ? 1 : 2;
+            if (prob[static_cast<std::size_t>(hero)] <= 0) hero = p[0] > 0 ? 0 : 1;
+            for (int c = 0; c < 3; ++c) q[c] = 1.0;
+        }
+    }
     double max_beta() const {
         double m = beta[0];
         for (int c = 1; c < NC; ++c) m = std::max(m, beta[c]);

@@ -37,6 +37,7 @@ struct RenderArgs {
     int batch_spp = 0;
     std::string sampler = "sobol";
     std::string absorption = "auto";
+    std::string hero = "throughput-albedo";
     CommonOptions common;
 };
 
@@ -57,6 +58,7 @@ std::string render_toml(const RenderArgs& a, const Scene& scene, const volpath::
     st.record("sampler",
               std::string(o.sampler == volpath::RenderSampler::kSobol ? "sobol" : "independent"));
     st.record("absorption", a.absorption);
+    st.record("hero", a.hero);
     // What "auto" (or the requested policy) came to in each medium.
     ConfigTable media = st.table_or_empty("media_absorption");
     for (const auto& [name, policy] : r.media_absorption)
@@ -120,6 +122,8 @@ int run_render(const RenderArgs& a) {
     o.batch_spp = a.batch_spp;
     o.sampler = a.sampler == "independent" ? volpath::RenderSampler::kIndependent
                                            : volpath::RenderSampler::kSobol;
+    o.hero = a.hero == "throughput-albedo" ? volpath::RenderHero::kThroughputAlbedo
+                                           : volpath::RenderHero::kUniform;
     if (a.absorption != "auto")
         o.absorption = a.absorption == "weighted" ? volpath::Absorption::kWeighted
                                                   : volpath::Absorption::kAnalog;
@@ -288,6 +292,12 @@ void register_render(CLI::App& app, std::function<int()>& action) {
                     "albedo) or weighted (the albedos in the path's weights, Russian roulette on "
                     "small weights)")
         ->check(one_of({"auto", "analog", "weighted"}));
+    sub->add_option("--hero", a->hero,
+                    "The hero channel of walks in media: throughput-albedo (default; chosen "
+                    "anew at every entry into a medium, with probability proportional to the "
+                    "path's throughput times the medium's albedo) or uniform (R, G, B in turn "
+                    "per camera path, as before volpath-render-6)")
+        ->check(one_of({"uniform", "throughput-albedo"}));
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
 
