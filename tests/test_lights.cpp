@@ -56,10 +56,28 @@ std::vector<Case> cases() {
     return out;
 }
 
+// Directions in cells of equal probability: n_u bands of a coordinate u in [0, 1] that is
+// uniform under the density tested, n_phi sectors of the azimuth of the local direction l.
+struct CellHistogram {
+    int n_u = 20, n_phi = 20;
+    std::vector<double> observed = std::vector<double>(static_cast<std::size_t>(n_u * n_phi), 0.0);
+    void add(double u, const Vec3& l) {
+        const int a = std::min(n_u - 1, static_cast<int>(u * n_u));
+        const double phi = std::atan2(l.y, l.x) + kPi;
+        const int b = std::min(n_phi - 1, static_cast<int>(phi / (2 * kPi) * n_phi));
+        observed[static_cast<std::size_t>(a * n_phi + b)] += 1;
+    }
+    // Pearson's chi-square against equal expected counts of `n` samples in all; its p-value.
+    double p(std::int64_t n, double& chi2, int& dof) const {
+        const std::vector<double> expected(observed.size(), static_cast<double>(n) / (n_u * n_phi));
+        chi2 = testing::chi2_statistic(observed, expected, dof);
+        return chi_square_p(chi2, dof);
+    }
+};
+
 TEST(Lights, SampledDirectionsFollowTheStatedDensity) {
     // Cells of equal solid angle within the cone: n_mu bands of equal width in cos(theta)
     // about the axis, n_phi sectors each; every sample must carry pdf = light_pdf = 1 / cone.
-    const int n_mu = 20, n_phi = 20;
     const std::int64_t n = static_cast<std::int64_t>(2e5 * testing::test_scale());
     const std::vector<Case> all = cases();
     const double alpha = testing::sidak(0.01, static_cast<int>(all.size()));
@@ -68,7 +86,7 @@ TEST(Lights, SampledDirectionsFollowTheStatedDensity) {
         SCOPED_TRACE(c.name);
         const Frame f(c.axis);
         const double cone = 2 * kPi * (1 - c.cos_max);
-        std::vector<double> observed(static_cast<std::size_t>(n_mu * n_phi), 0.0);
+        CellHistogram cells;
         RngStream rng(3, rng_domain::kTest + 60, index++);
         int bad_pdf = 0, outside = 0;
         for (std::int64_t i = 0; i < n; ++i) {
@@ -84,18 +102,13 @@ TEST(Lights, SampledDirectionsFollowTheStatedDensity) {
                 ++outside;
                 continue;
             }
-            const int a = std::min(n_mu - 1, static_cast<int>(u * n_mu));
-            const double phi = std::atan2(l.y, l.x) + kPi;
-            const int b = std::min(n_phi - 1, static_cast<int>(phi / (2 * kPi) * n_phi));
-            observed[static_cast<std::size_t>(a * n_phi + b)] += 1;
+            cells.add(u, l);
         }
         EXPECT_EQ(bad_pdf, 0);
         EXPECT_EQ(outside, 0);
-        const std::vector<double> expected(observed.size(),
-                                           static_cast<double>(n) / (n_mu * n_phi));
+        double chi2 = 0;
         int dof = 0;
-        const double chi2 = testing::chi2_statistic(observed, expected, dof);
-        const double p = chi_square_p(chi2, dof);
+        const double p = cells.p(n, chi2, dof);
         EXPECT_GT(p, alpha) << "chi2 " << chi2 << " over " << dof;
         std::printf("  [measured] %s: chi2 %.1f / %d, p %.3f\n", c.name, chi2, dof, p);
         // Directions outside the cone are never picked.
@@ -141,9 +154,8 @@ TEST(Lights, TheEnvironmentAboutASurfaceNormalIsCosineDistributed) {
     const Light env = make_light(scene_light(LightType::kEnvironment));
     const Vec3 n = normalize(Vec3{1, -2, 0.5});
     const Frame f(n);
-    const int n_u = 20, n_phi = 20;
     const std::int64_t count = static_cast<std::int64_t>(2e5 * testing::test_scale());
-    std::vector<double> observed(static_cast<std::size_t>(n_u * n_phi), 0.0);
+    CellHistogram cells;
     RngStream rng(6, rng_domain::kTest + 63, 0);
     int bad_pdf = 0, below = 0, bad_value = 0;
     for (std::int64_t i = 0; i < count; ++i) {
@@ -158,19 +170,14 @@ TEST(Lights, TheEnvironmentAboutASurfaceNormalIsCosineDistributed) {
             std::fabs(light_pdf(env, {0, 0, 0}, s.wi, &n) - expect) > 1e-9 * expect)
             ++bad_pdf;
         if (std::fabs(s.value[0] * l.z / s.pdf - 2.0 * kPi) > 1e-9) ++bad_value;
-        const double u = 1 - l.z * l.z;
-        const int a = std::min(n_u - 1, static_cast<int>(u * n_u));
-        const double phi = std::atan2(l.y, l.x) + kPi;
-        const int b = std::min(n_phi - 1, static_cast<int>(phi / (2 * kPi) * n_phi));
-        observed[static_cast<std::size_t>(a * n_phi + b)] += 1;
+        cells.add(1 - l.z * l.z, l);
     }
     EXPECT_EQ(below, 0);
     EXPECT_EQ(bad_pdf, 0);
     EXPECT_EQ(bad_value, 0);
-    const std::vector<double> expected(observed.size(), static_cast<double>(count) / (n_u * n_phi));
+    double chi2 = 0;
     int dof = 0;
-    const double chi2 = testing::chi2_statistic(observed, expected, dof);
-    const double p = chi_square_p(chi2, dof);
+    const double p = cells.p(count, chi2, dof);
     EXPECT_GT(p, 0.001) << "chi2 " << chi2 << " over " << dof;
     std::printf("  [measured] environment about a normal: chi2 %.1f / %d, p %.3f\n", chi2, dof, p);
     // Below the surface: never picked; without a normal: the whole sphere, as before.
