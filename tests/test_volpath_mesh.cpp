@@ -132,27 +132,20 @@ TEST(VolpathMesh, VeryLargeBoxEqualsTheHalfSpacePencilProfile) {
     po.only_channel = 0;
     po.seed = 77;
     const PencilRun ref = simulate_pencil(skin, grid, po);
-    double chi2 = 0, max_z = 0;
-    int bins = 0;
+    testing::ZTally t;
     for (int i = 0; i < grid.nr; ++i) {
         const double area = 2 * kPi * (i + 0.5) * grid.dr_cm * grid.dr_cm;
-        const double v = r.mean[static_cast<size_t>(i)] / area,
-                     s = r.se[static_cast<size_t>(i)] / area;
-        const double rv = ref.profile.rd_per_cm2[0][static_cast<size_t>(i)];
-        const double rs = ref.profile.se_per_cm2[0][static_cast<size_t>(i)];
-        if (!(s > 0 && rs > 0) || s > 0.3 * v || rs > 0.3 * rv) continue;
-        const double z = (v - rv) / std::hypot(s, rs);
-        chi2 += z * z;
-        max_z = std::max(max_z, std::fabs(z));
-        ++bins;
+        t.add_pair(r.mean[static_cast<size_t>(i)] / area, r.se[static_cast<size_t>(i)] / area,
+                   ref.profile.rd_per_cm2[0][static_cast<size_t>(i)],
+                   ref.profile.se_per_cm2[0][static_cast<size_t>(i)]);
     }
     std::printf(
         "  [measured] box vs pencil, Skin1 R: chi2 %.1f over %d bins, max |z| %.2f; other "
         "faces %.2g\n",
-        chi2, bins, max_z, r.mean[size - 1]);
-    EXPECT_GT(bins, 60);
-    EXPECT_LT(chi2, testing::chi2_critical(bins, 0.001));
-    EXPECT_LT(max_z, testing::normal_quantile(1 - 0.0005 / bins));
+        t.chi2, t.n, t.max_abs, r.mean[size - 1]);
+    EXPECT_GT(t.n, 60);
+    EXPECT_LT(t.chi2, testing::chi2_critical(t.n, 0.001));
+    EXPECT_LT(t.max_abs, testing::normal_quantile(1 - 0.0005 / t.n));
     EXPECT_EQ(r.mean[size - 1], 0.0);
 }
 
@@ -210,45 +203,36 @@ TEST(VolpathMesh, TessellatedSphereEqualsTheLitSphereEngine) {
     so.mode = ChromaticMode::kHero;
     so.image = true;
     const SphereRun ref = simulate_sphere(sc, so);
-    auto add = [](double v, double s, double rv, double rs, double& chi2, double& max_z, int& n) {
-        if (!(s > 0 && rs > 0) || s > 0.3 * v || rs > 0.3 * rv) return;
-        const double z = (v - rv) / std::hypot(s, rs);
-        chi2 += z * z;
-        max_z = std::max(max_z, std::fabs(z));
-        ++n;
-    };
-    double chi2 = 0, max_z = 0;
-    int bins = 0;
+    testing::ZTally zones;
     for (int j = 0; j < nb; ++j) {
         const double b0 = kPi * j / nb, b1 = kPi * (j + 1) / nb;
         const double zone = 2 * (std::cos(b0) - std::cos(b1));
-        add(r.mean[static_cast<size_t>(j)] / zone, r.se[static_cast<size_t>(j)] / zone,
-            ref.exitance[0][static_cast<size_t>(j)], ref.exitance_se[0][static_cast<size_t>(j)],
-            chi2, max_z, bins);
+        zones.add_pair(r.mean[static_cast<size_t>(j)] / zone, r.se[static_cast<size_t>(j)] / zone,
+                       ref.exitance[0][static_cast<size_t>(j)],
+                       ref.exitance_se[0][static_cast<size_t>(j)]);
     }
     std::printf("  [measured] tessellated vs exact sphere: chi2 %.1f over %d zones, max |z| %.2f\n",
-                chi2, bins, max_z);
-    EXPECT_GE(bins, 15);
-    EXPECT_LT(chi2, testing::chi2_critical(bins, testing::sidak(0.001, 2)));
+                zones.chi2, zones.n, zones.max_abs);
+    EXPECT_GE(zones.n, 15);
+    EXPECT_LT(zones.chi2, testing::chi2_critical(zones.n, testing::sidak(0.001, 2)));
     // The image: the engine's layer is M / pi per pixel [per unit E0]; ours the same estimator.
     const ImageLayer& E = ref.image->layer("exitance");
     const ImageLayer& Es = ref.image->layer("exitance.stderr");
     const double to_exitance = R * R / (cam.pixel_cm * cam.pixel_cm);
-    double ichi2 = 0, imax = 0;
-    int pixels = 0;
+    testing::ZTally pixels;
     for (int y = 0; y < W; ++y)
         for (int x = 0; x < W; ++x) {
             const size_t i = static_cast<size_t>(nb + y * W + x);
-            add(r.mean[i] * to_exitance, r.se[i] * to_exitance, E.at(x, y, 0), Es.at(x, y, 0),
-                ichi2, imax, pixels);
+            pixels.add_pair(r.mean[i] * to_exitance, r.se[i] * to_exitance, E.at(x, y, 0),
+                            Es.at(x, y, 0));
         }
     std::printf(
         "  [measured] exitance image, tessellated vs exact sphere: chi2 %.1f over %d pixels, "
         "max |z| %.2f\n",
-        ichi2, pixels, imax);
-    EXPECT_GT(pixels, 150);
-    EXPECT_LT(ichi2, testing::chi2_critical(pixels, testing::sidak(0.001, 2)));
-    EXPECT_LT(imax, testing::normal_quantile(1 - 0.0005 / pixels));
+        pixels.chi2, pixels.n, pixels.max_abs);
+    EXPECT_GT(pixels.n, 150);
+    EXPECT_LT(pixels.chi2, testing::chi2_critical(pixels.n, testing::sidak(0.001, 2)));
+    EXPECT_LT(pixels.max_abs, testing::normal_quantile(1 - 0.0005 / pixels.n));
 }
 
 }  // namespace

@@ -46,6 +46,23 @@ InputError input_error_of(F&& f, const std::string& what) {
     return InputError({}, "", "");
 }
 
+/// A chi-square tally of z-scores: the sum of their squares, the largest |z| and their count.
+struct ZTally {
+    double chi2 = 0, max_abs = 0;
+    int n = 0;
+    void add(double z) {
+        chi2 += z * z;
+        max_abs = std::max(max_abs, std::fabs(z));
+        ++n;
+    }
+    /// The z of two independent estimates a +- sa and b +- sb; left out where either standard
+    /// error is 0 or above `max_rel_se` of its estimate (too few events for Gaussian noise).
+    void add_pair(double a, double sa, double b, double sb, double max_rel_se = 0.3) {
+        if (!(sa > 0 && sb > 0) || sa > max_rel_se * a || sb > max_rel_se * b) return;
+        add((a - b) / std::hypot(sa, sb));
+    }
+};
+
 /// tests/data/<rel>
 std::string data_path(const std::string& rel);
 /// <source tree>/<rel>

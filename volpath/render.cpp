@@ -363,19 +363,11 @@ struct Renderer {
                         medium = mi;
                         medium_shape = static_cast<int>(shape);
                         if (opt.hero == RenderHero::kThroughputAlbedo) {
-                            std::array<double, 3> p{};
-                            double sum = 0;
-                            for (int k = 0; k < 3; ++k)
-                                sum += p[static_cast<size_t>(k)] =
-                                    beta[k] * md.region.albedo[static_cast<size_t>(k)];
-                            if (sum > 0)
-                                for (double& v : p) v /= sum;
-                            else
-                                p = {1.0 / 3, 1.0 / 3, 1.0 / 3};
                             // From the stream, not a Sobol dimension: the walk's first
                             // numbers keep the pairs they had.
                             const double u = rng.stream_uniform();
-                            ws.weights.choose_hero(p, entered ? u : (hero + u) / 3);
+                            ws.weights.choose_hero_by_throughput(md.region.albedo,
+                                                                 entered ? u : (hero + u) / 3);
                         }
                         entered = true;
                     } else {

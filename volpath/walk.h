@@ -121,9 +121,26 @@ struct SpectralWeights {
     void choose_hero(const std::array<double, 3>& p, double u) {
         if constexpr (NC == 3) {
             prob = p;
-            hero = u < p[0] ? 0 : u < p[0] + p[1] || p[2] <= 0 ? 1 : 2;
-            if (prob[static_cast<std::size_t>(hero)] <= 0) hero = p[0] > 0 ? 0 : 1;
+            hero = 0;
+            for (double cdf = p[0]; hero < 2 && !(u < cdf);)
+                cdf += p[static_cast<std::size_t>(++hero)];
+            // Rounding may leave u past the sum: the last channel that can be chosen.
+            while (p[static_cast<std::size_t>(hero)] <= 0) --hero;
             for (int c = 0; c < 3; ++c) q[c] = 1.0;
+        }
+    }
+    /// choose_hero with probabilities proportional to each channel's weight times `albedo`
+    /// (uniform if they are all 0).
+    void choose_hero_by_throughput(const std::array<double, 3>& albedo, double u) {
+        if constexpr (NC == 3) {
+            std::array<double, 3> p{};
+            double sum = 0;
+            for (std::size_t c = 0; c < 3; ++c) sum += p[c] = beta[c] * albedo[c];
+            if (sum > 0)
+                for (double& v : p) v /= sum;
+            else
+                p = {1.0 / 3, 1.0 / 3, 1.0 / 3};
+            choose_hero(p, u);
         }
     }
     double max_beta() const {
