@@ -9,6 +9,7 @@
 #include "testing.h"
 #include "volpath/pencil.h"
 #include "volpath/sampling.h"
+#include "volpath/walk.h"
 
 #include <gtest/gtest.h>
 
@@ -173,6 +174,47 @@ TEST(VolpathOptics, RotatedDirectionsHaveTheRequestedCosine) {
 }
 
 // ---- transport against closed forms and literature ---------------------------------------
+
+TEST(VolpathWeights, ScatteringIsTheBalanceHeuristicOverEachChannelsOwnDensity) {
+    // One scattering collision at distance d: whichever channel is the hero, channel c's weight
+    // is the one-sample balance heuristic f_c / sum_k P_k p_k with f_c = sigma_s,c T_c(d) and
+    // p_k the density of strategy k: sigma_s,k T_k(d) if it absorbs by roulette (analog),
+    // sigma_t,k T_k(d) if it weights its absorption. Per channel: albedos 0.95, 0.5, 0.17 give
+    // weighted, weighted (0.5 is the threshold), analog.
+    using namespace ssslab::volpath;
+    const std::array<double, 3> st{1.05, 6.0, 48.0}, ss{1.0, 3.0, 8.0};
+    const WalkRegion r = WalkRegion::make(st, ss, {0.0, 0.5, 0.9});
+    const std::array<double, 3> P{0.5, 0.3, 0.2};
+    const double d = 0.07;
+    for (const Absorption a :
+         {Absorption::kAnalog, Absorption::kWeighted, Absorption::kPerChannel}) {
+        const bool weighted[3] = {a != Absorption::kAnalog, a != Absorption::kAnalog,
+                                  a == Absorption::kWeighted};
+        double mix = 0;
+        for (int k = 0; k < 3; ++k)
+            mix += P[static_cast<size_t>(k)] *
+                   (weighted[k] ? st[static_cast<size_t>(k)] : ss[static_cast<size_t>(k)]) *
+                   std::exp(-st[static_cast<size_t>(k)] * d);
+        for (int h = 0; h < 3; ++h) {
+            SpectralWeights<3> w;
+            w.start(1.0);
+            w.prob = P;
+            w.hero = h;
+            w.scatter(r, d, a);
+            for (int c = 0; c < 3; ++c) {
+                const double f =
+                    ss[static_cast<size_t>(c)] * std::exp(-st[static_cast<size_t>(c)] * d);
+                EXPECT_NEAR(w.beta[c], f / mix, 1e-12 * f / mix)
+                    << to_string(a) << " hero " << h << " channel " << c;
+            }
+            // The mixture of the densities stays 1 (the rescaling).
+            EXPECT_NEAR(P[0] * w.q[0] + P[1] * w.q[1] + P[2] * w.q[2], 1.0, 1e-12);
+        }
+    }
+    EXPECT_EQ(channel_absorption(Absorption::kPerChannel, 0.5), Absorption::kWeighted);
+    EXPECT_EQ(channel_absorption(Absorption::kPerChannel, 0.4999), Absorption::kAnalog);
+    EXPECT_EQ(channel_absorption(Absorption::kAnalog, 0.99), Absorption::kAnalog);
+}
 
 TEST(VolpathTransport, WhiteFurnaceIndexMatchedSlabLosesNothing) {
     // Albedo 1, no index change: every path leaves the slab, R + T = 1 for each path in analog

@@ -112,8 +112,10 @@ struct RenderOptions : RunControl {
     RenderSampler sampler = RenderSampler::kSobol;
     /// Absorption inside media (volpath/walk.h): analog (the hero's roulette with its albedo;
     /// NEE at a vertex carries the survival probability) or weighted (the albedos in the
-    /// weights, Russian roulette below kWeightRouletteThreshold). Unset (the default since
-    /// volpath-render-5): per medium, `render_absorption`.
+    /// weights, Russian roulette below kWeightRouletteThreshold) or per channel (each
+    /// channel's strategy weighted where its albedo is at least kPerChannelWeightedAlbedo,
+    /// analog below). Unset (the default since volpath-render-5): per medium,
+    /// `render_absorption`.
     std::optional<Absorption> absorption;
     /// How a camera path's hero channel is chosen (volpath/walk.h SpectralWeights); the default
     /// since volpath-render-6, kUniform before.

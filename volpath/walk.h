@@ -14,7 +14,9 @@
 //   (NC = 1, per-channel runs).
 // - Absorption (`Absorption`, one policy per estimator): analog (the hero's roulette with its
 //   albedo; each channel's strategy includes its own roulette, so the weights stay below
-//   1 / P(hero = c)) or weighted (the albedo in the weights, Russian roulette below 0.1).
+//   1 / P(hero = c)) or weighted (the albedo in the weights, Russian roulette below 0.1), or
+//   per channel (each channel's strategy weighted where its albedo is at least 0.5, analog
+//   below; the hero's policy decides at a collision).
 // - Long paths: after `long_events` scattering events a path survives each further one with
 //   probability `long_survival` [Bitterli13 §3.2]; the weight reaching the first round (the
 //   mass at risk) goes to the `at_risk` hook. A flight that hits boundaries 10^6 times is
@@ -45,11 +47,29 @@ enum class Absorption {
     /// Multiply the weight by the albedo at every interaction and end paths by Russian roulette
     /// when the weight falls below 0.1 (implicit capture, as MCML does with its own threshold).
     kWeighted,
+    /// Each channel's strategy by its own albedo: weighted where it is at least
+    /// kPerChannelWeightedAlbedo, analog below; at a collision the hero's policy acts, and the
+    /// densities of the one-sample MIS are each channel's own (SpectralWeights::scatter). In a
+    /// medium of one high and two low albedos (a ketchup: 0.75, 0.067, 0.02) the high
+    /// channel's walks then collect light past the absorptions that would end them, while the
+    /// low channels keep the analog walk's short paths.
+    kPerChannel,
 };
 
-/// "analog" or "weighted": the policy's name in keys, settings and reports.
+/// The albedo from which a channel's strategy weights its absorption under kPerChannel.
+inline constexpr double kPerChannelWeightedAlbedo = 0.5;
+
+/// Channel c's own policy under `a` in a region of these albedos (kAnalog or kWeighted).
+inline Absorption channel_absorption(Absorption a, double albedo) {
+    if (a != Absorption::kPerChannel) return a;
+    return albedo >= kPerChannelWeightedAlbedo ? Absorption::kWeighted : Absorption::kAnalog;
+}
+
+/// "analog", "weighted" or "per-channel": the policy's name in keys, settings and reports.
 inline const char* to_string(Absorption a) {
-    return a == Absorption::kWeighted ? "weighted" : "analog";
+    return a == Absorption::kWeighted ? "weighted"
+           : a == Absorption::kAnalog ? "analog"
+                                      : "per-channel";
 }
 
 /// What happens to the sampled free path when it reaches the boundary and is reflected.
@@ -196,23 +216,25 @@ struct SpectralWeights {
     /// A flight of length d ended at a collision that scatters. Analog: the hero survived its
     /// absorption roulette, and each channel's strategy includes its own. Weighted: absorption
     /// enters the weights.
+    /// Under kPerChannel each channel's strategy has its own: the density of a scattering
+    /// collision at d is sigma_s T for an analog strategy (its roulette survived), sigma_t T
+    /// for a weighted one.
     void scatter(const WalkRegion& r, double d, Absorption a) {
         if constexpr (NC == 3) {
             const std::size_t h = static_cast<std::size_t>(hero);
+            const auto density = [&](std::size_t i) {
+                return channel_absorption(a, r.albedo[i]) == Absorption::kAnalog ? r.sigma_s[i]
+                                                                                 : r.sigma_t[i];
+            };
+            const double dh = density(h);
             for (int c = 0; c < 3; ++c) {
                 const std::size_t i = static_cast<std::size_t>(c);
                 const double e = relative_transmittance(r, c, d);
-                if (a == Absorption::kAnalog) {
-                    const double f = r.sigma_s[i] / r.sigma_s[h] * e;
-                    q[c] *= f;
-                    beta[c] *= f;
-                } else {
-                    q[c] *= r.sigma_t[i] / r.sigma_t[h] * e;
-                    beta[c] *= r.sigma_s[i] / r.sigma_t[h] * e;
-                }
+                q[c] *= density(i) / dh * e;
+                beta[c] *= r.sigma_s[i] / dh * e;
             }
             rescale();
-        } else if (a == Absorption::kWeighted) {
+        } else if (channel_absorption(a, r.albedo[0]) == Absorption::kWeighted) {
             beta[0] *= r.albedo[0];
         }
     }
@@ -415,10 +437,11 @@ WalkEnd walk(const Geometry& geo, WalkState<NC>& s, const WalkRules& rules, RngS
             }
         }
 
-        // A collision in R at s.p.
+        // A collision in R at s.p; the hero's policy acts (kPerChannel: its own).
         ++s.events;
-        if (rules.absorption == Absorption::kWeighted) {
-            wt.scatter(*R, travelled, Absorption::kWeighted);
+        const Absorption absorption = channel_absorption(rules.absorption, R->albedo[h]);
+        if (absorption == Absorption::kWeighted) {
+            wt.scatter(*R, travelled, rules.absorption);
             // NEE with the weights that hold the albedo, before the roulette on them (after
             // it, a strongly absorbing medium would collect light at the few survivors only).
             if (hooks.vertex_nee(s)) hooks.at_vertex(s, 1.0, rng);
@@ -430,10 +453,10 @@ WalkEnd walk(const Geometry& geo, WalkState<NC>& s, const WalkRules& rules, RngS
             }
         }
         const double survive = R->albedo[h];
-        const bool defer = rules.absorption == Absorption::kAnalog && hooks.vertex_nee(s);
-        if (rules.absorption == Absorption::kAnalog) {
+        const bool defer = absorption == Absorption::kAnalog && hooks.vertex_nee(s);
+        if (absorption == Absorption::kAnalog) {
             if (!defer && !(rng.uniform() < survive)) return WalkEnd::kAbsorbed;
-            wt.scatter(*R, travelled, Absorption::kAnalog);
+            wt.scatter(*R, travelled, rules.absorption);
         }
         if (s.events > rules.long_events) {
             if (s.events == rules.long_events + 1) hooks.at_risk(s);

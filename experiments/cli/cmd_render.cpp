@@ -125,8 +125,9 @@ int run_render(const RenderArgs& a) {
     o.hero = a.hero == "throughput-albedo" ? volpath::RenderHero::kThroughputAlbedo
                                            : volpath::RenderHero::kUniform;
     if (a.absorption != "auto")
-        o.absorption = a.absorption == "weighted" ? volpath::Absorption::kWeighted
-                                                  : volpath::Absorption::kAnalog;
+        o.absorption = a.absorption == "weighted"      ? volpath::Absorption::kWeighted
+                       : a.absorption == "per-channel" ? volpath::Absorption::kPerChannel
+                                                       : volpath::Absorption::kAnalog;
     o.error_measure = a.error_of == "image-mean" ? volpath::RenderErrorMeasure::kImageMean
                                                  : volpath::RenderErrorMeasure::kMedianPixel;
     o.width = a.width;
@@ -290,8 +291,9 @@ void register_render(CLI::App& app, std::function<int()>& action) {
                     "Absorption inside media: auto (default; weighted where every channel's "
                     "albedo is at least 0.9, else analog), analog (the hero's roulette with its "
                     "albedo) or weighted (the albedos in the path's weights, Russian roulette on "
-                    "small weights)")
-        ->check(one_of({"auto", "analog", "weighted"}));
+                    "small weights) or per-channel (each channel's strategy weighted where its "
+                    "albedo is at least 0.5, analog below)")
+        ->check(one_of({"auto", "analog", "weighted", "per-channel"}));
     sub->add_option("--hero", a->hero,
                     "The hero channel of walks in media: throughput-albedo (default; chosen "
                     "anew at every entry into a medium, with probability proportional to the "
