@@ -7,10 +7,13 @@
 #
 #   scripts/cycles_sidebyside.sh [scene.toml] [--size N] [--spp-ours N] [--spp-cycles N]
 #                                [--runs K] [--block B] [--threads T] [--out DIR]
+#                                [--ours-args "ARGS"]
 #
 # Besides the test of sameness it prints each side's efficiency 1/(MSE x time) per channel (MSE
 # the mean pixel variance; time ssslab's whole render and the sum of Cycles' render calls without
-# Blender's start-up), both renderers on the same T threads (default: all).
+# Blender's start-up), both renderers on the same T threads (default: all). --ours-args passes
+# further options to `ssslab render` (e.g. "--absorption per-channel": an estimator's option
+# against Cycles).
 #
 # Defaults: experiments/scenes/cycles/ketchup-matched.toml, 128 x 128, 16384 spp (ours), 16 runs
 # of 512 spp (Cycles), blocks of 16 pixels, results/cycles/<scene>/. Needs Debian's blender
@@ -19,7 +22,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 scene=experiments/scenes/cycles/ketchup-matched.toml
-size=128 spp_ours=16384 spp_cycles=512 runs=16 block=16 threads=0 out=""
+size=128 spp_ours=16384 spp_cycles=512 runs=16 block=16 threads=0 out="" ours_args=""
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --size) size=$2; shift 2 ;;
@@ -29,6 +32,7 @@ while [[ $# -gt 0 ]]; do
     --block) block=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
+    --ours-args) ours_args=$2; shift 2 ;;
     -*) echo "cycles_sidebyside.sh: unknown option $1" >&2; exit 2 ;;
     *) scene=$1; shift ;;
   esac
@@ -42,10 +46,11 @@ mkdir -p "$out"
 
 "$ssslab" scene "$scene" --export-obj "$out/export" > /dev/null
 json=$(ls "$out"/export/*/scene.json)
-echo "ssslab: $size x $size, $spp_ours spp"
+echo "ssslab: $size x $size, $spp_ours spp${ours_args:+, $ours_args}"
 start=$(date +%s%N)
+# shellcheck disable=SC2086  # ours_args: options split into words on purpose
 "$ssslab" render "$scene" --width "$size" --height "$size" --spp "$spp_ours" --seed 11 \
-  --threads "$threads" --out "$out/ssslab.exr" -q
+  --threads "$threads" --out "$out/ssslab.exr" -q $ours_args
 ours_s=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.1f", (b - a) / 1e9 }')
 echo "Cycles: $runs runs of $spp_cycles spp"
 files=()
