@@ -4,13 +4,7 @@
 // (GCC 12), so a TSan build compiles the baseline only.
 #pragma once
 
-#if defined(__SANITIZE_THREAD__)
-#define SSSLAB_TSAN 1
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
-#define SSSLAB_TSAN 1
-#endif
-#endif
+#include "core/sanitizers.h"
 
 #ifdef SSSLAB_TSAN
 #define SSSLAB_AVX2_CLONES

@@ -1,5 +1,7 @@
 #include "volpath/embree_scene.h"
 
+#include "core/sanitizers.h"
+
 #include <embree3/rtcore.h>
 #include <tbb/task_arena.h>
 
@@ -20,18 +22,6 @@ struct EmbreeScene::Impl {
     // the surface the ray queries see, for the point queries.
     std::vector<std::vector<std::array<Vec3, 4>>> corners;  // and the unit normal of their plane
 };
-
-// Whether this is the ThreadSanitizer build (GCC's macro; Clang's feature test).
-#if defined(__SANITIZE_THREAD__)
-#define SSSLAB_TSAN 1
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
-#define SSSLAB_TSAN 1
-#endif
-#endif
-#ifndef SSSLAB_TSAN
-#define SSSLAB_TSAN 0
-#endif
 
 namespace {
 
@@ -149,7 +139,7 @@ EmbreeScene::EmbreeScene(const std::vector<const TriangleMesh*>& meshes) : impl_
         if (id != k) throw std::runtime_error("Embree: unexpected geometry id");
         triangles_ += m.triangles.size();
     }
-#if SSSLAB_TSAN
+#ifdef SSSLAB_TSAN
     // The TSan build: Embree's BVH build runs on TBB through task code compiled into the
     // uninstrumented libembree3, so TSan cannot see how a TBB worker that took part in the build
     // is ordered with this thread's later reuse of the build's stack and heap (the reports of
