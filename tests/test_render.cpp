@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <sstream>
@@ -338,6 +339,111 @@ material = "m"
             EXPECT_LT(t.chi2, testing::chi2_critical(t.n, 0.001));
             EXPECT_LT(t.max_abs, testing::normal_quantile(1 - 0.0005 / t.n));
         }
+}
+
+TEST(Render, ShadowsOfOccludersCloserThanTheSceneEpsilonAreCast) {
+    // A diffuse floor 40,000 mm wide (the scene epsilon, 4e-5 of the extent, is then 0.8 mm)
+    // under a sun at 45 degrees, direct light only, seen straight down over x in [0, 2] mm. A
+    // step from 0.05 to 0.45 mm above the floor (below the epsilon) stands at x < 0: opaque
+    // and diffuse, or an index-matched absorbing medium (which may not touch the floor). Its
+    // shadow is closed-form: a floor point at x < 0.45 sees the sun through a chord
+    // sqrt(2) (0.45 - max(x, 0.05)) of the step (opaque: not at all), farther points see it
+    // unblocked, so each pixel column is L (1/w) integral of that transmittance over its x
+    // range, with L = albedo E cos(45) / pi. NEE's
+    // shadow rays from the floor start at the floor point, skipping its triangle
+    // (volpath-render-7); before, they started eps above it, above the step: no shadow at all
+    // (the legacy option below shows the test sees that).
+    const double fov = 2 * std::atan(0.1) * 180 / std::numbers::pi;  // half-width 1 mm at 10 mm
+    char camera[200];
+    std::snprintf(camera, sizeof camera,
+                  "[camera]\nposition = [1, 10, 0]\ntarget = [1, 0, 0]\nup = [0, 0, -1]\n"
+                  "fov_y_deg = %.17g\nwidth = 8\nheight = 8\n",
+                  fov);
+    const std::string common = std::string("[scene]\nname = \"step\"\n") + camera + R"(
+[[lights]]
+type = "directional"
+direction = [-1, 1, 0]
+irradiance = 2
+[[materials]]
+name = "floor"
+type = "diffuse"
+albedo = 0.5
+[[shapes]]
+type = "plane"
+size_x = 40000
+size_z = 40000
+material = "floor"
+[[shapes]]
+type = "box"
+size = [10, 0.4, 10]
+translate = [-5, 0.25, 0]
+material = "step"
+)";
+    const double sigma[3] = {1.0, 2.0, 4.0};
+    const double L = 0.5 * 2 * std::sqrt(0.5) / std::numbers::pi;
+    for (const bool medium : {false, true}) {
+        const std::string step =
+            medium ? "[[materials]]\nname = \"step\"\nsigma_a_per_mm = [1.0, 2.0, 4.0]\n"
+                     "sigma_s_per_mm = 0\ng = 0\neta = 1.0\n"
+                   : "[[materials]]\nname = \"step\"\ntype = \"diffuse\"\nalbedo = 0.5\n";
+        const Scene s = parse_scene(common + step, "step.toml", ".");
+        for (const bool from_surface : {true, false}) {
+            SCOPED_TRACE(std::string(medium ? "medium" : "opaque") +
+                         (from_surface ? ", from the surface" : ", eps off it"));
+            RenderOptions o = options(96);
+            o.max_depth = 1;
+            o.nee_from_surface = from_surface;
+            const RenderResult r = render(s, o);
+            const ImageLayer& img = r.image.layer("radiance");
+            const ImageLayer& se = r.image.layer("radiance.stderr");
+            // Per channel: the channels' noise is the same samples' (one x per sample).
+            testing::ZTally t[3];
+            int exact = 0;
+            for (int x = 0; x < 8; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    // Column x covers floor x in [x / 4, (x + 1) / 4] mm.
+                    const double a = medium ? sigma[c] * std::sqrt(2.0) : 0;
+                    auto lit = [&](double u) {  // integral of the transmittance from 0 to u
+                        const double y0 = 0.05, y1 = 0.45;
+                        double i = std::max(0.0, u - y1);
+                        if (medium) {
+                            const double t0 = std::exp(-a * (y1 - y0));
+                            i += std::min(u, y0) * t0;
+                            if (u > y0) i += (std::exp(-a * (y1 - std::min(u, y1))) - t0) / a;
+                        }
+                        return i;
+                    };
+                    const double ref = L * (lit((x + 1) / 4.0) - lit(x / 4.0)) * 4;
+                    for (int y = 0; y < 8; ++y) {
+                        const double v = img.at(x, y, c), e = se.at(x, y, c);
+                        // Wholly lit or wholly shadowed pixels have no noise (their standard
+                        // error is rounding): they must be exact (to the EXR's floats).
+                        if (e > 1e-6 * L) {
+                            t[c].add((v - ref) / e);
+                        } else if (std::fabs(v - ref) <= 1e-6 * L) {
+                            ++exact;
+                        } else {
+                            t[c].add(std::numeric_limits<double>::infinity());
+                        }
+                    }
+                }
+            std::printf(
+                "  [measured] step %s, NEE %s: column 0 %.4f %.4f %.4f (L %.4f), chi-square "
+                "%.1f, %.1f, %.1f over %d noisy pixels per channel (worst |z| %.2f), %d exact\n",
+                medium ? "(medium)" : "(opaque)", from_surface ? "from the surface" : "eps off it",
+                img.at(0, 4, 0), img.at(0, 4, 1), img.at(0, 4, 2), L, t[0].chi2, t[1].chi2,
+                t[2].chi2, t[0].n, std::max({t[0].max_abs, t[1].max_abs, t[2].max_abs}), exact);
+            bool pass = true;
+            for (const testing::ZTally& tc : t)
+                pass = pass && tc.chi2 < testing::chi2_critical(std::max(tc.n, 1), 0.001 / 3) &&
+                       tc.max_abs < testing::normal_quantile(1 - 0.0005 / 192);
+            EXPECT_EQ(pass, from_surface);
+            // The legacy origin starts above the step and misses its shadow.
+            if (!from_surface) {
+                EXPECT_NEAR(img.at(0, 4, 0), L, 1e-6 * L);
+            }
+        }
+    }
 }
 
 TEST(Render, BitIdenticalForAnyThreadCountAndResumable) {
@@ -680,9 +786,11 @@ TEST(Render, NewerEstimatorsAgreeWithTheLegacyOne) {
     // volpath-render-4 samples every light at each NEE and draws the first numbers of a path
     // from scrambled Sobol points; volpath-render-5 weights absorption in media of albedo
     // >= 0.9; volpath-render-6 chooses the hero at every entry into a medium by throughput x
-    // albedo and samples the environment about a surface's normal by cos(theta).
+    // albedo and samples the environment about a surface's normal by cos(theta);
+    // volpath-render-7 starts NEE's shadow rays at the surface point, skipping its triangle.
     // volpath-render-3's estimator (one light chosen uniformly, the stream alone, analog, the
-    // hero in turn, the environment over the sphere) stays an option, and so does each step.
+    // hero in turn, the environment over the sphere, shadow rays eps off the surface) stays an
+    // option, and so does each step.
     // Every combination estimates the same image: their block means agree with the legacy
     // image's by chi-square (batch standard errors on both sides), and the image means by z.
     const Scene s = estimator_scene(32);
@@ -693,6 +801,7 @@ TEST(Render, NewerEstimatorsAgreeWithTheLegacyOne) {
     legacy.absorption = Absorption::kAnalog;
     legacy.hero = RenderHero::kUniform;
     legacy.environment_cosine = false;
+    legacy.nee_from_surface = false;
     legacy.seed = 5;
     const RenderResult ref = render(s, legacy);
     const ImageEstimate b = estimate_with_stderr(ref.image, "radiance", "legacy");
@@ -702,6 +811,7 @@ TEST(Render, NewerEstimatorsAgreeWithTheLegacyOne) {
         Absorption absorption;
         RenderHero hero;
         bool env_cosine;
+        bool from_surface = false;
     };
     constexpr auto kSobol = RenderSampler::kSobol;
     constexpr auto kUniform = RenderHero::kUniform, kTA = RenderHero::kThroughputAlbedo;
@@ -714,7 +824,8 @@ TEST(Render, NewerEstimatorsAgreeWithTheLegacyOne) {
         {true, kSobol, Absorption::kAnalog, kUniform, false},
         {true, kSobol, Absorption::kAnalog, kTA, false},
         {true, kSobol, Absorption::kWeighted, kUniform, true},
-        {true, kSobol, Absorption::kWeighted, kTA, true},  // volpath-render-6
+        {true, kSobol, Absorption::kWeighted, kTA, true},        // volpath-render-6
+        {true, kSobol, Absorption::kWeighted, kTA, true, true},  // volpath-render-7
     };
     const double alpha = 0.001 / (3.0 * std::size(variants));
     for (const Variant& v : variants) {
@@ -725,15 +836,18 @@ TEST(Render, NewerEstimatorsAgreeWithTheLegacyOne) {
         o.absorption = v.absorption;
         o.hero = v.hero;
         o.environment_cosine = v.env_cosine;
+        o.nee_from_surface = v.from_surface;
         const RenderResult r = render(s, o);
         const ImageComparison c =
             compare_images(estimate_with_stderr(r.image, "radiance", "new"), b, 4);
         for (int ch = 0; ch < 3; ++ch) {
             std::printf(
                 "  [measured] all lights %d, sobol %d, weighted %d, hero %s, cosine env %d, "
-                "channel %d: chi2 %.1f over %d blocks, p %.3g, image mean z %.2f\n",
+                "from the surface %d, channel %d: chi2 %.1f over %d blocks, p %.3g, image mean "
+                "z %.2f\n",
                 v.all_lights, v.sampler == kSobol, v.absorption == Absorption::kWeighted,
-                to_string(v.hero), v.env_cosine, ch, c.chi2[ch], c.dof[ch], c.p[ch], c.z_mean[ch]);
+                to_string(v.hero), v.env_cosine, v.from_surface, ch, c.chi2[ch], c.dof[ch], c.p[ch],
+                c.z_mean[ch]);
             EXPECT_GT(c.p[ch], alpha) << v.all_lights << " " << ch;
             EXPECT_LT(std::fabs(c.z_mean[ch]), testing::normal_quantile(1 - alpha / 2));
         }

@@ -95,7 +95,8 @@ EmbreeScene::EmbreeScene(const std::vector<const TriangleMesh*>& meshes) : impl_
     if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
     impl_->scene = rtcNewScene(impl_->device);
     rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
-    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+    // The context filter skips the triangle a ray leaves (TriangleRef), only where one is named.
+    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
     double extent = 0;
     for (std::size_t k = 0; k < meshes.size(); ++k) {
         const TriangleMesh& m = *meshes[k];
@@ -161,9 +162,35 @@ EmbreeScene::~EmbreeScene() {
     if (impl_->device) rtcReleaseDevice(impl_->device);
 }
 
-RayHit EmbreeScene::intersect(const Vec3& o, const Vec3& d, double t_min, double t_max) const {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
+namespace {
+
+// An intersect context whose filter rejects the hits on one triangle (the one a ray leaves).
+struct SkipContext {
+    RTCIntersectContext ctx;  // first: Embree hands the filter &ctx
+    TriangleRef skip;
+};
+
+void skip_filter(const RTCFilterFunctionNArguments* args) {
+    const auto* c = reinterpret_cast<const SkipContext*>(args->context);
+    for (unsigned i = 0; i < args->N; ++i)
+        if (args->valid[i] == -1 && RTCHitN_geomID(args->hit, args->N, i) == c->skip.shape &&
+            RTCHitN_primID(args->hit, args->N, i) == c->skip.triangle)
+            args->valid[i] = 0;
+}
+
+void init_context(SkipContext& c, const TriangleRef* leaving) {
+    rtcInitIntersectContext(&c.ctx);
+    if (!leaving) return;
+    c.ctx.filter = skip_filter;
+    c.skip = *leaving;
+}
+
+}  // namespace
+
+RayHit EmbreeScene::intersect(const Vec3& o, const Vec3& d, double t_min, double t_max,
+                              const TriangleRef* leaving) const {
+    SkipContext ctx;
+    init_context(ctx, leaving);
     RTCRayHit rh{};
     rh.ray.org_x = static_cast<float>(o.x);
     rh.ray.org_y = static_cast<float>(o.y);
@@ -178,7 +205,7 @@ RayHit EmbreeScene::intersect(const Vec3& o, const Vec3& d, double t_min, double
     rh.ray.flags = 0;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(impl_->scene, &ctx, &rh);
+    rtcIntersect1(impl_->scene, &ctx.ctx, &rh);
     RayHit out;
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return out;
     out.t = rh.ray.tfar;
@@ -203,9 +230,10 @@ double EmbreeScene::distance_to_surface(const Vec3& p, double max_distance) cons
     return std::min(max_distance, std::sqrt(q.best2));
 }
 
-bool EmbreeScene::occluded(const Vec3& o, const Vec3& d, double t_min, double t_max) const {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
+bool EmbreeScene::occluded(const Vec3& o, const Vec3& d, double t_min, double t_max,
+                           const TriangleRef* leaving) const {
+    SkipContext ctx;
+    init_context(ctx, leaving);
     RTCRay r{};
     r.org_x = static_cast<float>(o.x);
     r.org_y = static_cast<float>(o.y);
@@ -218,7 +246,7 @@ bool EmbreeScene::occluded(const Vec3& o, const Vec3& d, double t_min, double t_
         std::isfinite(t_max) ? static_cast<float>(t_max) : std::numeric_limits<float>::infinity();
     r.mask = 0xffffffffu;
     r.flags = 0;
-    rtcOccluded1(impl_->scene, &ctx, &r);
+    rtcOccluded1(impl_->scene, &ctx.ctx, &r);
     return r.tfar < 0;  // Embree sets tfar to -inf on a hit
 }
 

@@ -4,7 +4,8 @@
 // what a scene needs); the pencil and sphere engines never open it.
 //
 // Embree works in single precision: hits are exact to about 1e-7 of the scene's extent, and a
-// ray leaving a surface must start a little off it (`offset_origin`) or skip that surface.
+// ray leaving a surface must start a little off it or skip that surface's triangle
+// (`TriangleRef`).
 #pragma once
 
 #include "core/mesh.h"
@@ -26,6 +27,12 @@ struct RayHit {
     static constexpr std::uint32_t kNone = 0xffffffffu;
 };
 
+/// One triangle of the scene: the surface a ray leaves, which its query skips.
+struct TriangleRef {
+    std::uint32_t shape = RayHit::kNone;
+    std::uint32_t triangle = 0;
+};
+
 class EmbreeScene {
   public:
     /// Builds the BVH over the meshes (in the given order: hit.shape indexes it). Throws
@@ -35,11 +42,16 @@ class EmbreeScene {
     EmbreeScene(const EmbreeScene&) = delete;
     EmbreeScene& operator=(const EmbreeScene&) = delete;
 
-    /// Nearest hit with t in (t_min, t_max); d must be a unit vector. Thread-safe.
+    /// Nearest hit with t in (t_min, t_max); d must be a unit vector. `leaving`: a triangle the
+    /// ray starts on, whose hits are skipped (every other surface counts, however near: a
+    /// distance skipped instead, as t_min, misses whatever lies closer than it). Thread-safe.
     RayHit intersect(const Vec3& o, const Vec3& d, double t_min = 0,
-                     double t_max = std::numeric_limits<double>::infinity()) const;
-    /// Whether anything lies on the segment t in (t_min, t_max). Thread-safe.
-    bool occluded(const Vec3& o, const Vec3& d, double t_min, double t_max) const;
+                     double t_max = std::numeric_limits<double>::infinity(),
+                     const TriangleRef* leaving = nullptr) const;
+    /// Whether anything lies on the segment t in (t_min, t_max), `leaving` as above.
+    /// Thread-safe.
+    bool occluded(const Vec3& o, const Vec3& d, double t_min, double t_max,
+                  const TriangleRef* leaving = nullptr) const;
     /// Distance from p to the nearest triangle of any mesh (closest points in double precision
     /// on the meshes' own vertices), or `max_distance` if none is nearer: a ball around p that
     /// no surface enters. Embree's point query over the same BVH. Thread-safe.
@@ -48,6 +60,10 @@ class EmbreeScene {
     std::size_t triangles() const { return triangles_; }
     /// A distance that moves a point off a surface safely for this scene's extent.
     double epsilon() const { return epsilon_; }
+    /// The distance within which a hit near the origin of a ray that leaves a triangle (skipped
+    /// by TriangleRef) is single-precision rounding, such as a coplanar neighbour of that
+    /// triangle met at t ~ 0: 1e-6 of the scene's extent (about 16 ulps), epsilon() / 40.
+    double rounding() const { return epsilon_ / 40; }
 
   private:
     struct Impl;

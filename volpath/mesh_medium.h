@@ -105,6 +105,7 @@ struct MeshGeometry {
         b.t = hit.t;
         b.n = hit.normal;
         b.shape = hit.shape;
+        b.triangle = hit.triangle;
         const double cos_i = dot(s.w, hit.normal);  // leaving: along the outward normal
         if (!(cos_i > 0))
             b.kind = hit.t < 4 * eps && cos_i == cos_i ? WalkBoundary::Kind::kSlip

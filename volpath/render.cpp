@@ -26,7 +26,7 @@ namespace {
 // every albedo is at least 0.9 (render_absorption); 6: the hero chosen at every entry into a
 // medium by throughput x albedo (RenderHero), the environment sampled about a surface's normal
 // by cos(theta) (RenderOptions::environment_cosine).
-constexpr const char* kEngineVersion = "volpath-render-6";
+constexpr const char* kEngineVersion = "volpath-render-7";
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
 constexpr int kMaxBatchSpp = 3 * 1024;  // the largest automatic batch (RenderOptions::batch_spp)
@@ -39,6 +39,12 @@ struct MediumData {
     Absorption absorption = Absorption::kAnalog;  // of its walks (render_absorption)
     std::shared_ptr<const DensityGrid> density;   // heterogeneous media (OpenVDB)
     WalkRegion region;                            // the walk's view of the above
+};
+
+// A surface vertex as NEE sees it: the normal of the side lit and the triangle it lies on.
+struct SurfaceAt {
+    Vec3 n;
+    TriangleRef triangle;
 };
 
 double power(double a, double b) {
@@ -131,8 +137,9 @@ struct Renderer {
 
     // Per-channel transmittance from o along wi up to tmax through index-matched homogeneous
     // media (`start_medium`: the one o is in, or -1); false if a surface blocks the way.
+    // `leaving`: the triangle o lies on (the first query skips it), or null.
     bool shadow(const Vec3& o, const Vec3& wi, double tmax, int start_medium, RGB& T,
-                std::uint64_t& rays) const {
+                std::uint64_t& rays, const TriangleRef* leaving) const {
         T = {1, 1, 1};
         int inside = start_medium;
         double t0 = 0, t = 0;
@@ -141,9 +148,15 @@ struct Renderer {
             for (int c = 0; c < 3; ++c)
                 T[static_cast<size_t>(c)] *= std::exp(-md.sigma_t[static_cast<size_t>(c)] * len);
         };
+        TriangleRef skip;  // the triangle the query leaves (volpath-render-7)
+        if (leaving) {
+            skip = *leaving;
+            t = es->rounding();
+        }
         for (int k = 0; k < 10000; ++k) {
             ++rays;
-            const RayHit hit = es->intersect(o, wi, t, tmax);
+            const RayHit hit =
+                es->intersect(o, wi, t, tmax, skip.shape != RayHit::kNone ? &skip : nullptr);
             if (!hit.hit()) break;
             const int mi = shape_medium[hit.shape];
             if (mi < 0 || !passable(mi)) return false;
@@ -154,7 +167,15 @@ struct Renderer {
                 if (inside == mi) attenuate(mi, hit.t - t0);
                 inside = -1;
             }
-            t = hit.t + eps;
+            // On from the boundary point, its triangle skipped (and hits within rounding);
+            // before volpath-render-7 (the option) eps beyond it, which missed the exit of a
+            // medium thinner than eps.
+            if (opt.nee_from_surface) {
+                t = hit.t + es->rounding();
+                skip = {hit.shape, hit.triangle};
+            } else {
+                t = hit.t + eps;
+            }
         }
         if (inside >= 0 && std::isfinite(tmax)) attenuate(inside, tmax - t0);
         return true;
@@ -162,35 +183,41 @@ struct Renderer {
 
     // Next-event estimation from p: every light, or one chosen uniformly (nee_all_lights);
     // `f_of(wi)` gives the BSDF (or phase function) value times |cos| per channel and
-    // `pdf_of(wi)` the sampling density of the other strategy; `offset` is the normal of the side
-    // the shadow ray leaves from (null at a point inside a medium, `medium` then names it).
+    // `pdf_of(wi)` the sampling density of the other strategy; `at`: the surface p lies on
+    // (the normal of the side the shadow ray leaves from and the triangle), null at a point
+    // inside a medium (`medium` then names it).
     template <class F, class P>
-    void nee(const Vec3& p, const Vec3* offset, RngStream& rng, const double* beta, F f_of,
+    void nee(const Vec3& p, const SurfaceAt* at, RngStream& rng, const double* beta, F f_of,
              P pdf_of, RGB& out, std::uint64_t& rays, int medium = -1) const {
         if (lights.empty()) return;
         if (opt.nee_all_lights) {
             for (const Light& l : lights)
-                nee_light(l, p, offset, rng, beta, f_of, pdf_of, out, rays, medium);
+                nee_light(l, p, at, rng, beta, f_of, pdf_of, out, rays, medium);
             return;
         }
         const std::size_t j =
             std::min(lights.size() - 1,
                      static_cast<std::size_t>(rng.uniform() * static_cast<double>(lights.size())));
-        nee_light(lights[j], p, offset, rng, beta, f_of, pdf_of, out, rays, medium);
+        nee_light(lights[j], p, at, rng, beta, f_of, pdf_of, out, rays, medium);
     }
 
     // One light's shadow ray of nee(), its MIS weight against the other strategy.
     template <class F, class P>
-    void nee_light(const Light& light, const Vec3& p, const Vec3* offset, RngStream& rng,
+    void nee_light(const Light& light, const Vec3& p, const SurfaceAt* at, RngStream& rng,
                    const double* beta, F& f_of, P& pdf_of, RGB& out, std::uint64_t& rays,
                    int medium) const {
         const double u1 = rng.uniform(), u2 = rng.uniform();
-        const LightSample ls = sample_light(light, p, u1, u2, env_normal(offset));
+        const LightSample ls = sample_light(light, p, u1, u2, env_normal(at ? &at->n : nullptr));
         if (!ls.ok) return;
-        if (offset && !(dot(ls.wi, *offset) > 0)) return;
+        if (at && !(dot(ls.wi, at->n) > 0)) return;
         const RGB fc = f_of(ls.wi);
         if (!(fc[0] > 0 || fc[1] > 0 || fc[2] > 0)) return;
-        const Vec3 o = offset ? p + *offset * eps : p;
+        // From a surface: from the point itself, its triangle skipped and hits within
+        // single-precision rounding of it (volpath-render-7), or (the option) eps off it along
+        // the normal.
+        const bool offset = at && !opt.nee_from_surface;
+        const Vec3 o = offset ? p + at->n * eps : p;
+        const TriangleRef* leaving = at && !offset ? &at->triangle : nullptr;
         const double tmax = std::isfinite(ls.dist) ? ls.dist * (1 - 1e-7) - eps : kInf;
         // Sphere lights are opaque emitters outside the BVH: one in the way blocks the light
         // sampled (as it ends a path that meets it). Before volpath-render-4 the environment and
@@ -202,10 +229,10 @@ struct Renderer {
                 return;
         RGB T{1, 1, 1};
         if (has_passable) {
-            if (!shadow(o, ls.wi, tmax, medium, T, rays)) return;
+            if (!shadow(o, ls.wi, tmax, medium, T, rays, leaving)) return;
         } else {
             ++rays;
-            if (es->occluded(o, ls.wi, 0, tmax)) return;
+            if (es->occluded(o, ls.wi, leaving ? es->rounding() : 0.0, tmax, leaving)) return;
         }
         double w = 1, pl = 1;
         if (ls.pdf > 0) {
@@ -275,7 +302,8 @@ struct Renderer {
         // A surface vertex at p (shape `shape`, its normal n), reached along d from either side
         // of a medium's boundary or from outside a diffuse surface: the surface model, NEE,
         // the next direction and the throughput roulette. False: the path ends.
-        auto vertex = [&](const Vec3& p, Vec3 n, std::uint32_t shape) -> bool {
+        auto vertex = [&](const Vec3& p, Vec3 n, TriangleRef tri) -> bool {
+            const std::uint32_t shape = tri.shape;
             if (opt.max_depth > 0 && depth >= opt.max_depth) return false;
             const int mi = shape_medium[shape];
             const Vec3 wo = -d;
@@ -284,9 +312,10 @@ struct Renderer {
                 const SceneMaterial& m =
                     scene.materials[static_cast<size_t>(scene.shapes[shape].material)];
                 if (dot(n, wo) < 0) n = -n;
+                const SurfaceAt at{n, tri};
                 RGB c{};
                 nee(
-                    p, &n, rng, beta,
+                    p, &at, rng, beta,
                     [&](const Vec3& wi) {
                         const double cs = std::max(0.0, dot(wi, n)) / kPi;
                         return RGB{m.albedo[0] * cs, m.albedo[1] * cs, m.albedo[2] * cs};
@@ -327,9 +356,10 @@ struct Renderer {
                     // "specular" layer's (without this it went into "radiance" only).
                     const bool first_reflection = depth == 0 && outside && !entered;
                     if (first_reflection) specular_path = true;
+                    const SurfaceAt at{n, tri};
                     RGB c{};
                     nee(
-                        p, &n, rng, beta,
+                        p, &at, rng, beta,
                         [&](const Vec3& wi) {
                             const double f = rough_dielectric_f(wo_l, fr.local(wi), eta, md.alpha,
                                                                 TransportMode::kRadiance) *
@@ -436,7 +466,8 @@ struct Renderer {
                 return v / sum;
             }
             BoundaryAction boundary(WalkState<3>& s, const WalkBoundary& b, RngStream&) {
-                if (!at_surface(s.p, b.n, b.shape)) return BoundaryAction::kEnd;
+                if (!at_surface(s.p, b.n, TriangleRef{b.shape, b.triangle}))
+                    return BoundaryAction::kEnd;
                 return medium >= 0 ? BoundaryAction::kReflect : BoundaryAction::kExit;
             }
             // Analog absorption by the hero's albedo. Where NEE is done at a vertex
@@ -531,7 +562,7 @@ struct Renderer {
                 }
                 return rays;
             }
-            if (!vertex(p, hit.normal, hit.shape)) return rays;
+            if (!vertex(p, hit.normal, TriangleRef{hit.shape, hit.triangle})) return rays;
         }
         return rays;
     }
@@ -663,6 +694,7 @@ std::string fingerprint_with_batch(const Scene& scene, const RenderOptions& o, i
     if (o.absorption) k.add("absorption", to_string(*o.absorption));
     if (o.hero != RenderHero::kThroughputAlbedo) k.add("hero", to_string(o.hero));
     if (!o.environment_cosine) k.add("environment_cosine", false);
+    if (!o.nee_from_surface) k.add("nee_from_surface", false);
     add_to_key(k, scene);
     return k.text();
 }

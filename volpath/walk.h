@@ -276,7 +276,8 @@ struct WalkBoundary {
         kWrongSide,  ///< met from outside farther than that: lost if the path gets there
         kLeak,       ///< no boundary (a leak) or another shape: the walk is lost
     } kind = Kind::kFace;
-    std::uint32_t shape = 0;  ///< mesh geometry: the shape met
+    std::uint32_t shape = 0;     ///< mesh geometry: the shape met
+    std::uint32_t triangle = 0;  ///< and its triangle
 };
 
 /// What a boundary hook decided.
