@@ -392,7 +392,7 @@ material = "step"
                          (from_surface ? ", from the surface" : ", eps off it"));
             RenderOptions o = options(96);
             o.max_depth = 1;
-            o.nee_from_surface = from_surface;
+            o.rays_from_surface = from_surface;
             const RenderResult r = render(s, o);
             const ImageLayer& img = r.image.layer("radiance");
             const ImageLayer& se = r.image.layer("radiance.stderr");
@@ -443,6 +443,69 @@ material = "step"
                 EXPECT_NEAR(img.at(0, 4, 0), L, 1e-6 * L);
             }
         }
+    }
+}
+
+TEST(Render, AnOccluderCloserThanTheSceneEpsilonShadowsTheSky) {
+    // The floor of the test above (epsilon 0.8 mm) under a constant sky of radiance 1 only,
+    // direct light only, and an opaque step from 0.05 to 0.45 mm above it over x < 0, 10 m
+    // long and deep (infinite as seen from the view). From a floor point at x the step hides
+    // the directions whose projection on the x-y plane rises less than beta = atan(0.45 / x)
+    // toward -x (below the step the ray meets its underside), and for a shape infinite along
+    // z the cosine-weighted share of such directions is (1 - cos beta) / 2, so the radiance is
+    // albedo (1 + x / sqrt(x^2 + 0.45^2)) / 2, and a pixel column [x0, x1] averages it to
+    // albedo / 2 (1 + (sqrt(x1^2 + h^2) - sqrt(x0^2 + h^2)) / (x1 - x0)). The sky is found by
+    // NEE (cos-sampled) and by the path's cosine-sampled ray, each with MIS weight 1/2: both
+    // must leave the floor from the floor itself. With shadow rays alone from the surface half
+    // of the step's shadow was missing; with neither, all of it (the legacy option below).
+    const double fov = 2 * std::atan(0.1) * 180 / std::numbers::pi;  // half-width 1 mm at 10 mm
+    char camera[200];
+    std::snprintf(camera, sizeof camera,
+                  "[camera]\nposition = [1, 10, 0]\ntarget = [1, 0, 0]\nup = [0, 0, -1]\n"
+                  "fov_y_deg = %.17g\nwidth = 8\nheight = 8\n",
+                  fov);
+    const Scene s = parse_scene(std::string("[scene]\nname = \"sky\"\n") + camera + R"(
+[[lights]]
+type = "environment"
+radiance = 1
+[[materials]]
+name = "floor"
+type = "diffuse"
+albedo = 0.5
+[[shapes]]
+type = "plane"
+size_x = 40000
+size_z = 40000
+material = "floor"
+[[shapes]]
+type = "box"
+size = [10000, 0.4, 10000]
+translate = [-5000, 0.25, 0]
+material = "floor"
+)",
+                                "sky.toml", ".");
+    const double h = 0.45;
+    for (const bool from_surface : {true, false}) {
+        RenderOptions o = options(96);
+        o.max_depth = 1;
+        o.rays_from_surface = from_surface;
+        const RenderResult r = render(s, o);
+        const ImageLayer& img = r.image.layer("radiance");
+        const ImageLayer& se = r.image.layer("radiance.stderr");
+        testing::ZTally t;  // channel 0 (the channels are the same samples)
+        for (int x = 0; x < 8; ++x) {
+            const double x0 = x / 4.0, x1 = (x + 1) / 4.0;
+            const double ref = 0.25 * (1 + (std::hypot(x1, h) - std::hypot(x0, h)) / (x1 - x0));
+            for (int y = 0; y < 8; ++y) t.add((img.at(x, y, 0) - ref) / se.at(x, y, 0));
+        }
+        std::printf(
+            "  [measured] sky over a step below eps, rays %s: column 0 %.4f (closed form "
+            "%.4f, no shadow 0.5), chi-square %.1f over %d pixels, worst |z| %.2f\n",
+            from_surface ? "from the surface" : "eps off it", img.at(0, 4, 0),
+            0.25 * (1 + (std::hypot(0.25, h) - h) / 0.25), t.chi2, t.n, t.max_abs);
+        const bool pass = t.chi2 < testing::chi2_critical(t.n, 0.001) &&
+                          t.max_abs < testing::normal_quantile(1 - 0.0005 / t.n);
+        EXPECT_EQ(pass, from_surface);
     }
 }
 
@@ -801,7 +864,7 @@ TEST(Render, NewerEstimatorsAgreeWithTheLegacyOne) {
     legacy.absorption = Absorption::kAnalog;
     legacy.hero = RenderHero::kUniform;
     legacy.environment_cosine = false;
-    legacy.nee_from_surface = false;
+    legacy.rays_from_surface = false;
     legacy.seed = 5;
     const RenderResult ref = render(s, legacy);
     const ImageEstimate b = estimate_with_stderr(ref.image, "radiance", "legacy");
@@ -836,7 +899,7 @@ TEST(Render, NewerEstimatorsAgreeWithTheLegacyOne) {
         o.absorption = v.absorption;
         o.hero = v.hero;
         o.environment_cosine = v.env_cosine;
-        o.nee_from_surface = v.from_surface;
+        o.rays_from_surface = v.from_surface;
         const RenderResult r = render(s, o);
         const ImageComparison c =
             compare_images(estimate_with_stderr(r.image, "radiance", "new"), b, 4);

@@ -187,7 +187,7 @@ TEST(WalkGolden, SphereEngineVolpathSphere3) {
 // spp), which volpath-render-4 keeps as options; otherwise the defaults. `absorption`: as the
 // pinned version had it (volpath-render-5 chooses per medium). Before volpath-render-6 (v6
 // false): the hero in turn and the environment sampled over the sphere, as those versions had
-// them; before volpath-render-7 (v7 false) NEE's shadow rays from a surface start eps off it.
+// them; before volpath-render-7 (v7 false) rays leaving a surface start eps off it.
 std::vector<double> render_pin(const std::string& material, const std::string& lights, bool legacy,
                                std::optional<Absorption> absorption = Absorption::kAnalog,
                                bool v6 = false, bool v7 = false) {
@@ -225,7 +225,7 @@ material = "floor"
         o.hero = RenderHero::kUniform;
         o.environment_cosine = false;
     }
-    o.nee_from_surface = v7;
+    o.rays_from_surface = v7;
     if (legacy) {
         o.nee_all_lights = false;
         o.sampler = RenderSampler::kIndependent;
@@ -319,29 +319,28 @@ TEST(WalkGolden, RenderEngineVolpathRender6) {
                    476.77173663734123, 109340.08712605348, 394.36662711691463, 90314.026273336305});
 }
 
-// volpath-render-7's defaults: NEE's shadow rays from a surface start at the surface point and
-// skip its triangle (their agreement with volpath-render-6's: Render.NewerEstimatorsAgreeWith
-// TheLegacyOne; the shadow of an occluder closer than the old offset:
-// Render.ShadowsOfOccludersCloserThanTheSceneEpsilonAreCast).
+// volpath-render-7's defaults: rays from a surface (NEE's shadow rays, the path's rays outside
+// media) start at the surface point and skip its triangle (their agreement with
+// volpath-render-6's: Render.NewerEstimatorsAgreeWithTheLegacyOne; the shadows of an occluder
+// closer than the old offset: Render.ShadowsOfOccludersCloserThanTheSceneEpsilonAreCast and
+// Render.AnOccluderCloserThanTheSceneEpsilonShadowsTheSky).
 TEST(WalkGolden, RenderEngineVolpathRender7) {
     ASSERT_STREQ(render_engine_version(), "volpath-render-7");
-    // The rough and smooth boundaries' pins are volpath-render-6's to the bit: no occluder
-    // lies within eps of their shadow rays' origins, and the numbers drawn are the same.
     expect_pinned("render rough boundary (v7)",
                   render_pin(kCoefficients + "eta = 1.3\nroughness = 0.3\n", kLights, false,
                              std::nullopt, true, true),
-                  {27.805747460520845, 7387.8575108956702, 234.451369146753, 65245.493445825065,
-                   472.0116359470772, 108280.93026447114, 393.61408007044338, 90024.986383101903});
+                  {27.805746958116192, 7387.8573126970332, 234.45164676601183, 65245.594386546341,
+                   472.01158788734961, 108280.91604163079, 393.61402775832738, 90024.966224092845});
     expect_pinned(
         "render smooth boundary (v7)",
         render_pin(kCoefficients + "eta = 1.4\n", kLights, false, std::nullopt, true, true),
-        {28.043737496565321, 7477.247000560681, 233.26143068851755, 65337.363309710025,
-         473.2315479619192, 108583.41246994091, 392.39764589655545, 89920.493967366841});
+        {28.043737861942809, 7477.2471399521928, 233.26144206220181, 65337.366440442485,
+         473.23153422443789, 108583.40565280149, 392.39764521940276, 89920.494349980174});
     expect_pinned(
         "render index-matched (v7)",
         render_pin(kCoefficients + "eta = 1.0\n", kLights, false, std::nullopt, true, true),
-        {28.244254199450861, 7553.7591880419795, 237.26293534624341, 65581.808377966168,
-         476.77175212170835, 109340.09186080626, 394.36716283262149, 90314.09071351857});
+        {28.244254380290815, 7553.7592593833424, 237.26277660244335, 65581.737423565821,
+         476.7714144595891, 109339.9867192856, 394.36699735932336, 90314.009776079067});
 }
 
 }  // namespace

@@ -170,7 +170,7 @@ struct Renderer {
             // On from the boundary point, its triangle skipped (and hits within rounding);
             // before volpath-render-7 (the option) eps beyond it, which missed the exit of a
             // medium thinner than eps.
-            if (opt.nee_from_surface) {
+            if (opt.rays_from_surface) {
                 t = hit.t + es->rounding();
                 skip = {hit.shape, hit.triangle};
             } else {
@@ -215,7 +215,7 @@ struct Renderer {
         // From a surface: from the point itself, its triangle skipped and hits within
         // single-precision rounding of it (volpath-render-7), or (the option) eps off it along
         // the normal.
-        const bool offset = at && !opt.nee_from_surface;
+        const bool offset = at && !opt.rays_from_surface;
         const Vec3 o = offset ? p + at->n * eps : p;
         const TriangleRef* leaving = at && !offset ? &at->triangle : nullptr;
         const double tmax = std::isfinite(ls.dist) ? ls.dist * (1 - 1e-7) - eps : kInf;
@@ -279,6 +279,8 @@ struct Renderer {
         Vec3& o = ws.p;
         Vec3& d = ws.w;
         bool& on_surface = ws.on_surface;
+        // Outside media: the triangle the next ray leaves (rays_from_surface), else none.
+        TriangleRef leave;
         double* beta = ws.weights.beta;
         int medium = -1;  // index into media of the medium the path is in
         int medium_shape = -1;
@@ -296,6 +298,19 @@ struct Renderer {
                     T[RenderLayout::kSubsurface + c] += v;
                 else if (specular_path)
                     T[RenderLayout::kSpecular + c] += v;
+            }
+        };
+
+        // The next ray outside media leaves the surface at p (triangle tri) on the side of n:
+        // from p itself, that triangle and hits within rounding skipped (volpath-render-7), or
+        // (the option) from eps off it.
+        auto leave_outside = [&](const Vec3& p, const Vec3& n, TriangleRef tri) {
+            on_surface = false;
+            if (opt.rays_from_surface) {
+                o = p;
+                leave = tri;
+            } else {
+                o = p + n * eps;
             }
         };
 
@@ -331,8 +346,7 @@ struct Renderer {
                 nee_normal = n;
                 nee_on_surface = true;
                 for (int k = 0; k < 3; ++k) beta[k] *= m.albedo[static_cast<size_t>(k)];
-                o = p + n * eps;
-                on_surface = false;
+                leave_outside(p, n, tri);
             } else {  // a medium's dielectric boundary
                 const MediumData& md = media[static_cast<size_t>(mi)];
                 const bool outside = dot(wo, n) > 0;
@@ -414,10 +428,7 @@ struct Renderer {
                     o = p;
                     on_surface = true;
                 } else {
-                    // Outside: from just off the surface (a ray from the surface itself can
-                    // slip through a concave crease).
-                    o = p + n * (dot(d, n) > 0 ? eps : -eps);
-                    on_surface = false;
+                    leave_outside(p, dot(d, n) > 0 ? n : -n, tri);
                 }
             }
             // Russian roulette on the throughput.
@@ -521,7 +532,10 @@ struct Renderer {
                 continue;
             }
             ++rays;
-            const RayHit hit = es->intersect(o, d, on_surface ? eps : 0.0);
+            const RayHit hit = leave.shape != RayHit::kNone
+                                   ? es->intersect(o, d, es->rounding(), kInf, &leave)
+                                   : es->intersect(o, d, on_surface ? eps : 0.0);
+            leave = TriangleRef{};
             if (depth == 0 && hit.hit()) {
                 T[RenderLayout::kDepth] += hit.t;
                 for (int c = 0; c < 3; ++c) T[RenderLayout::kNormal + c] += hit.normal[c];
@@ -694,7 +708,7 @@ std::string fingerprint_with_batch(const Scene& scene, const RenderOptions& o, i
     if (o.absorption) k.add("absorption", to_string(*o.absorption));
     if (o.hero != RenderHero::kThroughputAlbedo) k.add("hero", to_string(o.hero));
     if (!o.environment_cosine) k.add("environment_cosine", false);
-    if (!o.nee_from_surface) k.add("nee_from_surface", false);
+    if (!o.rays_from_surface) k.add("rays_from_surface", false);
     add_to_key(k, scene);
     return k.text();
 }

@@ -124,13 +124,14 @@ struct RenderOptions : RunControl {
     /// side's normal (volpath/lights.h sample_light) instead of uniformly over the sphere (half
     /// of whose samples fell below the surface). Off: as before volpath-render-6.
     bool environment_cosine = true;
-    /// NEE's shadow rays leave a surface from the surface point itself, skipping its triangle
-    /// (the way Cycles leaves a surface), and go on through index-matched boundaries the same
-    /// way. Off: as before volpath-render-7, from eps off the surface along its normal
-    /// (EmbreeScene::epsilon, 4e-5 of the scene's extent) and on from eps beyond each boundary,
-    /// which misses an occluder closer than eps and the exit of a medium thinner than eps: the
-    /// darker arcs along the silhouettes of ketchup-matched against Cycles.
-    bool nee_from_surface = true;
+    /// Rays leave a surface from the surface point itself, skipping its triangle (the way
+    /// Cycles leaves a surface): NEE's shadow rays, which go on through index-matched
+    /// boundaries the same way, and the path's rays outside media. Off: as before
+    /// volpath-render-7, from eps off the surface along its normal (EmbreeScene::epsilon, 4e-5
+    /// of the scene's extent) and on from eps beyond each boundary, which misses an occluder
+    /// closer than eps and the exit of a medium thinner than eps: the darker arcs along the
+    /// silhouettes of ketchup-matched against Cycles.
+    bool rays_from_surface = true;
     /// Samples per pixel in a batch, a multiple of 3 (each channel the hero equally often).
     /// 0: 3 x 2^m, the largest with at least 32 batches in a sample budget (3 when there is a
     /// time or an error budget); a render resumed from a checkpoint keeps the size it started
