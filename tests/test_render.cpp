@@ -341,29 +341,19 @@ material = "m"
         }
 }
 
-TEST(Render, ShadowsOfOccludersCloserThanTheSceneEpsilonAreCast) {
-    // A diffuse floor 40,000 mm wide (the scene epsilon, 4e-5 of the extent, is then 0.8 mm)
-    // under a sun at 45 degrees, direct light only, seen straight down over x in [0, 2] mm. A
-    // step from 0.05 to 0.45 mm above the floor (below the epsilon) stands at x < 0: opaque
-    // and diffuse, or an index-matched absorbing medium (which may not touch the floor). Its
-    // shadow is closed-form: a floor point at x < 0.45 sees the sun through a chord
-    // sqrt(2) (0.45 - max(x, 0.05)) of the step (opaque: not at all), farther points see it
-    // unblocked, so each pixel column is L (1/w) integral of that transmittance over its x
-    // range, with L = albedo E cos(45) / pi. NEE's
-    // shadow rays from the floor start at the floor point, skipping its triangle
-    // (volpath-render-7); before, they started eps above it, above the step: no shadow at all
-    // (the legacy option below shows the test sees that).
+// A diffuse floor (albedo 0.5) 40,000 mm wide, so that the scene epsilon (4e-5 of the extent)
+// is 0.8 mm, seen straight down over x in [0, 2] mm by 8 x 8 pixels (column x covers
+// [x / 4, (x + 1) / 4] mm), and a step of material "step" from 0.05 to 0.45 mm above the floor
+// (below the epsilon) over x < 0, 10 m long and deep (infinite as seen from the view).
+// `lights_and_step`: the lights and the step's material.
+Scene step_scene(const std::string& lights_and_step) {
     const double fov = 2 * std::atan(0.1) * 180 / std::numbers::pi;  // half-width 1 mm at 10 mm
     char camera[200];
     std::snprintf(camera, sizeof camera,
                   "[camera]\nposition = [1, 10, 0]\ntarget = [1, 0, 0]\nup = [0, 0, -1]\n"
                   "fov_y_deg = %.17g\nwidth = 8\nheight = 8\n",
                   fov);
-    const std::string common = std::string("[scene]\nname = \"step\"\n") + camera + R"(
-[[lights]]
-type = "directional"
-direction = [-1, 1, 0]
-irradiance = 2
+    return parse_scene(std::string("[scene]\nname = \"step\"\n") + camera + lights_and_step + R"(
 [[materials]]
 name = "floor"
 type = "diffuse"
@@ -375,10 +365,33 @@ size_z = 40000
 material = "floor"
 [[shapes]]
 type = "box"
-size = [10, 0.4, 10]
-translate = [-5, 0.25, 0]
+size = [10000, 0.4, 10000]
+translate = [-5000, 0.25, 0]
 material = "step"
-)";
+)",
+                       "step.toml", ".");
+}
+
+// A step_scene, direct light only, 96 spp; rays leave surfaces from the surface (the default)
+// or eps off it (as before volpath-render-7).
+RenderResult render_step(const Scene& s, bool from_surface) {
+    RenderOptions o = options(96);
+    o.max_depth = 1;
+    o.rays_from_surface = from_surface;
+    return render(s, o);
+}
+
+TEST(Render, ShadowsOfOccludersCloserThanTheSceneEpsilonAreCast) {
+    // step_scene under a sun at 45 degrees, direct light only; the step opaque and diffuse,
+    // or an index-matched absorbing medium (which may not touch the floor). Its shadow is
+    // closed-form: a floor point at x < 0.45 sees the sun through a chord
+    // sqrt(2) (0.45 - max(x, 0.05)) of the step (opaque: not at all), farther points see it
+    // unblocked, so each pixel column is L (1/w) integral of that transmittance over its x
+    // range, with L = albedo E cos(45) / pi. NEE's shadow rays from the floor start at the
+    // floor point, skipping its triangle (volpath-render-7); before, they started eps above it,
+    // above the step: no shadow at all (the legacy option below shows the test sees that).
+    const std::string sun =
+        "[[lights]]\ntype = \"directional\"\ndirection = [-1, 1, 0]\nirradiance = 2\n";
     const double sigma[3] = {1.0, 2.0, 4.0};
     const double L = 0.5 * 2 * std::sqrt(0.5) / std::numbers::pi;
     for (const bool medium : {false, true}) {
@@ -386,14 +399,11 @@ material = "step"
             medium ? "[[materials]]\nname = \"step\"\nsigma_a_per_mm = [1.0, 2.0, 4.0]\n"
                      "sigma_s_per_mm = 0\ng = 0\neta = 1.0\n"
                    : "[[materials]]\nname = \"step\"\ntype = \"diffuse\"\nalbedo = 0.5\n";
-        const Scene s = parse_scene(common + step, "step.toml", ".");
+        const Scene s = step_scene(sun + step);
         for (const bool from_surface : {true, false}) {
             SCOPED_TRACE(std::string(medium ? "medium" : "opaque") +
                          (from_surface ? ", from the surface" : ", eps off it"));
-            RenderOptions o = options(96);
-            o.max_depth = 1;
-            o.rays_from_surface = from_surface;
-            const RenderResult r = render(s, o);
+            const RenderResult r = render_step(s, from_surface);
             const ImageLayer& img = r.image.layer("radiance");
             const ImageLayer& se = r.image.layer("radiance.stderr");
             // Per channel: the channels' noise is the same samples' (one x per sample).
@@ -447,9 +457,8 @@ material = "step"
 }
 
 TEST(Render, AnOccluderCloserThanTheSceneEpsilonShadowsTheSky) {
-    // The floor of the test above (epsilon 0.8 mm) under a constant sky of radiance 1 only,
-    // direct light only, and an opaque step from 0.05 to 0.45 mm above it over x < 0, 10 m
-    // long and deep (infinite as seen from the view). From a floor point at x the step hides
+    // step_scene (epsilon 0.8 mm) under a constant sky of radiance 1 only, direct light only,
+    // the step opaque and diffuse. From a floor point at x the step hides
     // the directions whose projection on the x-y plane rises less than beta = atan(0.45 / x)
     // toward -x (below the step the ray meets its underside), and for a shape infinite along
     // z the cosine-weighted share of such directions is (1 - cos beta) / 2, so the radiance is
@@ -458,38 +467,12 @@ TEST(Render, AnOccluderCloserThanTheSceneEpsilonShadowsTheSky) {
     // NEE (cos-sampled) and by the path's cosine-sampled ray, each with MIS weight 1/2: both
     // must leave the floor from the floor itself. With shadow rays alone from the surface half
     // of the step's shadow was missing; with neither, all of it (the legacy option below).
-    const double fov = 2 * std::atan(0.1) * 180 / std::numbers::pi;  // half-width 1 mm at 10 mm
-    char camera[200];
-    std::snprintf(camera, sizeof camera,
-                  "[camera]\nposition = [1, 10, 0]\ntarget = [1, 0, 0]\nup = [0, 0, -1]\n"
-                  "fov_y_deg = %.17g\nwidth = 8\nheight = 8\n",
-                  fov);
-    const Scene s = parse_scene(std::string("[scene]\nname = \"sky\"\n") + camera + R"(
-[[lights]]
-type = "environment"
-radiance = 1
-[[materials]]
-name = "floor"
-type = "diffuse"
-albedo = 0.5
-[[shapes]]
-type = "plane"
-size_x = 40000
-size_z = 40000
-material = "floor"
-[[shapes]]
-type = "box"
-size = [10000, 0.4, 10000]
-translate = [-5000, 0.25, 0]
-material = "floor"
-)",
-                                "sky.toml", ".");
+    const Scene s = step_scene(
+        "[[lights]]\ntype = \"environment\"\nradiance = 1\n[[materials]]\nname = \"step\"\n"
+        "type = \"diffuse\"\nalbedo = 0.5\n");
     const double h = 0.45;
     for (const bool from_surface : {true, false}) {
-        RenderOptions o = options(96);
-        o.max_depth = 1;
-        o.rays_from_surface = from_surface;
-        const RenderResult r = render(s, o);
+        const RenderResult r = render_step(s, from_surface);
         const ImageLayer& img = r.image.layer("radiance");
         const ImageLayer& se = r.image.layer("radiance.stderr");
         testing::ZTally t;  // channel 0 (the channels are the same samples)
