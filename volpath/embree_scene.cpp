@@ -178,19 +178,22 @@ void skip_filter(const RTCFilterFunctionNArguments* args) {
             args->valid[i] = 0;
 }
 
-void init_context(SkipContext& c, const TriangleRef* leaving) {
+// The context of a query, and its near distance: a ray that leaves a triangle skips it and the
+// hits within `rounding` past t_min.
+float init_context(SkipContext& c, TriangleRef leaving, double t_min, double rounding) {
     rtcInitIntersectContext(&c.ctx);
-    if (!leaving) return;
+    if (!leaving.any()) return static_cast<float>(t_min);
     c.ctx.filter = skip_filter;
-    c.skip = *leaving;
+    c.skip = leaving;
+    return static_cast<float>(t_min + rounding);
 }
 
 }  // namespace
 
 RayHit EmbreeScene::intersect(const Vec3& o, const Vec3& d, double t_min, double t_max,
-                              const TriangleRef* leaving) const {
+                              TriangleRef leaving) const {
     SkipContext ctx;
-    init_context(ctx, leaving);
+    const float t_near = init_context(ctx, leaving, t_min, rounding());
     RTCRayHit rh{};
     rh.ray.org_x = static_cast<float>(o.x);
     rh.ray.org_y = static_cast<float>(o.y);
@@ -198,7 +201,7 @@ RayHit EmbreeScene::intersect(const Vec3& o, const Vec3& d, double t_min, double
     rh.ray.dir_x = static_cast<float>(d.x);
     rh.ray.dir_y = static_cast<float>(d.y);
     rh.ray.dir_z = static_cast<float>(d.z);
-    rh.ray.tnear = static_cast<float>(t_min);
+    rh.ray.tnear = t_near;
     rh.ray.tfar =
         std::isfinite(t_max) ? static_cast<float>(t_max) : std::numeric_limits<float>::infinity();
     rh.ray.mask = 0xffffffffu;
@@ -231,9 +234,9 @@ double EmbreeScene::distance_to_surface(const Vec3& p, double max_distance) cons
 }
 
 bool EmbreeScene::occluded(const Vec3& o, const Vec3& d, double t_min, double t_max,
-                           const TriangleRef* leaving) const {
+                           TriangleRef leaving) const {
     SkipContext ctx;
-    init_context(ctx, leaving);
+    const float t_near = init_context(ctx, leaving, t_min, rounding());
     RTCRay r{};
     r.org_x = static_cast<float>(o.x);
     r.org_y = static_cast<float>(o.y);
@@ -241,7 +244,7 @@ bool EmbreeScene::occluded(const Vec3& o, const Vec3& d, double t_min, double t_
     r.dir_x = static_cast<float>(d.x);
     r.dir_y = static_cast<float>(d.y);
     r.dir_z = static_cast<float>(d.z);
-    r.tnear = static_cast<float>(t_min);
+    r.tnear = t_near;
     r.tfar =
         std::isfinite(t_max) ? static_cast<float>(t_max) : std::numeric_limits<float>::infinity();
     r.mask = 0xffffffffu;

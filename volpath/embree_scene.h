@@ -27,10 +27,12 @@ struct RayHit {
     static constexpr std::uint32_t kNone = 0xffffffffu;
 };
 
-/// One triangle of the scene: the surface a ray leaves, which its query skips.
+/// One triangle of the scene: the surface a ray leaves, which its query skips (none: shape
+/// kNone).
 struct TriangleRef {
     std::uint32_t shape = RayHit::kNone;
     std::uint32_t triangle = 0;
+    bool any() const { return shape != RayHit::kNone; }
 };
 
 class EmbreeScene {
@@ -43,15 +45,16 @@ class EmbreeScene {
     EmbreeScene& operator=(const EmbreeScene&) = delete;
 
     /// Nearest hit with t in (t_min, t_max); d must be a unit vector. `leaving`: a triangle the
-    /// ray starts on, whose hits are skipped (every other surface counts, however near: a
-    /// distance skipped instead, as t_min, misses whatever lies closer than it). Thread-safe.
+    /// ray leaves at t_min, whose hits are skipped, and with them hits within rounding() past
+    /// t_min (every other surface counts: a distance skipped instead, as eps, misses whatever
+    /// lies closer than it). Thread-safe.
     RayHit intersect(const Vec3& o, const Vec3& d, double t_min = 0,
                      double t_max = std::numeric_limits<double>::infinity(),
-                     const TriangleRef* leaving = nullptr) const;
+                     TriangleRef leaving = {}) const;
     /// Whether anything lies on the segment t in (t_min, t_max), `leaving` as above.
     /// Thread-safe.
     bool occluded(const Vec3& o, const Vec3& d, double t_min, double t_max,
-                  const TriangleRef* leaving = nullptr) const;
+                  TriangleRef leaving = {}) const;
     /// Distance from p to the nearest triangle of any mesh (closest points in double precision
     /// on the meshes' own vertices), or `max_distance` if none is nearer: a ball around p that
     /// no surface enters. Embree's point query over the same BVH. Thread-safe.
@@ -63,6 +66,7 @@ class EmbreeScene {
     /// The distance within which a hit near the origin of a ray that leaves a triangle (skipped
     /// by TriangleRef) is single-precision rounding, such as a coplanar neighbour of that
     /// triangle met at t ~ 0: 1e-6 of the scene's extent (about 16 ulps), epsilon() / 40.
+    /// intersect and occluded skip it for a ray that names the triangle it leaves.
     double rounding() const { return epsilon_ / 40; }
 
   private:

@@ -137,9 +137,9 @@ struct Renderer {
 
     // Per-channel transmittance from o along wi up to tmax through index-matched homogeneous
     // media (`start_medium`: the one o is in, or -1); false if a surface blocks the way.
-    // `leaving`: the triangle o lies on (the first query skips it), or null.
+    // `leaving`: the triangle o lies on (the first query skips it), or none.
     bool shadow(const Vec3& o, const Vec3& wi, double tmax, int start_medium, RGB& T,
-                std::uint64_t& rays, const TriangleRef* leaving) const {
+                std::uint64_t& rays, TriangleRef leaving) const {
         T = {1, 1, 1};
         int inside = start_medium;
         double t0 = 0, t = 0;
@@ -148,15 +148,9 @@ struct Renderer {
             for (int c = 0; c < 3; ++c)
                 T[static_cast<size_t>(c)] *= std::exp(-md.sigma_t[static_cast<size_t>(c)] * len);
         };
-        TriangleRef skip;  // the triangle the query leaves (volpath-render-7)
-        if (leaving) {
-            skip = *leaving;
-            t = es->rounding();
-        }
         for (int k = 0; k < 10000; ++k) {
             ++rays;
-            const RayHit hit =
-                es->intersect(o, wi, t, tmax, skip.shape != RayHit::kNone ? &skip : nullptr);
+            const RayHit hit = es->intersect(o, wi, t, tmax, leaving);
             if (!hit.hit()) break;
             const int mi = shape_medium[hit.shape];
             if (mi < 0 || !passable(mi)) return false;
@@ -171,8 +165,8 @@ struct Renderer {
             // before volpath-render-7 (the option) eps beyond it, which missed the exit of a
             // medium thinner than eps.
             if (opt.rays_from_surface) {
-                t = hit.t + es->rounding();
-                skip = {hit.shape, hit.triangle};
+                t = hit.t;
+                leaving = {hit.shape, hit.triangle};
             } else {
                 t = hit.t + eps;
             }
@@ -217,7 +211,7 @@ struct Renderer {
         // the normal.
         const bool offset = at && !opt.rays_from_surface;
         const Vec3 o = offset ? p + at->n * eps : p;
-        const TriangleRef* leaving = at && !offset ? &at->triangle : nullptr;
+        const TriangleRef leaving = at && !offset ? at->triangle : TriangleRef{};
         const double tmax = std::isfinite(ls.dist) ? ls.dist * (1 - 1e-7) - eps : kInf;
         // Sphere lights are opaque emitters outside the BVH: one in the way blocks the light
         // sampled (as it ends a path that meets it). Before volpath-render-4 the environment and
@@ -232,7 +226,7 @@ struct Renderer {
             if (!shadow(o, ls.wi, tmax, medium, T, rays, leaving)) return;
         } else {
             ++rays;
-            if (es->occluded(o, ls.wi, leaving ? es->rounding() : 0.0, tmax, leaving)) return;
+            if (es->occluded(o, ls.wi, 0, tmax, leaving)) return;
         }
         double w = 1, pl = 1;
         if (ls.pdf > 0) {
@@ -532,9 +526,7 @@ struct Renderer {
                 continue;
             }
             ++rays;
-            const RayHit hit = leave.shape != RayHit::kNone
-                                   ? es->intersect(o, d, es->rounding(), kInf, &leave)
-                                   : es->intersect(o, d, on_surface ? eps : 0.0);
+            const RayHit hit = es->intersect(o, d, on_surface ? eps : 0.0, kInf, leave);
             leave = TriangleRef{};
             if (depth == 0 && hit.hit()) {
                 T[RenderLayout::kDepth] += hit.t;
