@@ -8,8 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 namespace ssslab::volpath {
 namespace {
@@ -83,6 +85,54 @@ TEST(Embree, ClosedMeshesAreWatertight) {
         if (!t.hit() || t.shape != 1) ++misses;
     }
     EXPECT_EQ(misses, 0);
+}
+
+TEST(Embree, CrossingsRecordThePassableBoundariesOfASegment) {
+    // Three unit boxes along x (faces exact in floats) at x in [1, 2], [3, 4], [5, 6]: the
+    // first two passable, the third opaque. One query records the passable faces a segment
+    // crosses (each once after sorting and merging repeats), stops at an opaque one, skips the
+    // triangle a ray leaves, and says when the buffer is too small.
+    std::vector<TriangleMesh> boxes;
+    for (int k = 0; k < 3; ++k) {
+        TriangleMesh b = make_box({1, 1, 1});
+        for (Vec3& v : b.positions) v += Vec3{1.5 + 2 * k, 0, 0};
+        boxes.push_back(std::move(b));
+    }
+    const EmbreeScene es({&boxes[0], &boxes[1], &boxes[2]});
+    const std::vector<char> passable = {1, 1, 0};
+    EmbreeScene::Crossing buf[8];
+    std::size_t n = 0;
+    // Distances of the distinct crossings, sorted (a hit may come twice).
+    auto distinct = [&] {
+        std::vector<double> t;
+        for (std::size_t i = 0; i < n; ++i) t.push_back(buf[i].t);
+        std::sort(t.begin(), t.end());
+        t.erase(std::unique(t.begin(), t.end()), t.end());
+        return t;
+    };
+    const Vec3 o{0, 0.1, 0.2}, d{1, 0, 0};
+    EXPECT_EQ(es.crossings(o, d, 0, 4.5, {}, passable, buf, 8, n), EmbreeScene::Through::kClear);
+    EXPECT_EQ(distinct(), (std::vector<double>{1, 2, 3, 4}));
+    for (std::size_t i = 0; i < n; ++i) {
+        EXPECT_EQ(buf[i].shape, buf[i].t < 2.5 ? 0u : 1u);
+        const Vec3& nrm = es.normal(buf[i].shape, buf[i].triangle);
+        EXPECT_EQ(nrm.x, buf[i].t == 1 || buf[i].t == 3 ? -1.0 : 1.0);  // entering, leaving
+    }
+    // The opaque box blocks a longer segment; a shorter one crosses the first box only.
+    EXPECT_EQ(es.crossings(o, d, 0, 5.5, {}, passable, buf, 8, n), EmbreeScene::Through::kBlocked);
+    EXPECT_EQ(es.crossings(o, d, 0, 2.5, {}, passable, buf, 8, n), EmbreeScene::Through::kClear);
+    EXPECT_EQ(distinct(), (std::vector<double>{1, 2}));
+    // Too small a buffer.
+    EXPECT_EQ(es.crossings(o, d, 0, 4.5, {}, passable, buf, 3, n), EmbreeScene::Through::kTooMany);
+    // Leaving the first box's entry face from its point: that face is skipped.
+    const RayHit entry = es.intersect(o, d);
+    ASSERT_EQ(entry.shape, 0u);
+    EXPECT_EQ(es.crossings(o + d * entry.t, d, 0, 3.5, {entry.shape, entry.triangle}, passable, buf,
+                           8, n),
+              EmbreeScene::Through::kClear);
+    EXPECT_EQ(distinct(), (std::vector<double>{1, 2, 3}));  // from x = 1: x = 2, 3, 4
+    // Nothing passable: the first box blocks.
+    EXPECT_EQ(es.crossings(o, d, 0, 4.5, {}, {0, 0, 0}, buf, 8, n), EmbreeScene::Through::kBlocked);
 }
 
 }  // namespace

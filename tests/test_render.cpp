@@ -492,6 +492,88 @@ TEST(Render, AnOccluderCloserThanTheSceneEpsilonShadowsTheSky) {
     }
 }
 
+TEST(Render, ShadowRaysCrossManyIndexMatchedBoundariesInOneQuery) {
+    // A diffuse floor (albedo 0.5, 400 mm: epsilon 8 um) seen straight down over x in [0, 2]
+    // mm, under a sun at 45 degrees from -x, direct light only. Between floor and sun a stack of
+    // K absorbing index-matched slabs 0.5 mm thick (sigma_a 0.02, 0.05, 0.1 /mm) at
+    // y = 3 + k .. 3.5 + k, x < -1 (the camera's rays miss them): every shadow ray crosses 2 K
+    // boundaries and the radiance is closed-form, with no noise: L = albedo E cos(45) / pi
+    // exp(-sigma sqrt(2) K 0.5). K = 20 takes one occlusion query per shadow ray
+    // (EmbreeScene::crossings, 40 crossings recorded and put in order); K = 40 is more than
+    // its buffer holds (64) and steps from boundary to boundary; the legacy option steps from
+    // eps beyond each. All three must give the closed form.
+    const double sigma[3] = {0.02, 0.05, 0.1};
+    const double fov = 2 * std::atan(0.1) * 180 / std::numbers::pi;
+    for (const int K : {20, 40}) {
+        char camera[200];
+        std::snprintf(camera, sizeof camera,
+                      "[camera]\nposition = [1, 10, 0]\ntarget = [1, 0, 0]\nup = [0, 0, -1]\n"
+                      "fov_y_deg = %.17g\nwidth = 4\nheight = 4\n",
+                      fov);
+        std::string text = std::string("[scene]\nname = \"slabs\"\n") + camera + R"(
+[[lights]]
+type = "directional"
+direction = [-1, 1, 0]
+irradiance = 2
+[[materials]]
+name = "floor"
+type = "diffuse"
+albedo = 0.5
+[[materials]]
+name = "slab"
+sigma_a_per_mm = [0.02, 0.05, 0.1]
+sigma_s_per_mm = 0
+g = 0
+eta = 1.0
+[[shapes]]
+type = "plane"
+size_x = 400
+size_z = 400
+material = "floor"
+)";
+        for (int k = 0; k < K; ++k) {
+            char slab[200];
+            std::snprintf(slab, sizeof slab,
+                          "[[shapes]]\ntype = \"box\"\nsize = [100, 0.5, 100]\n"
+                          "translate = [-51, %.2f, 0]\nmaterial = \"slab\"\n",
+                          3.25 + k);
+            text += slab;
+        }
+        const Scene s = parse_scene(text, "slabs.toml", ".");
+        for (const bool from_surface : {true, false}) {
+            RenderOptions o = options(6);
+            o.budget.samples = 6;
+            o.max_depth = 1;
+            o.rays_from_surface = from_surface;
+            const RenderResult r = render(s, o);
+            const ImageLayer& img = r.image.layer("radiance");
+            double worst = 0;
+            for (int c = 0; c < 3; ++c) {
+                const double ref = 0.5 * 2 * std::sqrt(0.5) / std::numbers::pi *
+                                   std::exp(-sigma[c] * std::sqrt(2.0) * K * 0.5);
+                for (int y = 0; y < 4; ++y)
+                    for (int x = 0; x < 4; ++x)
+                        worst = std::max(worst, std::fabs(img.at(x, y, c) / ref - 1));
+            }
+            // Queries per path: the camera ray, the path's next ray from the floor (for the
+            // MIS of a light it would meet) and the floor's shadow ray: one query, or one per
+            // boundary and the last (the fallback after the query that found too many).
+            const double per_path =
+                static_cast<double>(r.rays) / (16.0 * static_cast<double>(r.spp));
+            std::printf(
+                "  [measured] %d slabs, rays %s: worst relative error %.2e against the closed "
+                "form, %.1f queries per path\n",
+                K, from_surface ? "from the surface" : "eps off it", worst, per_path);
+            EXPECT_LT(worst, 1e-6);
+            if (from_surface && K == 20) {
+                EXPECT_EQ(per_path, 3.0);
+            } else {
+                EXPECT_EQ(per_path, 2.0 + (from_surface ? 1 : 0) + 2 * K + 1);
+            }
+        }
+    }
+}
+
 TEST(Render, BitIdenticalForAnyThreadCountAndResumable) {
     const Scene s = parse_scene(
         scene_text("[[materials]]\nname = \"m\"\npreset = \"Skin1\"\nroughness = 0.3\n",

@@ -188,7 +188,75 @@ float init_context(SkipContext& c, TriangleRef leaving, double t_min, double rou
     return static_cast<float>(t_min + rounding);
 }
 
+// The context of crossings(): the triangle skipped, the passable shapes and the hits on them.
+struct CrossContext {
+    RTCIntersectContext ctx;  // first: Embree hands the filter &ctx
+    TriangleRef skip;
+    const std::vector<char>* passable;
+    EmbreeScene::Crossing* out;
+    std::size_t cap, n;
+    bool overflow;
+};
+
+// Accepts (and so ends the occlusion query with) a hit on an opaque shape, or the first hit
+// that finds the buffer full; records and rejects the hits on passable shapes. Embree writes
+// the candidate's distance into the ray's tfar before it calls the filter.
+void cross_filter(const RTCFilterFunctionNArguments* args) {
+    auto* c = reinterpret_cast<CrossContext*>(args->context);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        const unsigned geom = RTCHitN_geomID(args->hit, args->N, i);
+        const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+        if (geom == c->skip.shape && prim == c->skip.triangle) {
+            args->valid[i] = 0;
+            continue;
+        }
+        if (!(*c->passable)[geom]) continue;
+        if (c->n == c->cap) {
+            c->overflow = true;
+            continue;
+        }
+        c->out[c->n++] = {RTCRayN_tfar(args->ray, args->N, i), geom, prim};
+        args->valid[i] = 0;
+    }
+}
+
 }  // namespace
+
+const Vec3& EmbreeScene::normal(std::uint32_t shape, std::uint32_t triangle) const {
+    return impl_->normals[shape][triangle];
+}
+
+EmbreeScene::Through EmbreeScene::crossings(const Vec3& o, const Vec3& d, double t_min,
+                                            double t_max, TriangleRef leaving,
+                                            const std::vector<char>& passable, Crossing* out,
+                                            std::size_t cap, std::size_t& n) const {
+    CrossContext ctx;
+    rtcInitIntersectContext(&ctx.ctx);
+    ctx.ctx.filter = cross_filter;
+    ctx.skip = leaving;
+    ctx.passable = &passable;
+    ctx.out = out;
+    ctx.cap = cap;
+    ctx.n = 0;
+    ctx.overflow = false;
+    RTCRay r{};
+    r.org_x = static_cast<float>(o.x);
+    r.org_y = static_cast<float>(o.y);
+    r.org_z = static_cast<float>(o.z);
+    r.dir_x = static_cast<float>(d.x);
+    r.dir_y = static_cast<float>(d.y);
+    r.dir_z = static_cast<float>(d.z);
+    r.tnear = static_cast<float>(leaving.any() ? t_min + rounding() : t_min);
+    r.tfar =
+        std::isfinite(t_max) ? static_cast<float>(t_max) : std::numeric_limits<float>::infinity();
+    r.mask = 0xffffffffu;
+    r.flags = 0;
+    rtcOccluded1(impl_->scene, &ctx.ctx, &r);
+    n = ctx.n;
+    if (ctx.overflow) return Through::kTooMany;
+    return r.tfar < 0 ? Through::kBlocked : Through::kClear;
+}
 
 RayHit EmbreeScene::intersect(const Vec3& o, const Vec3& d, double t_min, double t_max,
                               TriangleRef leaving) const {

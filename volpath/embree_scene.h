@@ -55,6 +55,22 @@ class EmbreeScene {
     /// Thread-safe.
     bool occluded(const Vec3& o, const Vec3& d, double t_min, double t_max,
                   TriangleRef leaving = {}) const;
+    /// A boundary a segment crosses (see crossings()): its distance along the ray and triangle.
+    struct Crossing {
+        double t;
+        std::uint32_t shape, triangle;
+    };
+    enum class Through { kClear, kBlocked, kTooMany };
+    /// The segment t in (t_min, t_max), `leaving` as above, in one occlusion query that passes
+    /// through the shapes `passable` marks (indexed by shape): kBlocked if any other shape lies
+    /// on it; else up to `cap` passable hits in `out` (in the order Embree met them, a hit
+    /// possibly twice; n: how many) and kClear, or kTooMany if there were more. Thread-safe.
+    Through crossings(const Vec3& o, const Vec3& d, double t_min, double t_max, TriangleRef leaving,
+                      const std::vector<char>& passable, Crossing* out, std::size_t cap,
+                      std::size_t& n) const;
+    /// The unit geometric normal of a triangle (outward for its mesh's orientation), as a hit
+    /// on it reports it.
+    const Vec3& normal(std::uint32_t shape, std::uint32_t triangle) const;
     /// Distance from p to the nearest triangle of any mesh (closest points in double precision
     /// on the meshes' own vertices), or `max_distance` if none is nearer: a ball around p that
     /// no surface enters. Embree's point query over the same BVH. Thread-safe.

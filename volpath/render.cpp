@@ -63,6 +63,7 @@ struct Renderer {
     std::vector<std::unique_ptr<SurfaceDistanceGrid>> shape_balls;
     double eps = 1e-6;
     bool has_passable = false;  // any index-matched homogeneous medium (shadow rays cross them)
+    std::vector<char> passable_shape;  // per shape: a boundary shadow rays cross (passable())
     Vec3 cam_pos, cam_f, cam_r, cam_u;
     double tan_half = 0, aspect = 1;
     // The probability that NEE samples a given light: 1 when every light is sampled at every
@@ -114,6 +115,7 @@ struct Renderer {
             media.push_back(md);
             has_passable = has_passable || (o.index_matched_nee && md.eta == 1.0 && !md.density);
         }
+        for (int mi : shape_medium) passable_shape.push_back(mi >= 0 && passable(mi) ? 1 : 0);
         const SceneCamera& c = s.camera;
         cam_pos = c.position;
         cam_f = normalize(c.target - c.position);
@@ -137,38 +139,81 @@ struct Renderer {
 
     // Per-channel transmittance from o along wi up to tmax through index-matched homogeneous
     // media (`start_medium`: the one o is in, or -1); false if a surface blocks the way.
-    // `leaving`: the triangle o lies on (the first query skips it), or none.
+    // `leaving`: the triangle o lies on (skipped), or none. One occlusion query that passes
+    // through the passable boundaries and records them (EmbreeScene::crossings); the crossings,
+    // in order, attenuate as a ray stepped from each to the next would (the loop of the option
+    // off, which restarts eps beyond each boundary, and the fallback for more crossings than
+    // the buffer holds).
     bool shadow(const Vec3& o, const Vec3& wi, double tmax, int start_medium, RGB& T,
                 std::uint64_t& rays, TriangleRef leaving) const {
         T = {1, 1, 1};
         int inside = start_medium;
-        double t0 = 0, t = 0;
+        double t0 = 0;
         auto attenuate = [&](int mi, double len) {
             const MediumData& md = media[static_cast<size_t>(mi)];
             for (int c = 0; c < 3; ++c)
                 T[static_cast<size_t>(c)] *= std::exp(-md.sigma_t[static_cast<size_t>(c)] * len);
         };
-        for (int k = 0; k < 10000; ++k) {
-            ++rays;
-            const RayHit hit = es->intersect(o, wi, t, tmax, leaving);
-            if (!hit.hit()) break;
-            const int mi = shape_medium[hit.shape];
-            if (mi < 0 || !passable(mi)) return false;
-            if (dot(wi, hit.normal) < 0) {  // entering
+        // A boundary crossed at distance t (its triangle's normal n).
+        auto cross = [&](int mi, double t, const Vec3& n) {
+            if (dot(wi, n) < 0) {  // entering
                 inside = mi;
-                t0 = hit.t;
+                t0 = t;
             } else {
-                if (inside == mi) attenuate(mi, hit.t - t0);
+                if (inside == mi) attenuate(mi, t - t0);
                 inside = -1;
             }
-            // On from the boundary point, its triangle skipped (and hits within rounding);
-            // before volpath-render-7 (the option) eps beyond it, which missed the exit of a
-            // medium thinner than eps.
-            if (opt.rays_from_surface) {
-                t = hit.t;
-                leaving = {hit.shape, hit.triangle};
+        };
+        bool stepped = !opt.rays_from_surface;
+        if (!stepped) {
+            constexpr std::size_t kCap = 64;
+            EmbreeScene::Crossing buf[kCap];
+            std::size_t n = 0;
+            ++rays;
+            const auto through =
+                es->crossings(o, wi, 0, tmax, leaving, passable_shape, buf, kCap, n);
+            if (through == EmbreeScene::Through::kBlocked) return false;
+            if (through == EmbreeScene::Through::kTooMany) {
+                stepped = true;
             } else {
-                t = hit.t + eps;
+                std::sort(buf, buf + n, [](const auto& a, const auto& b) {
+                    return a.t < b.t ||
+                           (a.t == b.t &&
+                            (a.shape < b.shape || (a.shape == b.shape && a.triangle < b.triangle)));
+                });
+                // As the stepping loop meets them: after a crossing the next query starts at it,
+                // skipping its triangle and the hits within rounding (a hit reported twice too).
+                const EmbreeScene::Crossing* prev = nullptr;
+                for (std::size_t k = 0; k < n; ++k) {
+                    const EmbreeScene::Crossing& c = buf[k];
+                    if (prev && (!(c.t >= static_cast<float>(prev->t + es->rounding())) ||
+                                 (c.shape == prev->shape && c.triangle == prev->triangle)))
+                        continue;
+                    cross(shape_medium[c.shape], c.t, es->normal(c.shape, c.triangle));
+                    prev = &c;
+                }
+            }
+        }
+        if (stepped) {
+            inside = start_medium;
+            T = {1, 1, 1};
+            double t = 0;
+            for (int k = 0; k < 10000; ++k) {
+                ++rays;
+                const RayHit hit = es->intersect(o, wi, t, tmax, leaving);
+                if (!hit.hit()) break;
+                const int mi = shape_medium[hit.shape];
+                if (mi < 0 || !passable(mi)) return false;
+                cross(mi, hit.t, hit.normal);
+                // On from the boundary point, its triangle skipped (and hits within rounding);
+                // before volpath-render-7 (the option) eps beyond it, which missed the exit of a
+                // medium thinner than eps.
+                if (opt.rays_from_surface) {
+                    t = hit.t;
+                    leaving = {hit.shape, hit.triangle};
+                } else {
+                    t = hit.t + eps;
+                }
             }
         }
         if (inside >= 0 && std::isfinite(tmax)) attenuate(inside, tmax - t0);
