@@ -18,6 +18,8 @@
 
 #include "core/hash.h"
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 
 namespace ssslab {
@@ -52,9 +54,44 @@ inline std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed) {
     return reverse_bits(laine_karras(reverse_bits(x), seed));
 }
 
+namespace sobol_detail {
+
+// The second dimension's generator matrix (primitive polynomial x + 1: direction numbers
+// v_0 = 2^31, v_{i+1} = v_i ^ (v_i >> 1)) applied a byte at a time: entry 256 k + b is the XOR
+// of the direction numbers of the bits set in byte k of the index (b at bits 8k .. 8k + 7).
+struct SecondDimension {
+    std::array<std::uint32_t, 1024> table{};
+    constexpr SecondDimension() {
+        std::uint32_t v[32] = {};
+        v[0] = 1u << 31;
+        for (int i = 1; i < 32; ++i) v[i] = v[i - 1] ^ (v[i - 1] >> 1);
+        for (int k = 0; k < 4; ++k)
+            for (int b = 0; b < 256; ++b) {
+                std::uint32_t y = 0;
+                for (int j = 0; j < 8; ++j)
+                    if (b & (1 << j)) y ^= v[8 * k + j];
+                table[static_cast<std::size_t>(256 * k + b)] = y;
+            }
+    }
+};
+inline constexpr SecondDimension kSecondDimension{};
+
+}  // namespace sobol_detail
+
 /// The first two dimensions of the Sobol sequence at `index` as 32-bit fixed-point values: the
-/// van der Corput sequence and the dimension of primitive polynomial x + 1.
+/// van der Corput sequence and the dimension of primitive polynomial x + 1 (the product of its
+/// generator matrix with the index's bits, four table lookups; sobol_2d_bitwise is the
+/// definition, bit by bit).
 inline void sobol_2d(std::uint32_t index, std::uint32_t& x, std::uint32_t& y) {
+    const auto& t = sobol_detail::kSecondDimension.table;
+    x = sobol_detail::reverse_bits(index);
+    y = t[index & 0xffu] ^ t[256 + ((index >> 8) & 0xffu)] ^ t[512 + ((index >> 16) & 0xffu)] ^
+        t[768 + (index >> 24)];
+}
+
+/// sobol_2d by the definition: the direction numbers of the index's set bits XORed one by one
+/// (what the tables hold, for the test).
+inline void sobol_2d_bitwise(std::uint32_t index, std::uint32_t& x, std::uint32_t& y) {
     x = sobol_detail::reverse_bits(index);
     y = 0;
     std::uint32_t v = 1u << 31;

@@ -1,12 +1,15 @@
 // The counter-based generator: the eight-block Philox4x32-10 (AVX2 where available) against
-// Random123's own implementation, and the counter layout of RngStream.
+// Random123's own implementation, the counter layout of RngStream, and the 2D Sobol points
+// (core/sobol.h).
 #include "core/philox.h"
 #include "core/rng.h"
+#include "core/sobol.h"
 
 #include <Random123/philox.h>
 #include <gtest/gtest.h>
 
 #include <random>
+#include <vector>
 
 namespace ssslab {
 namespace {
@@ -35,7 +38,9 @@ TEST(Philox, GroupEqualsRandom123BlockByBlock) {
                 ASSERT_EQ(out[2 * i], w0)
                     << to_string(path) << " trial " << trial << " block " << i;
                 ASSERT_EQ(out[2 * i + 1], w1) << to_string(path);
-                if (path == philox_path()) ASSERT_EQ(fast[2 * i], w0);
+                if (path == philox_path()) {
+                    ASSERT_EQ(fast[2 * i], w0);
+                }
             }
         }
     }
@@ -69,6 +74,42 @@ TEST(RngStream, CounterLayoutIsSeedDomainIndex) {
     }
     EXPECT_EQ(s.words_drawn(), 40u);
     EXPECT_THROW(RngStream(1, 1u << 16, 0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace ssslab
+
+namespace ssslab {
+namespace {
+
+TEST(Sobol, TablesEqualTheDefinitionAndTheFirstPointsFormNets) {
+    // The table lookups against the bit-by-bit definition, on every 16-bit index and random
+    // 32-bit ones.
+    std::mt19937_64 pick(7);
+    for (std::uint64_t k = 0; k < (1u << 16) + 200000; ++k) {
+        const auto i =
+            k < (1u << 16) ? static_cast<std::uint32_t>(k) : static_cast<std::uint32_t>(pick());
+        std::uint32_t x = 0, y = 0, xb = 0, yb = 0;
+        sobol_2d(i, x, y);
+        sobol_2d_bitwise(i, xb, yb);
+        ASSERT_EQ(x, xb) << i;
+        ASSERT_EQ(y, yb) << i;
+    }
+    // Independent of both: the first 2^m points of the first two Sobol dimensions form a
+    // (0, m, 2)-net in base 2: every elementary interval [a 2^-j, (a + 1) 2^-j) x
+    // [b 2^-(m - j), (b + 1) 2^-(m - j)) holds exactly one point.
+    for (int m = 1; m <= 12; ++m)
+        for (int j = 0; j <= m; ++j) {
+            std::vector<int> count(std::size_t{1} << m, 0);
+            for (std::uint32_t i = 0; i < (1u << m); ++i) {
+                std::uint32_t x = 0, y = 0;
+                sobol_2d(i, x, y);
+                const std::uint32_t a = j == 0 ? 0 : x >> (32 - j);
+                const std::uint32_t b = m - j == 0 ? 0 : y >> (32 - (m - j));
+                ++count[(a << (m - j)) | b];
+            }
+            for (int c : count) ASSERT_EQ(c, 1) << "m " << m << ", j " << j;
+        }
 }
 
 }  // namespace
