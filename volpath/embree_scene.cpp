@@ -188,6 +188,23 @@ float init_context(SkipContext& c, TriangleRef leaving, double t_min, double rou
     return static_cast<float>(t_min + rounding);
 }
 
+// An Embree ray from o along d over (t_near, t_max] (t_max infinite: unbounded).
+RTCRay make_ray(const Vec3& o, const Vec3& d, float t_near, double t_max) {
+    RTCRay r{};
+    r.org_x = static_cast<float>(o.x);
+    r.org_y = static_cast<float>(o.y);
+    r.org_z = static_cast<float>(o.z);
+    r.dir_x = static_cast<float>(d.x);
+    r.dir_y = static_cast<float>(d.y);
+    r.dir_z = static_cast<float>(d.z);
+    r.tnear = t_near;
+    r.tfar =
+        std::isfinite(t_max) ? static_cast<float>(t_max) : std::numeric_limits<float>::infinity();
+    r.mask = 0xffffffffu;
+    r.flags = 0;
+    return r;
+}
+
 // The context of crossings(): the triangle skipped, the passable shapes and the hits on them.
 struct CrossContext {
     RTCIntersectContext ctx;  // first: Embree hands the filter &ctx
@@ -240,18 +257,8 @@ EmbreeScene::Through EmbreeScene::crossings(const Vec3& o, const Vec3& d, double
     ctx.cap = cap;
     ctx.n = 0;
     ctx.overflow = false;
-    RTCRay r{};
-    r.org_x = static_cast<float>(o.x);
-    r.org_y = static_cast<float>(o.y);
-    r.org_z = static_cast<float>(o.z);
-    r.dir_x = static_cast<float>(d.x);
-    r.dir_y = static_cast<float>(d.y);
-    r.dir_z = static_cast<float>(d.z);
-    r.tnear = static_cast<float>(leaving.any() ? t_min + rounding() : t_min);
-    r.tfar =
-        std::isfinite(t_max) ? static_cast<float>(t_max) : std::numeric_limits<float>::infinity();
-    r.mask = 0xffffffffu;
-    r.flags = 0;
+    RTCRay r =
+        make_ray(o, d, static_cast<float>(leaving.any() ? t_min + rounding() : t_min), t_max);
     rtcOccluded1(impl_->scene, &ctx.ctx, &r);
     n = ctx.n;
     if (ctx.overflow) return Through::kTooMany;
@@ -263,17 +270,7 @@ RayHit EmbreeScene::intersect(const Vec3& o, const Vec3& d, double t_min, double
     SkipContext ctx;
     const float t_near = init_context(ctx, leaving, t_min, rounding());
     RTCRayHit rh{};
-    rh.ray.org_x = static_cast<float>(o.x);
-    rh.ray.org_y = static_cast<float>(o.y);
-    rh.ray.org_z = static_cast<float>(o.z);
-    rh.ray.dir_x = static_cast<float>(d.x);
-    rh.ray.dir_y = static_cast<float>(d.y);
-    rh.ray.dir_z = static_cast<float>(d.z);
-    rh.ray.tnear = t_near;
-    rh.ray.tfar =
-        std::isfinite(t_max) ? static_cast<float>(t_max) : std::numeric_limits<float>::infinity();
-    rh.ray.mask = 0xffffffffu;
-    rh.ray.flags = 0;
+    rh.ray = make_ray(o, d, t_near, t_max);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &ctx.ctx, &rh);
@@ -305,18 +302,7 @@ bool EmbreeScene::occluded(const Vec3& o, const Vec3& d, double t_min, double t_
                            TriangleRef leaving) const {
     SkipContext ctx;
     const float t_near = init_context(ctx, leaving, t_min, rounding());
-    RTCRay r{};
-    r.org_x = static_cast<float>(o.x);
-    r.org_y = static_cast<float>(o.y);
-    r.org_z = static_cast<float>(o.z);
-    r.dir_x = static_cast<float>(d.x);
-    r.dir_y = static_cast<float>(d.y);
-    r.dir_z = static_cast<float>(d.z);
-    r.tnear = t_near;
-    r.tfar =
-        std::isfinite(t_max) ? static_cast<float>(t_max) : std::numeric_limits<float>::infinity();
-    r.mask = 0xffffffffu;
-    r.flags = 0;
+    RTCRay r = make_ray(o, d, t_near, t_max);
     rtcOccluded1(impl_->scene, &ctx.ctx, &r);
     return r.tfar < 0;  // Embree sets tfar to -inf on a hit
 }
