@@ -341,19 +341,26 @@ material = "m"
         }
 }
 
+// A camera 10 mm above the floor at x = 1 mm looking straight down, size x size pixels over
+// x, z in [0, 2] mm.
+std::string down_camera(int size) {
+    const double fov = 2 * std::atan(0.1) * 180 / std::numbers::pi;  // half-width 1 mm at 10 mm
+    char camera[200];
+    std::snprintf(camera, sizeof camera,
+                  "[camera]\nposition = [1, 10, 0]\ntarget = [1, 0, 0]\nup = [0, 0, -1]\n"
+                  "fov_y_deg = %.17g\nwidth = %d\nheight = %d\n",
+                  fov, size, size);
+    return camera;
+}
+
 // A diffuse floor (albedo 0.5) 40,000 mm wide, so that the scene epsilon (4e-5 of the extent)
 // is 0.8 mm, seen straight down over x in [0, 2] mm by 8 x 8 pixels (column x covers
 // [x / 4, (x + 1) / 4] mm), and a step of material "step" from 0.05 to 0.45 mm above the floor
 // (below the epsilon) over x < 0, 10 m long and deep (infinite as seen from the view).
 // `lights_and_step`: the lights and the step's material.
 Scene step_scene(const std::string& lights_and_step) {
-    const double fov = 2 * std::atan(0.1) * 180 / std::numbers::pi;  // half-width 1 mm at 10 mm
-    char camera[200];
-    std::snprintf(camera, sizeof camera,
-                  "[camera]\nposition = [1, 10, 0]\ntarget = [1, 0, 0]\nup = [0, 0, -1]\n"
-                  "fov_y_deg = %.17g\nwidth = 8\nheight = 8\n",
-                  fov);
-    return parse_scene(std::string("[scene]\nname = \"step\"\n") + camera + lights_and_step + R"(
+    return parse_scene(
+        std::string("[scene]\nname = \"step\"\n") + down_camera(8) + lights_and_step + R"(
 [[materials]]
 name = "floor"
 type = "diffuse"
@@ -369,7 +376,7 @@ size = [10000, 0.4, 10000]
 translate = [-5000, 0.25, 0]
 material = "step"
 )",
-                       "step.toml", ".");
+        "step.toml", ".");
 }
 
 // A step_scene, direct light only, 96 spp; rays leave surfaces from the surface (the default)
@@ -503,14 +510,8 @@ TEST(Render, ShadowRaysCrossManyIndexMatchedBoundariesInOneQuery) {
     // its buffer holds (64) and steps from boundary to boundary; the legacy option steps from
     // eps beyond each. All three must give the closed form.
     const double sigma[3] = {0.02, 0.05, 0.1};
-    const double fov = 2 * std::atan(0.1) * 180 / std::numbers::pi;
     for (const int K : {20, 40}) {
-        char camera[200];
-        std::snprintf(camera, sizeof camera,
-                      "[camera]\nposition = [1, 10, 0]\ntarget = [1, 0, 0]\nup = [0, 0, -1]\n"
-                      "fov_y_deg = %.17g\nwidth = 4\nheight = 4\n",
-                      fov);
-        std::string text = std::string("[scene]\nname = \"slabs\"\n") + camera + R"(
+        std::string text = std::string("[scene]\nname = \"slabs\"\n") + down_camera(4) + R"(
 [[lights]]
 type = "directional"
 direction = [-1, 1, 0]

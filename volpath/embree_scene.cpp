@@ -170,12 +170,16 @@ struct SkipContext {
     TriangleRef skip;
 };
 
+// Whether candidate i of a filter call is on the triangle the ray leaves.
+bool on_skipped(const SkipContext& c, const RTCFilterFunctionNArguments* args, unsigned i) {
+    return RTCHitN_geomID(args->hit, args->N, i) == c.skip.shape &&
+           RTCHitN_primID(args->hit, args->N, i) == c.skip.triangle;
+}
+
 void skip_filter(const RTCFilterFunctionNArguments* args) {
     const auto* c = reinterpret_cast<const SkipContext*>(args->context);
     for (unsigned i = 0; i < args->N; ++i)
-        if (args->valid[i] == -1 && RTCHitN_geomID(args->hit, args->N, i) == c->skip.shape &&
-            RTCHitN_primID(args->hit, args->N, i) == c->skip.triangle)
-            args->valid[i] = 0;
+        if (args->valid[i] == -1 && on_skipped(*c, args, i)) args->valid[i] = 0;
 }
 
 // The context of a query, and its near distance: a ray that leaves a triangle skips it and the
@@ -207,8 +211,7 @@ RTCRay make_ray(const Vec3& o, const Vec3& d, float t_near, double t_max) {
 
 // The context of crossings(): the triangle skipped, the passable shapes and the hits on them.
 struct CrossContext {
-    RTCIntersectContext ctx;  // first: Embree hands the filter &ctx
-    TriangleRef skip;
+    SkipContext base;  // first: Embree hands the filter &base.ctx
     const std::vector<char>* passable;
     EmbreeScene::Crossing* out;
     std::size_t cap, n;
@@ -222,12 +225,12 @@ void cross_filter(const RTCFilterFunctionNArguments* args) {
     auto* c = reinterpret_cast<CrossContext*>(args->context);
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] != -1) continue;
-        const unsigned geom = RTCHitN_geomID(args->hit, args->N, i);
-        const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
-        if (geom == c->skip.shape && prim == c->skip.triangle) {
+        if (on_skipped(c->base, args, i)) {
             args->valid[i] = 0;
             continue;
         }
+        const unsigned geom = RTCHitN_geomID(args->hit, args->N, i);
+        const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
         if (!(*c->passable)[geom]) continue;
         if (c->n == c->cap) {
             c->overflow = true;
@@ -248,18 +251,11 @@ EmbreeScene::Through EmbreeScene::crossings(const Vec3& o, const Vec3& d, double
                                             double t_max, TriangleRef leaving,
                                             const std::vector<char>& passable, Crossing* out,
                                             std::size_t cap, std::size_t& n) const {
-    CrossContext ctx;
-    rtcInitIntersectContext(&ctx.ctx);
-    ctx.ctx.filter = cross_filter;
-    ctx.skip = leaving;
-    ctx.passable = &passable;
-    ctx.out = out;
-    ctx.cap = cap;
-    ctx.n = 0;
-    ctx.overflow = false;
-    RTCRay r =
-        make_ray(o, d, static_cast<float>(leaving.any() ? t_min + rounding() : t_min), t_max);
-    rtcOccluded1(impl_->scene, &ctx.ctx, &r);
+    CrossContext ctx{{}, &passable, out, cap, 0, false};
+    const float t_near = init_context(ctx.base, leaving, t_min, rounding());
+    ctx.base.ctx.filter = cross_filter;  // also where no triangle is skipped
+    RTCRay r = make_ray(o, d, t_near, t_max);
+    rtcOccluded1(impl_->scene, &ctx.base.ctx, &r);
     n = ctx.n;
     if (ctx.overflow) return Through::kTooMany;
     return r.tfar < 0 ? Through::kBlocked : Through::kClear;

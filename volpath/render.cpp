@@ -113,9 +113,10 @@ struct Renderer {
                     std::make_unique<SurfaceDistanceGrid>(*es, sh.mesh);
             }
             media.push_back(md);
-            has_passable = has_passable || (o.index_matched_nee && md.eta == 1.0 && !md.density);
         }
         for (int mi : shape_medium) passable_shape.push_back(mi >= 0 && passable(mi) ? 1 : 0);
+        has_passable =
+            std::find(passable_shape.begin(), passable_shape.end(), 1) != passable_shape.end();
         const SceneCamera& c = s.camera;
         cam_pos = c.position;
         cam_f = normalize(c.target - c.position);
@@ -194,9 +195,7 @@ struct Renderer {
                 }
             }
         }
-        if (stepped) {
-            inside = start_medium;
-            T = {1, 1, 1};
+        if (stepped) {  // nothing crossed yet: T and inside as they started
             double t = 0;
             for (int k = 0; k < 10000; ++k) {
                 ++rays;
