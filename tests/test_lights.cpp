@@ -219,5 +219,77 @@ TEST(Lights, SphereHitsLieOnTheSphereAndDeltaLightsGiveTheirValues) {
     EXPECT_EQ(light_pdf(make_light(dl), {0, 0, 0}, {0, 1, 0}), 0.0);
 }
 
+// The exit guide's lobe (volpath/sampling.h, the renderer's volpath-render-8): von
+// Mises-Fisher directions about an axis. Its density integrates to one over the sphere
+// (Simpson's rule in theta, the lobe and the rest apart), and sampled directions fall into bands of
+// theta (equal widths up to where the lobe has all but 1e-6 of its mass, then the rest) and sectors
+// of azimuth as often as the density integrated over each band says (chi-square, Sidak over the
+// concentrations), from nearly uniform (kappa 1e-3) to a lobe a third of a degree wide (kappa 1e5,
+// the renderer's cap).
+TEST(Lights, VonMisesFisherDirectionsFollowTheirDensity) {
+    const Vec3 axis = normalize(Vec3{0.3, -0.5, 0.8});
+    const Frame f(axis);
+    const double kappas[] = {1e-3, 1.0, 30.0, 1e3, 1e5};
+    const double alpha = testing::sidak(0.01, static_cast<int>(std::size(kappas)));
+    const std::int64_t n = static_cast<std::int64_t>(2e5 * testing::test_scale());
+    std::uint64_t index = 0;
+    for (const double kappa : kappas) {
+        SCOPED_TRACE(kappa);
+        // The density in theta, integrated by Simpson's rule over [a, b].
+        auto mass = [&](double a, double b) {
+            const int m = 2000;
+            const double h = (b - a) / m;
+            double sum = 0;
+            for (int i = 0; i <= m; ++i) {
+                const double t = a + i * h;
+                const double v = vmf_pdf(axis, kappa, f.world({std::sin(t), 0, std::cos(t)})) * 2 *
+                                 kPi * std::sin(t);
+                sum += v * (i == 0 || i == m ? 1 : (i % 2 ? 4 : 2));
+            }
+            return sum * h / 3;
+        };
+        // theta_max: where 1 - cos = 14 / kappa (mass beyond: exp(-14) ~ 1e-6), or pi.
+        const double t_max = kappa * 2 > 14 ? std::acos(1 - 14 / kappa) : kPi;
+        EXPECT_NEAR(mass(0, t_max) + (t_max < kPi ? mass(t_max, kPi) : 0.0), 1.0, 1e-6);
+        const int bands = 16, sectors = 8;
+        std::vector<double> edges(bands + 1), expected, observed(bands * sectors + 1, 0.0);
+        for (int b = 0; b <= bands; ++b) edges[static_cast<std::size_t>(b)] = t_max * b / bands;
+        for (int b = 0; b < bands; ++b)
+            for (int k = 0; k < sectors; ++k)
+                expected.push_back(static_cast<double>(n) *
+                                   mass(edges[static_cast<std::size_t>(b)],
+                                        edges[static_cast<std::size_t>(b) + 1]) /
+                                   sectors);
+        expected.push_back(static_cast<double>(n) * (1 - mass(0, t_max)));
+        RngStream rng(4, rng_domain::kTest + 61, index++);
+        for (std::int64_t i = 0; i < n; ++i) {
+            const Vec3 l = f.local(sample_vmf(axis, kappa, rng.uniform(), rng.uniform()));
+            const double t = std::acos(std::clamp(l.z, -1.0, 1.0));
+            if (!(t < t_max)) {
+                observed.back() += 1;
+                continue;
+            }
+            const int b = std::min(bands - 1, static_cast<int>(t / t_max * bands));
+            const double phi = std::atan2(l.y, l.x) + kPi;
+            const int k = std::min(sectors - 1, static_cast<int>(phi / (2 * kPi) * sectors));
+            observed[static_cast<std::size_t>(b * sectors + k)] += 1;
+        }
+        // The last cell (beyond theta_max) expects almost nothing: merged into the band before.
+        if (expected.back() < 5) {
+            observed[observed.size() - 2] += observed.back();
+            expected[expected.size() - 2] += expected.back();
+            observed.pop_back();
+            expected.pop_back();
+        }
+        int dof = 0;
+        const double chi2 = testing::chi2_statistic(observed, expected, dof);
+        const double p = chi_square_p(chi2, dof);
+        EXPECT_GT(p, alpha) << "chi2 " << chi2 << " over " << dof;
+        std::printf("  [measured] kappa %g: chi2 %.1f / %d, p %.3f\n", kappa, chi2, dof, p);
+        // The inverse of the sampler's first number.
+        EXPECT_NEAR(vmf_cdf(kappa, std::cos(t_max / 2)), 1 - mass(0, t_max / 2), 1e-6);
+    }
+}
+
 }  // namespace
 }  // namespace ssslab::volpath

@@ -187,10 +187,12 @@ TEST(WalkGolden, SphereEngineVolpathSphere3) {
 // spp), which volpath-render-4 keeps as options; otherwise the defaults. `absorption`: as the
 // pinned version had it (volpath-render-5 chooses per medium). Before volpath-render-6 (v6
 // false): the hero in turn and the environment sampled over the sphere, as those versions had
-// them; before volpath-render-7 (v7 false) rays leaving a surface start eps off it.
+// them; before volpath-render-7 (v7 false) rays leaving a surface start eps off it; before
+// volpath-render-8 (guide false) no exit guides (they change only media behind rough boundaries
+// with the same g in all channels).
 std::vector<double> render_pin(const std::string& material, const std::string& lights, bool legacy,
                                std::optional<Absorption> absorption = Absorption::kAnalog,
-                               bool v6 = false, bool v7 = false) {
+                               bool v6 = false, bool v7 = false, bool guide = false) {
     const std::string text = R"(
 [scene]
 name = "golden"
@@ -226,6 +228,7 @@ material = "floor"
         o.environment_cosine = false;
     }
     o.rays_from_surface = v7;
+    o.exit_guide = guide;
     if (legacy) {
         o.nee_all_lights = false;
         o.sampler = RenderSampler::kIndependent;
@@ -325,7 +328,6 @@ TEST(WalkGolden, RenderEngineVolpathRender6) {
 // closer than the old offset: Render.ShadowsOfOccludersCloserThanTheSceneEpsilonAreCast and
 // Render.AnOccluderCloserThanTheSceneEpsilonShadowsTheSky).
 TEST(WalkGolden, RenderEngineVolpathRender7) {
-    ASSERT_STREQ(render_engine_version(), "volpath-render-7");
     expect_pinned("render rough boundary (v7)",
                   render_pin(kCoefficients + "eta = 1.3\nroughness = 0.3\n", kLights, false,
                              std::nullopt, true, true),
@@ -341,6 +343,26 @@ TEST(WalkGolden, RenderEngineVolpathRender7) {
         render_pin(kCoefficients + "eta = 1.0\n", kLights, false, std::nullopt, true, true),
         {28.244254380290815, 7553.7592593833424, 237.26277660244335, 65581.737423565821,
          476.7714144595891, 109339.9867192856, 394.36699735932336, 90314.009776079067});
+}
+
+// volpath-render-8's defaults: exit guides at the scattering vertices of media behind rough
+// boundaries whose g is the same in all channels (the pins above have per-channel g, so
+// volpath-render-8 keeps them); such a medium without the guide draws volpath-render-7's
+// numbers (its agreement with the guided one:
+// Render.TheExitGuideAgreesWithTheWalkAloneAndLowersItsVariance).
+TEST(WalkGolden, RenderEngineVolpathRender8) {
+    ASSERT_STREQ(render_engine_version(), "volpath-render-8");
+    const std::string same_g =
+        "[[materials]]\nname = \"m\"\nsigma_a_per_mm = [0.05, 0.1, 0.2]\n"
+        "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = 0.5\neta = 1.3\nroughness = 0.3\n";
+    expect_pinned("render rough boundary, one g (v7)",
+                  render_pin(same_g, kLights, false, std::nullopt, true, true, false),
+                  {28.029280635515857, 7472.6594903212317, 232.22387355304994, 64166.360951180985,
+                   472.67522948714912, 108274.63625511063, 393.04202599612887, 90050.116245004261});
+    expect_pinned("render rough boundary, one g (v8)",
+                  render_pin(same_g, kLights, false, std::nullopt, true, true, true),
+                  {27.917873591930316, 7431.1689303764579, 232.4512732699616, 64544.930307656723,
+                   472.08462318861007, 108334.05724742034, 392.78739498342986, 90025.835060199752});
 }
 
 }  // namespace

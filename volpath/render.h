@@ -16,7 +16,11 @@
 // boundary cannot be connected (a delta BSDF): behind it only light that BSDF sampling finds
 // arrives, which is why the built-in scenes use rough boundaries or area lights, and scene files
 // whose delta lights shine on smooth media are refused
-// (Scene::delta_light_through_smooth_boundary).
+// (Scene::delta_light_through_smooth_boundary). Behind a rough boundary the light of a sphere
+// light or a sun disc also reaches the walk's scattering vertices near the way out through the
+// exit guide (RenderOptions::exit_guide, volpath-render-8): NEE of the light through the
+// boundary from a point the vertex reaches along a direction that the boundary refracts towards
+// the light, combined with the walk's own ways to the same paths by the balance heuristic.
 //
 // Film: per pixel the radiance, its subsurface part (light that entered a medium), its
 // surface-specular part (first-surface reflection off a medium's boundary), their standard
@@ -132,6 +136,17 @@ struct RenderOptions : RunControl {
     /// closer than eps and the exit of a medium thinner than eps: the darker arcs along the
     /// silhouettes of ketchup-matched against Cycles.
     bool rays_from_surface = true;
+    /// The exit guide (volpath-render-8): at every scattering vertex inside a medium behind a
+    /// rough boundary that lies within kExitGuideReach of the medium's smallest mean free paths
+    /// of the way out towards a sphere light or a sun disc, one more estimator of the light
+    /// that leaves through that boundary straight from the vertex: a direction from a von
+    /// Mises-Fisher lobe about the one the boundary there refracts towards the light, the
+    /// flight to the boundary without a collision (its transmittance as a weight), and NEE of
+    /// the light through the rough boundary; balance heuristic with the walk's own ways to the
+    /// same path (its flight, and at the exit NEE or BSDF sampling). The walk alone finds such
+    /// light only where its exit direction happens to fall in the boundary's narrow transmission
+    /// lobe towards the light (heavy-tailed: the noise of backlit milk and apple). Off: as before.
+    bool exit_guide = true;
     /// Samples per pixel in a batch, a multiple of 3 (each channel the hero equally often).
     /// 0: 3 x 2^m, the largest with at least 32 batches in a sample budget (3 when there is a
     /// time or an error budget); a render resumed from a checkpoint keeps the size it started

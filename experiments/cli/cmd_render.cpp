@@ -38,6 +38,7 @@ struct RenderArgs {
     std::string sampler = "sobol";
     std::string absorption = "auto";
     std::string hero = "throughput-albedo";
+    std::string exit_guide = "on";
     CommonOptions common;
 };
 
@@ -59,6 +60,7 @@ std::string render_toml(const RenderArgs& a, const Scene& scene, const volpath::
               std::string(o.sampler == volpath::RenderSampler::kSobol ? "sobol" : "independent"));
     st.record("absorption", a.absorption);
     st.record("hero", a.hero);
+    st.record("exit_guide", a.exit_guide);
     // What "auto" (or the requested policy) came to in each medium.
     ConfigTable media = st.table_or_empty("media_absorption");
     for (const auto& [name, policy] : r.media_absorption)
@@ -128,6 +130,7 @@ int run_render(const RenderArgs& a) {
         o.absorption = a.absorption == "weighted"      ? volpath::Absorption::kWeighted
                        : a.absorption == "per-channel" ? volpath::Absorption::kPerChannel
                                                        : volpath::Absorption::kAnalog;
+    o.exit_guide = a.exit_guide == "on";
     o.error_measure = a.error_of == "image-mean" ? volpath::RenderErrorMeasure::kImageMean
                                                  : volpath::RenderErrorMeasure::kMedianPixel;
     o.width = a.width;
@@ -300,6 +303,11 @@ void register_render(CLI::App& app, std::function<int()>& action) {
                     "path's throughput times the medium's albedo) or uniform (R, G, B in turn "
                     "per camera path, as before volpath-render-6)")
         ->check(one_of({"uniform", "throughput-albedo"}));
+    sub->add_option("--exit-guide", a->exit_guide,
+                    "Inside media behind rough boundaries, the exit guide's estimator of the "
+                    "light of sphere lights and sun discs that leaves straight from a scattering "
+                    "vertex near the boundary: on (default since volpath-render-8) or off")
+        ->check(one_of({"on", "off"}));
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
 
