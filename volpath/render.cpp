@@ -73,14 +73,17 @@ struct ExitGuide {
     double kappa[kMaxGuides] = {};
     Vec3 z, din;        // the vertex and the direction the path arrived along
     double pq[3] = {};  // P(k) q_k at z, the hero mixture's weights (they sum to one)
-    const double* sigma_t = nullptr;
-    double g = 0;
-    // The walk's density of the way from z along w to the boundary at distance t: the phase
-    // function's times the hero mixture's probability of no collision before it.
-    double walk_density(const Vec3& w, double t) const {
+    // The walk's density of the way from z along w to the boundary at distance t in medium md:
+    // the phase function's times the hero mixture's probability of no collision before it.
+    double walk_density(const MediumData& md, const Vec3& w, double t) const {
         double T = 0;
-        for (std::size_t k = 0; k < 3; ++k) T += pq[k] * std::exp(-sigma_t[k] * t);
-        return hg_pdf(g, dot(din, w)) * T;
+        for (std::size_t k = 0; k < 3; ++k) T += pq[k] * std::exp(-md.sigma_t[k] * t);
+        return hg_pdf(md.g[0], dot(din, w)) * T;
+    }
+    // The guide's density of direction w by lobe i: its estimator runs with probability
+    // kExitGuideProb, then draws w from the lobe.
+    double density(int i, const Vec3& w) const {
+        return kExitGuideProb * vmf_pdf(axis[i], kappa[i], w);
     }
 };
 
@@ -104,6 +107,20 @@ struct GuideShare {
         return f < 0 ? power(p, other) : p / (p + other + f * pl_light);
     }
 };
+
+// The share of guide g (aimed, of a vertex in medium md) at the exit the walk reached from it
+// along w at distance t.
+GuideShare share_of(const ExitGuide& g, const MediumData& md, const std::vector<Light>& lights,
+                    const Vec3& w, double t) {
+    GuideShare share;
+    const double wd = g.walk_density(md, w, t);
+    for (int i = 0; i < g.n; ++i) {
+        share.light[i] = &lights[static_cast<size_t>(g.light[i])];
+        share.factor[i] = wd > 0 ? g.density(i, w) / wd : 0.0;
+    }
+    share.n = g.n;
+    return share;
+}
 
 struct Renderer {
     const Scene& scene;
@@ -440,10 +457,10 @@ struct Renderer {
             RGB T{1, 1, 1};
             if (!reaches(light, x, &at, ls, -1, T, rays)) continue;
             const double denom =
-                g.walk_density(w, hit.t) *
+                g.walk_density(md, w, hit.t) *
                     (sel * ls.pdf + rough_dielectric_pdf(wo_l, wi_l, md.eta, md.alpha)) +
-                kExitGuideProb * vmf_pdf(g.axis[i], g.kappa[i], w) * ls.pdf;
-            const double phase = hg_pdf(g.g, dot(g.din, w));
+                g.density(i, w) * ls.pdf;
+            const double phase = hg_pdf(md.g[0], dot(g.din, w));
             for (std::size_t c = 0; c < 3; ++c)
                 out[c] += bs[c] * phase * std::exp(-md.sigma_t[c] * hit.t) * f * ls.value[c] *
                           T[c] / denom;
@@ -584,15 +601,7 @@ struct Renderer {
                     GuideShare share;
                     if (guided_arrival && !outside) {
                         if (!guide.aimed) exit_guide(md, medium_shape, guide, rays);
-                        const double wd = guide.walk_density(d, length(p - guide.z));
-                        for (int i = 0; i < guide.n; ++i) {
-                            share.light[i] = &lights[static_cast<size_t>(guide.light[i])];
-                            share.factor[i] =
-                                wd > 0 ? kExitGuideProb *
-                                             vmf_pdf(guide.axis[i], guide.kappa[i], d) / wd
-                                       : 0.0;
-                        }
-                        share.n = guide.n;
+                        share = share_of(guide, md, lights, d, length(p - guide.z));
                     }
                     RGB c{};
                     nee(
@@ -725,19 +734,14 @@ struct Renderer {
                 const Vec3 din = s.w;
                 RGB c{};
                 if (md.guided) {
-                    // The exit it aims at is a surface vertex: none beyond max_depth.
-                    if (R.opt.max_depth > 0 && depth >= R.opt.max_depth) {
-                        guide.aimed = true;
-                        guide.n = 0;
-                        return;
-                    }
+                    // The exit it aims at is a surface vertex: none beyond max_depth (where the
+                    // path ends at its next vertex, before any use of the guide).
+                    if (R.opt.max_depth > 0 && depth >= R.opt.max_depth) return;
                     guide.aimed = false;
                     guide.z = s.p;
                     guide.din = s.w;
                     for (std::size_t k = 0; k < 3; ++k)
                         guide.pq[k] = s.weights.prob[k] * s.weights.q[k];
-                    guide.sigma_t = md.sigma_t.data();
-                    guide.g = md.g[0];
                     if (rng.stream_uniform() < kExitGuideProb) {
                         R.exit_guide(md, medium_shape, guide, rays);
                         R.guided_exits(guide, md, medium_shape, bs, rng, c, rays);
