@@ -192,7 +192,8 @@ TEST(WalkGolden, SphereEngineVolpathSphere3) {
 // with the same g in all channels).
 std::vector<double> render_pin(const std::string& material, const std::string& lights, bool legacy,
                                std::optional<Absorption> absorption = Absorption::kAnalog,
-                               bool v6 = false, bool v7 = false, bool guide = false) {
+                               bool v6 = false, bool v7 = false, bool guide = false,
+                               bool boundary_guides = false) {
     const std::string text = R"(
 [scene]
 name = "golden"
@@ -229,6 +230,7 @@ material = "floor"
     }
     o.rays_from_surface = v7;
     o.exit_guide = guide;
+    o.boundary_guides = boundary_guides;
     if (legacy) {
         o.nee_all_lights = false;
         o.sampler = RenderSampler::kIndependent;
@@ -345,24 +347,37 @@ TEST(WalkGolden, RenderEngineVolpathRender7) {
          476.7714144595891, 109339.9867192856, 394.36699735932336, 90314.009776079067});
 }
 
+// A same-g medium behind a rough boundary (the scene of the v8 and v9 pins below).
+const std::string kSameG =
+    "[[materials]]\nname = \"m\"\nsigma_a_per_mm = [0.05, 0.1, 0.2]\n"
+    "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = 0.5\neta = 1.3\nroughness = 0.3\n";
+
 // volpath-render-8's defaults: exit guides at the scattering vertices of media behind rough
 // boundaries whose g is the same in all channels (the pins above have per-channel g, so
 // volpath-render-8 keeps them); such a medium without the guide draws volpath-render-7's
 // numbers (its agreement with the guided one:
 // Render.TheExitGuideAgreesWithTheWalkAloneAndLowersItsVariance).
 TEST(WalkGolden, RenderEngineVolpathRender8) {
-    ASSERT_STREQ(render_engine_version(), "volpath-render-8");
-    const std::string same_g =
-        "[[materials]]\nname = \"m\"\nsigma_a_per_mm = [0.05, 0.1, 0.2]\n"
-        "sigma_s_per_mm = [1.0, 3.0, 8.0]\ng = 0.5\neta = 1.3\nroughness = 0.3\n";
+    const std::string& same_g = kSameG;
     expect_pinned("render rough boundary, one g (v7)",
                   render_pin(same_g, kLights, false, std::nullopt, true, true, false),
                   {28.029280635515857, 7472.6594903212317, 232.22387355304994, 64166.360951180985,
                    472.67522948714912, 108274.63625511063, 393.04202599612887, 90050.116245004261});
     expect_pinned("render rough boundary, one g (v8)",
-                  render_pin(same_g, kLights, false, std::nullopt, true, true, true),
+                  render_pin(same_g, kLights, false, std::nullopt, true, true, true, false),
                   {27.917873591930316, 7431.1689303764579, 232.4512732699616, 64544.930307656723,
                    472.08462318861007, 108334.05724742034, 392.78739498342986, 90025.835060199752});
+}
+
+// volpath-render-9's defaults: exit guides at the boundary's own vertices too (the entry, an
+// internal reflection); without them a same-g rough medium draws volpath-render-8's numbers
+// (above; agreement: Render.BoundaryGuidesAgreeWithTheWalkAloneAndLowerTheVarianceOfAThinMedium).
+TEST(WalkGolden, RenderEngineVolpathRender9) {
+    ASSERT_STREQ(render_engine_version(), "volpath-render-9");
+    expect_pinned("render rough boundary, one g (v9)",
+                  render_pin(kSameG, kLights, false, std::nullopt, true, true, true, true),
+                  {27.897791076901566, 7423.3078059643785, 231.31763060594824, 64453.843216489928,
+                   472.14564069093694, 108416.05445036953, 392.83213495170008, 90011.528211538753});
 }
 
 }  // namespace

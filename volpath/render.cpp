@@ -26,7 +26,7 @@ namespace {
 // every albedo is at least 0.9 (render_absorption); 6: the hero chosen at every entry into a
 // medium by throughput x albedo (RenderHero), the environment sampled about a surface's normal
 // by cos(theta) (RenderOptions::environment_cosine).
-constexpr const char* kEngineVersion = "volpath-render-8";
+constexpr const char* kEngineVersion = "volpath-render-9";
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
 constexpr int kMaxBatchSpp = 3 * 1024;  // the largest automatic batch (RenderOptions::batch_spp)
@@ -62,9 +62,12 @@ constexpr double kExitGuideReach = 8.0;
 constexpr double kExitGuideProb = 0.25;
 constexpr int kMaxGuides = 4;  // guide lights (sphere lights and sun discs) a vertex aims at
 
-// The exit guide of a scattering vertex z inside a medium behind a rough boundary: per guide
-// light, a von Mises-Fisher lobe of directions from z about the one the boundary refracts
-// towards the light, and what the walk's own density of reaching the boundary needs.
+// The exit guide of a vertex z from which a walk inside a medium behind a rough boundary goes on
+// in a sampled direction: a scattering vertex (the phase function's direction), or since
+// volpath-render-9 a vertex on that boundary (the rough BSDF's direction into the medium: the
+// entry from outside, an internal reflection). Per guide light, a von Mises-Fisher lobe of
+// directions from z about the one the boundary refracts towards the light, and what the walk's
+// own density of reaching the boundary needs.
 struct ExitGuide {
     bool aimed = false;  // the lobes below are those of z (computed when first needed)
     int n = 0;           // lobes (0: no guide at z)
@@ -73,12 +76,33 @@ struct ExitGuide {
     double kappa[kMaxGuides] = {};
     Vec3 z, din;        // the vertex and the direction the path arrived along
     double pq[3] = {};  // P(k) q_k at z, the hero mixture's weights (they sum to one)
+    // On the boundary (z on triangle tri, its outward normal normal): the walk's direction
+    // comes from the rough BSDF for the incident direction -din.
+    bool surface = false;
+    Vec3 normal;
+    TriangleRef tri;
+    // The vertex's value for direction w (the phase function, or the BSDF times |cos|) and
+    // the density with which the walk samples w there.
+    double value(const MediumData& md, const Vec3& w) const {
+        if (!surface) return hg_pdf(md.g[0], dot(din, w));
+        const Frame fr(normal);
+        const Vec3 wi = fr.local(w);
+        return rough_dielectric_f(fr.local(-din), wi, md.eta, md.alpha, TransportMode::kRadiance) *
+               std::abs(wi.z);
+    }
+    double pdf(const MediumData& md, const Vec3& w) const {
+        if (!surface) return hg_pdf(md.g[0], dot(din, w));
+        const Frame fr(normal);
+        return rough_dielectric_pdf(fr.local(-din), fr.local(w), md.eta, md.alpha);
+    }
+    // Whether w goes from z into the medium (always from a scattering vertex).
+    bool inward(const Vec3& w) const { return !surface || dot(w, normal) < 0; }
     // The walk's density of the way from z along w to the boundary at distance t in medium md:
-    // the phase function's times the hero mixture's probability of no collision before it.
+    // the vertex's density of w times the hero mixture's probability of no collision before it.
     double walk_density(const MediumData& md, const Vec3& w, double t) const {
         double T = 0;
         for (std::size_t k = 0; k < 3; ++k) T += pq[k] * std::exp(-md.sigma_t[k] * t);
-        return hg_pdf(md.g[0], dot(din, w)) * T;
+        return pdf(md, w) * T;
     }
     // The guide's density of direction w by lobe i: its estimator runs with probability
     // kExitGuideProb, then draws w from the lobe.
@@ -373,8 +397,9 @@ struct Renderer {
         return !es->occluded(o, ls.wi, 0, tmax, leaving);
     }
 
-    // The exit guide at the scattering vertex s.p of a guided medium md inside `shape` (the path
-    // arrived along s.w): per guide light whose direction from the vertex (towards a sphere's
+    // The exit guide at vertex g.z of a guided medium md inside `shape` (a scattering vertex, or
+    // one on its boundary from which the walk goes inwards): per guide light whose direction
+    // from the vertex (inwards from a boundary vertex; towards a sphere's
     // centre, along a disc's axis) leaves the shape within kExitGuideReach of md's smallest
     // mean free paths, the inside direction that the boundary there refracts along it, and a
     // concentration from the light's angular radius (shrunk by the refraction) and the spread
@@ -409,8 +434,9 @@ struct Renderer {
                 to = l.dir;
                 angle = std::acos(l.cos_max);
             }
+            if (!g.inward(to)) continue;
             ++rays;
-            const RayHit hit = es->intersect(g.z, to, 0, reach, TriangleRef{});
+            const RayHit hit = es->intersect(g.z, to, 0, reach, g.tri);
             if (!hit.hit() || hit.shape != static_cast<std::uint32_t>(shape)) continue;
             const Vec3& n = hit.normal;
             const double cn = dot(to, n);
@@ -427,7 +453,8 @@ struct Renderer {
         }
     }
 
-    // The exit guide's estimator at its vertex (weights bs): per lobe, a direction from it, the
+    // The exit guide's estimator at its vertex (weights bs, before the vertex's value, which it
+    // evaluates for its own direction: ExitGuide::value): per lobe, a direction from it, the
     // flight to the boundary without a collision (the transmittance a weight), NEE of the lobe's
     // light through the rough boundary there; balance heuristic against the walk's own ways to
     // the same path (its flight, then NEE or BSDF sampling at the exit).
@@ -438,8 +465,9 @@ struct Renderer {
             const double u1 = rng.stream_uniform(), u2 = rng.stream_uniform(),
                          u3 = rng.stream_uniform(), u4 = rng.stream_uniform();
             const Vec3 w = sample_vmf(g.axis[i], g.kappa[i], u1, u2);
+            if (!g.inward(w)) continue;
             ++rays;
-            const RayHit hit = es->intersect(g.z, w, 0, kInf, TriangleRef{});
+            const RayHit hit = es->intersect(g.z, w, 0, kInf, g.tri);
             if (!hit.hit() || hit.shape != static_cast<std::uint32_t>(shape) ||
                 !(dot(w, hit.normal) > 0))
                 continue;
@@ -460,10 +488,10 @@ struct Renderer {
                 g.walk_density(md, w, hit.t) *
                     (sel * ls.pdf + rough_dielectric_pdf(wo_l, wi_l, md.eta, md.alpha)) +
                 g.density(i, w) * ls.pdf;
-            const double phase = hg_pdf(md.g[0], dot(g.din, w));
+            const double fz = g.value(md, w);
             for (std::size_t c = 0; c < 3; ++c)
-                out[c] += bs[c] * phase * std::exp(-md.sigma_t[c] * hit.t) * f * ls.value[c] *
-                          T[c] / denom;
+                out[c] +=
+                    bs[c] * fz * std::exp(-md.sigma_t[c] * hit.t) * f * ls.value[c] * T[c] / denom;
         }
     }
 
@@ -510,14 +538,16 @@ struct Renderer {
         Vec3 nee_normal;  // and there the normal of the lit side, if on a surface
         bool nee_on_surface = false;  // (the environment is sampled about it: sample_light)
         int depth = 0;                // surface vertices (medium events do not count)
-        ExitGuide guide;              // of the last scattering vertex (exit_guide)
+        ExitGuide guide;              // of the last vertex a walk went on from (exit_guide)
         bool guide_armed = false;     // it aims at the boundary the path meets next
         GuideShare exit_share;        // at the exit the path left by: its part in the next hit
-        auto flush = [&](const RGB& contribution) {
+        // `subsurface`: light that entered a medium whatever the path so far (an exit guide's
+        // estimate at the boundary where the path is still outside).
+        auto flush = [&](const RGB& contribution, bool subsurface = false) {
             for (int c = 0; c < 3; ++c) {
                 const double v = contribution[static_cast<size_t>(c)];
                 T[RenderLayout::kRadiance + c] += v;
-                if (entered)
+                if (entered || subsurface)
                     T[RenderLayout::kSubsurface + c] += v;
                 else if (specular_path)
                     T[RenderLayout::kSpecular + c] += v;
@@ -580,6 +610,8 @@ struct Renderer {
                 const Vec3 wo_l = fr.local(wo);
                 const double eta = md.eta;  // inside over outside (outside index 1)
                 bool transmitted = false, reflected = false;
+                ExitGuide here;  // this vertex's exit guide (rough boundaries)
+                bool here_guided = false;
                 if (md.alpha == 0) {
                     // The smooth boundary of every engine's walk (walk_mesh_medium's too).
                     const double eta_side = outside ? eta : 1 / eta;
@@ -597,7 +629,7 @@ struct Renderer {
                     const bool first_reflection = depth == 0 && outside && !entered;
                     if (first_reflection) specular_path = true;
                     const SurfaceAt at{n, tri};
-                    // Straight from a guided scattering vertex to this exit: the guide's part.
+                    // Straight from a guided vertex to this exit: the guide's part.
                     GuideShare share;
                     if (guided_arrival && !outside) {
                         if (!guide.aimed) exit_guide(md, medium_shape, guide, rays);
@@ -617,6 +649,34 @@ struct Renderer {
                         },
                         c, rays, -1, share);
                     flush(c);
+                    // The exit guide of this vertex (volpath-render-9), as at a scattering
+                    // vertex: the light that crosses the medium from here to the way out
+                    // without a collision, an estimator of its own whatever the walk's sample
+                    // below does (enter or go on inside, or not). Not where the exit it aims at
+                    // would lie beyond max_depth.
+                    here_guided = md.guided && opt.boundary_guides &&
+                                  !(opt.max_depth > 0 && depth + 1 >= opt.max_depth);
+                    if (here_guided) {
+                        here.surface = true;
+                        here.z = p;
+                        here.din = d;
+                        here.normal = n;
+                        here.tri = tri;
+                        // The hero mixture of the walk from here: the one inside, or the
+                        // probabilities the entry will choose the hero with.
+                        const bool chooses = outside && opt.hero == RenderHero::kThroughputAlbedo;
+                        const auto prob =
+                            chooses ? ws.weights.throughput_probabilities(md.region.albedo)
+                                    : ws.weights.prob;
+                        for (std::size_t k = 0; k < 3; ++k)
+                            here.pq[k] = prob[k] * (chooses ? 1.0 : ws.weights.q[k]);
+                        if (rng.stream_uniform() < kExitGuideProb) {
+                            RGB g{};
+                            exit_guide(md, static_cast<int>(shape), here, rays);
+                            guided_exits(here, md, static_cast<int>(shape), beta, rng, g, rays);
+                            flush(g, true);
+                        }
+                    }
                     if (first_reflection) specular_path = false;  // decided by the sample below
                     const double uc = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
                     const auto smp = sample_rough_dielectric(wo_l, eta, md.alpha, uc, u1, u2,
@@ -660,6 +720,12 @@ struct Renderer {
                     // at eps = 4e-5 of a 1 m scene).
                     o = p;
                     on_surface = true;
+                    // The walk goes on from this vertex of a rough boundary: its exit guide
+                    // (above) takes part in the MIS of the exit it reaches straight from here.
+                    if (here_guided) {
+                        guide = here;
+                        guide_armed = true;
+                    }
                 } else {
                     leave_outside(p, dot(d, n) > 0 ? n : -n, tri);
                 }
@@ -738,6 +804,8 @@ struct Renderer {
                     // path ends at its next vertex, before any use of the guide).
                     if (R.opt.max_depth > 0 && depth >= R.opt.max_depth) return;
                     guide.aimed = false;
+                    guide.surface = false;
+                    guide.tri = TriangleRef{};
                     guide.z = s.p;
                     guide.din = s.w;
                     for (std::size_t k = 0; k < 3; ++k)
@@ -966,6 +1034,7 @@ std::string fingerprint_with_batch(const Scene& scene, const RenderOptions& o, i
     if (!o.environment_cosine) k.add("environment_cosine", false);
     if (!o.rays_from_surface) k.add("rays_from_surface", false);
     if (!o.exit_guide) k.add("exit_guide", false);
+    if (o.exit_guide && !o.boundary_guides) k.add("boundary_guides", false);
     add_to_key(k, scene);
     return k.text();
 }

@@ -20,7 +20,9 @@
 // light or a sun disc also reaches the walk's scattering vertices near the way out through the
 // exit guide (RenderOptions::exit_guide, volpath-render-8): NEE of the light through the
 // boundary from a point the vertex reaches along a direction that the boundary refracts towards
-// the light, combined with the walk's own ways to the same paths by the balance heuristic.
+// the light, combined with the walk's own ways to the same paths by the balance heuristic; since
+// volpath-render-9 also from the boundary's own vertices from which a walk goes on inside (the
+// entry, an internal reflection: light that crosses a thin medium without a collision).
 //
 // Film: per pixel the radiance, its subsurface part (light that entered a medium), its
 // surface-specular part (first-surface reflection off a medium's boundary), their standard
@@ -147,6 +149,13 @@ struct RenderOptions : RunControl {
     /// light only where its exit direction happens to fall in the boundary's narrow transmission
     /// lobe towards the light (heavy-tailed: the noise of backlit milk and apple). Off: as before.
     bool exit_guide = true;
+    /// With exit_guide, the same estimator also at the vertices on such a boundary from which
+    /// the walk goes on inside (the entry from outside, an internal reflection): the light that
+    /// crosses the medium from there to the way out without a collision, where two narrow
+    /// lobes of the rough boundary (the one the walk's direction comes from, the one towards
+    /// the light) meet only in their tails (volpath-render-9; off: volpath-render-8's guides at
+    /// scattering vertices only).
+    bool boundary_guides = true;
     /// Samples per pixel in a batch, a multiple of 3 (each channel the hero equally often).
     /// 0: 3 x 2^m, the largest with at least 32 batches in a sample budget (3 when there is a
     /// time or an error budget); a render resumed from a checkpoint keeps the size it started

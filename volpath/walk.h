@@ -152,16 +152,19 @@ struct SpectralWeights {
     /// choose_hero with probabilities proportional to each channel's weight times `albedo`
     /// (uniform if they are all 0).
     void choose_hero_by_throughput(const std::array<double, 3>& albedo, double u) {
-        if constexpr (NC == 3) {
-            std::array<double, 3> p{};
-            double sum = 0;
-            for (std::size_t c = 0; c < 3; ++c) sum += p[c] = beta[c] * albedo[c];
-            if (sum > 0)
-                for (double& v : p) v /= sum;
-            else
-                p = {1.0 / 3, 1.0 / 3, 1.0 / 3};
-            choose_hero(p, u);
-        }
+        if constexpr (NC == 3) choose_hero(throughput_probabilities(albedo), u);
+    }
+    /// The probabilities choose_hero_by_throughput draws with.
+    std::array<double, 3> throughput_probabilities(const std::array<double, 3>& albedo) const {
+        std::array<double, 3> p{};
+        double sum = 0;
+        for (std::size_t c = 0; c < 3; ++c)
+            sum += p[c] = beta[std::min<std::size_t>(c, NC - 1)] * albedo[c];
+        if (sum > 0)
+            for (double& v : p) v /= sum;
+        else
+            p = {1.0 / 3, 1.0 / 3, 1.0 / 3};
+        return p;
     }
     double max_beta() const {
         double m = beta[0];

@@ -130,7 +130,8 @@ int run_render(const RenderArgs& a) {
         o.absorption = a.absorption == "weighted"      ? volpath::Absorption::kWeighted
                        : a.absorption == "per-channel" ? volpath::Absorption::kPerChannel
                                                        : volpath::Absorption::kAnalog;
-    o.exit_guide = a.exit_guide == "on";
+    o.exit_guide = a.exit_guide != "off";
+    o.boundary_guides = a.exit_guide == "on";
     o.error_measure = a.error_of == "image-mean" ? volpath::RenderErrorMeasure::kImageMean
                                                  : volpath::RenderErrorMeasure::kMedianPixel;
     o.width = a.width;
@@ -305,9 +306,11 @@ void register_render(CLI::App& app, std::function<int()>& action) {
         ->check(one_of({"uniform", "throughput-albedo"}));
     sub->add_option("--exit-guide", a->exit_guide,
                     "Inside media behind rough boundaries, the exit guide's estimator of the "
-                    "light of sphere lights and sun discs that leaves straight from a scattering "
-                    "vertex near the boundary: on (default since volpath-render-8) or off")
-        ->check(one_of({"on", "off"}));
+                    "light of sphere lights and sun discs that leaves straight from a vertex "
+                    "near the boundary: on (default since volpath-render-9: scattering vertices "
+                    "and the boundary's own vertices from which the walk goes on inside), "
+                    "scattering (scattering vertices only, volpath-render-8) or off")
+        ->check(one_of({"on", "scattering", "off"}));
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
 
