@@ -911,6 +911,31 @@ roughness = 0.3
 )");
 }
 
+// Two renders of the same image agree: block chi-square (4 x 4 pixel blocks) and image means
+// per channel at level alpha, no pixel deterministic in one and not the other; the figures
+// printed under `what`.
+void expect_same_image(const ImageEstimate& a, const ImageEstimate& b, double alpha,
+                       const std::string& what) {
+    const ImageComparison c = compare_images(a, b, 4);
+    for (int ch = 0; ch < 3; ++ch) {
+        std::printf(
+            "  [measured] %s, channel %d: chi2 %.1f over %d blocks, p %.3g, image mean z %.2f\n",
+            what.c_str(), ch, c.chi2[ch], c.dof[ch], c.p[ch], c.z_mean[ch]);
+        EXPECT_GT(c.p[ch], alpha) << what << " " << ch;
+        EXPECT_LT(std::fabs(c.z_mean[ch]), testing::normal_quantile(1 - alpha / 2)) << what;
+    }
+    EXPECT_EQ(c.deterministic_differences, 0) << what;
+}
+
+// A render's radiance estimate (named `name`) and its subsurface layer's summed SE^2.
+std::pair<ImageEstimate, double> render_with_se2(const Scene& s, const RenderOptions& o,
+                                                 const std::string& name) {
+    const RenderResult r = render(s, o);
+    double se2 = 0;
+    for (float v : r.image.layer("subsurface.stderr").pixels()) se2 += static_cast<double>(v) * v;
+    return {estimate_with_stderr(r.image, "radiance", name), se2};
+}
+
 TEST(Render, NewerEstimatorsAgreeWithTheLegacyOne) {
     // volpath-render-4 samples every light at each NEE and draws the first numbers of a path
     // from scrambled Sobol points; volpath-render-5 weights absorption in media of albedo
@@ -967,20 +992,13 @@ TEST(Render, NewerEstimatorsAgreeWithTheLegacyOne) {
         o.environment_cosine = v.env_cosine;
         o.rays_from_surface = v.from_surface;
         const RenderResult r = render(s, o);
-        const ImageComparison c =
-            compare_images(estimate_with_stderr(r.image, "radiance", "new"), b, 4);
-        for (int ch = 0; ch < 3; ++ch) {
-            std::printf(
-                "  [measured] all lights %d, sobol %d, weighted %d, hero %s, cosine env %d, "
-                "from the surface %d, channel %d: chi2 %.1f over %d blocks, p %.3g, image mean "
-                "z %.2f\n",
-                v.all_lights, v.sampler == kSobol, v.absorption == Absorption::kWeighted,
-                to_string(v.hero), v.env_cosine, v.from_surface, ch, c.chi2[ch], c.dof[ch], c.p[ch],
-                c.z_mean[ch]);
-            EXPECT_GT(c.p[ch], alpha) << v.all_lights << " " << ch;
-            EXPECT_LT(std::fabs(c.z_mean[ch]), testing::normal_quantile(1 - alpha / 2));
-        }
-        EXPECT_EQ(c.deterministic_differences, 0);
+        char what[160];
+        std::snprintf(what, sizeof what,
+                      "all lights %d, sobol %d, weighted %d, hero %s, cosine env %d, from the "
+                      "surface %d",
+                      v.all_lights, v.sampler == kSobol, v.absorption == Absorption::kWeighted,
+                      to_string(v.hero), v.env_cosine, v.from_surface);
+        expect_same_image(estimate_with_stderr(r.image, "radiance", "new"), b, alpha, what);
     }
 }
 
@@ -1023,29 +1041,16 @@ TEST(Render, TheExitGuideAgreesWithTheWalkAloneAndLowersItsVariance) {
     const Absorption policies[] = {Absorption::kWeighted, Absorption::kAnalog};
     const double alpha = 0.001 / (3.0 * std::size(policies));
     for (const Absorption a : policies) {
-        ImageEstimate e[2];
-        double medium_se2[2] = {0, 0};
+        std::pair<ImageEstimate, double> e[2];
         for (int guided = 0; guided < 2; ++guided) {
             RenderOptions o = options(3072);
             o.absorption = a;
             o.exit_guide = guided == 1;
             o.seed = 21 + static_cast<std::uint64_t>(guided);
-            const RenderResult r = render(s, o);
-            e[guided] = estimate_with_stderr(r.image, "radiance", guided ? "guided" : "walk");
-            const ImageLayer& sub = r.image.layer("subsurface.stderr");
-            for (float v : sub.pixels()) medium_se2[guided] += static_cast<double>(v) * v;
+            e[guided] = render_with_se2(s, o, guided ? "guided" : "walk");
         }
-        const ImageComparison c = compare_images(e[1], e[0], 4);
-        const double ratio = medium_se2[1] / medium_se2[0];
-        for (int ch = 0; ch < 3; ++ch) {
-            std::printf(
-                "  [measured] %s absorption, channel %d: chi2 %.1f over %d blocks, p %.3g, "
-                "image mean z %.2f\n",
-                to_string(a), ch, c.chi2[ch], c.dof[ch], c.p[ch], c.z_mean[ch]);
-            EXPECT_GT(c.p[ch], alpha) << to_string(a) << " " << ch;
-            EXPECT_LT(std::fabs(c.z_mean[ch]), testing::normal_quantile(1 - alpha / 2));
-        }
-        EXPECT_EQ(c.deterministic_differences, 0);
+        expect_same_image(e[1].first, e[0].first, alpha, std::string(to_string(a)) + " absorption");
+        const double ratio = e[1].second / e[0].second;
         std::printf(
             "  [measured] %s absorption: the subsurface layer's summed SE^2 with the "
             "guide over without: %.3f\n",
@@ -1107,30 +1112,14 @@ material = "floor"
 }
 
 // The puddle rendered with the walk alone (mode 0), the scattering vertices' exit guides (1)
-// or those and the boundary's (2): the radiance estimate and the subsurface layer's summed SE^2.
+// or those and the boundary's (2).
 std::pair<ImageEstimate, double> render_puddle(const Scene& s, double spp, int mode,
                                                std::uint64_t seed) {
     RenderOptions o = options(spp);
     o.exit_guide = mode > 0;
     o.boundary_guides = mode == 2;
     o.seed = seed;
-    const RenderResult r = render(s, o);
-    double se2 = 0;
-    for (float v : r.image.layer("subsurface.stderr").pixels()) se2 += static_cast<double>(v) * v;
-    return {estimate_with_stderr(r.image, "radiance", "mode " + std::to_string(mode)), se2};
-}
-
-void expect_same_image(const ImageEstimate& a, const ImageEstimate& b, double alpha,
-                       const char* what) {
-    const ImageComparison c = compare_images(a, b, 4);
-    for (int ch = 0; ch < 3; ++ch) {
-        std::printf(
-            "  [measured] %s, channel %d: chi2 %.1f over %d blocks, p %.3g, image mean z %.2f\n",
-            what, ch, c.chi2[ch], c.dof[ch], c.p[ch], c.z_mean[ch]);
-        EXPECT_GT(c.p[ch], alpha) << what << " " << ch;
-        EXPECT_LT(std::fabs(c.z_mean[ch]), testing::normal_quantile(1 - alpha / 2)) << what;
-    }
-    EXPECT_EQ(c.deterministic_differences, 0) << what;
+    return render_with_se2(s, o, "mode " + std::to_string(mode));
 }
 
 TEST(Render, BoundaryGuidesAgreeWithTheWalkAloneAndLowerTheVarianceOfAThinMedium) {

@@ -453,6 +453,15 @@ struct Renderer {
         }
     }
 
+    // The exit guide's estimator at g's vertex, run with probability kExitGuideProb (the one
+    // ExitGuide::density counts): g aimed, its estimate added to out.
+    void run_exit_guide(ExitGuide& g, const MediumData& md, int shape, const double* bs,
+                        RngStream& rng, RGB& out, std::uint64_t& rays) const {
+        if (!(rng.stream_uniform() < kExitGuideProb)) return;
+        exit_guide(md, shape, g, rays);
+        guided_exits(g, md, shape, bs, rng, out, rays);
+    }
+
     // The exit guide's estimator at its vertex (weights bs, before the vertex's value, which it
     // evaluates for its own direction: ExitGuide::value): per lobe, a direction from it, the
     // flight to the boundary without a collision (the transmittance a weight), NEE of the lobe's
@@ -670,12 +679,9 @@ struct Renderer {
                                     : ws.weights.prob;
                         for (std::size_t k = 0; k < 3; ++k)
                             here.pq[k] = prob[k] * (chooses ? 1.0 : ws.weights.q[k]);
-                        if (rng.stream_uniform() < kExitGuideProb) {
-                            RGB g{};
-                            exit_guide(md, static_cast<int>(shape), here, rays);
-                            guided_exits(here, md, static_cast<int>(shape), beta, rng, g, rays);
-                            flush(g, true);
-                        }
+                        RGB g{};
+                        run_exit_guide(here, md, static_cast<int>(shape), beta, rng, g, rays);
+                        flush(g, true);
                     }
                     if (first_reflection) specular_path = false;  // decided by the sample below
                     const double uc = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
@@ -810,11 +816,8 @@ struct Renderer {
                     guide.din = s.w;
                     for (std::size_t k = 0; k < 3; ++k)
                         guide.pq[k] = s.weights.prob[k] * s.weights.q[k];
-                    if (rng.stream_uniform() < kExitGuideProb) {
-                        R.exit_guide(md, medium_shape, guide, rays);
-                        R.guided_exits(guide, md, medium_shape, bs, rng, c, rays);
-                        add(c);
-                    }
+                    R.run_exit_guide(guide, md, medium_shape, bs, rng, c, rays);
+                    add(c);
                     return;
                 }
                 R.nee(
