@@ -189,11 +189,12 @@ TEST(WalkGolden, SphereEngineVolpathSphere3) {
 // false): the hero in turn and the environment sampled over the sphere, as those versions had
 // them; before volpath-render-7 (v7 false) rays leaving a surface start eps off it; before
 // volpath-render-8 (guide false) no exit guides (they change only media behind rough boundaries
-// with the same g in all channels).
+// with the same g in all channels); before volpath-render-9 (boundary_guides false) none at the
+// boundary's vertices; before volpath-render-10 (diffuse_guides false) none at diffuse ones.
 std::vector<double> render_pin(const std::string& material, const std::string& lights, bool legacy,
                                std::optional<Absorption> absorption = Absorption::kAnalog,
                                bool v6 = false, bool v7 = false, bool guide = false,
-                               bool boundary_guides = false) {
+                               bool boundary_guides = false, bool diffuse_guides = false) {
     const std::string text = R"(
 [scene]
 name = "golden"
@@ -231,6 +232,7 @@ material = "floor"
     o.rays_from_surface = v7;
     o.exit_guide = guide;
     o.boundary_guides = boundary_guides;
+    o.diffuse_guides = diffuse_guides;
     if (legacy) {
         o.nee_all_lights = false;
         o.sampler = RenderSampler::kIndependent;
@@ -373,11 +375,22 @@ TEST(WalkGolden, RenderEngineVolpathRender8) {
 // internal reflection); without them a same-g rough medium draws volpath-render-8's numbers
 // (above; agreement: Render.BoundaryGuidesAgreeWithTheWalkAloneAndLowerTheVarianceOfAThinMedium).
 TEST(WalkGolden, RenderEngineVolpathRender9) {
-    ASSERT_STREQ(render_engine_version(), "volpath-render-9");
     expect_pinned("render rough boundary, one g (v9)",
                   render_pin(kSameG, kLights, false, std::nullopt, true, true, true, true),
                   {27.897791076901566, 7423.3078059643785, 231.31763060594824, 64453.843216489928,
                    472.14564069093694, 108416.05445036953, 392.83213495170008, 90011.528211538753});
+}
+
+// volpath-render-10's defaults: guides at the floor's vertices straight after the way out of the
+// sphere (the floor lies 0.1 mm under it, lit by the sphere light through it); without them a
+// same-g rough medium draws volpath-render-9's numbers (above; agreement:
+// Render.DiffuseGuidesAgreeWithTheWalkAloneAndLowerTheVarianceOfACausticSeenThroughIt).
+TEST(WalkGolden, RenderEngineVolpathRender10) {
+    ASSERT_STREQ(render_engine_version(), "volpath-render-10");
+    expect_pinned("render rough boundary, one g (v10)",
+                  render_pin(kSameG, kLights, false, std::nullopt, true, true, true, true, true),
+                  {27.897791076901566, 7423.3078059643785, 231.31763060594824, 64453.843216489928,
+                   472.20654194532597, 108329.34933220572, 392.75731782558836, 89988.235652269519});
 }
 
 }  // namespace

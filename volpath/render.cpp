@@ -25,8 +25,11 @@ namespace {
 // sphere lights block the shadow rays of other lights; 5: absorption weighted in media whose
 // every albedo is at least 0.9 (render_absorption); 6: the hero chosen at every entry into a
 // medium by throughput x albedo (RenderHero), the environment sampled about a surface's normal
-// by cos(theta) (RenderOptions::environment_cosine).
-constexpr const char* kEngineVersion = "volpath-render-9";
+// by cos(theta) (RenderOptions::environment_cosine); 7: rays leave a surface from the point itself
+// (rays_from_surface); 8: exit guides at scattering vertices (exit_guide); 9: and at a rough
+// boundary's own vertices (boundary_guides); 10: and at a diffuse vertex straight after the way
+// out of a guided medium (diffuse_guides).
+constexpr const char* kEngineVersion = "volpath-render-10";
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
 constexpr int kMaxBatchSpp = 3 * 1024;  // the largest automatic batch (RenderOptions::batch_spp)
@@ -61,6 +64,10 @@ double power(double a, double b) {
 constexpr double kExitGuideReach = 8.0;
 constexpr double kExitGuideProb = 0.25;
 constexpr int kMaxGuides = 4;  // guide lights (sphere lights and sun discs) a vertex aims at
+// A diffuse vertex's guide lobe (DiffuseGuide) runs with this probability, and its aim corrects
+// the direction through the medium's two boundaries this many times.
+constexpr double kDiffuseGuideProb = 0.5;
+constexpr int kDiffuseGuideAims = 2;
 
 // The exit guide of a vertex z from which a walk inside a medium behind a rough boundary goes on
 // in a sampled direction: a scattering vertex (the phase function's direction), or since
@@ -105,10 +112,11 @@ struct ExitGuide {
         return pdf(md, w) * T;
     }
     // The guide's density of direction w by lobe i: its estimator runs with probability
-    // kExitGuideProb, then draws w from the lobe.
-    double density(int i, const Vec3& w) const {
-        return kExitGuideProb * vmf_pdf(axis[i], kappa[i], w);
-    }
+    // kExitGuideProb, then draws w from the lobe. `prob` is that probability, or at an entry
+    // straight from a diffuse vertex with a guide (DiffuseGuide), that plus the diffuse guide's
+    // density of din over the cosine's there: the ways to this guide's direction at z.
+    double prob = kExitGuideProb;
+    double density(int i, const Vec3& w) const { return prob * vmf_pdf(axis[i], kappa[i], w); }
 };
 
 // What the exit guide adds to the densities of the strategies at the exit vertex x it aims at,
@@ -145,6 +153,27 @@ GuideShare share_of(const ExitGuide& g, const MediumData& md, const std::vector<
     share.n = g.n;
     return share;
 }
+
+// The guide of a diffuse vertex x that the path reached straight from the way out of a guided
+// medium (volpath-render-10): light that reaches x through that medium from a guide light,
+// crossing it without a collision (the caustic a thin puddle casts on what lies under it, seen
+// through the puddle). Per guide light, a von Mises-Fisher lobe of directions from x about the
+// one that the two boundaries (in, then out) refract towards the light; a direction from a lobe
+// enters the medium, where the entry's exit guide (every lobe, no coin) estimates the light that
+// leaves straight from there. One more strategy for those paths (x, the entry, the exit, the
+// light), in the balance heuristic with the walk's (the cosine at x, then its ways to the exit)
+// and the entry's exit guide after the cosine: ExitGuide::prob at that entry carries its density.
+struct DiffuseGuide {
+    int n = 0;  // lobes (0: none)
+    Vec3 axis[kMaxGuides];
+    double kappa[kMaxGuides] = {};
+    // The lobes' density of direction w (each lobe's estimator runs with kDiffuseGuideProb).
+    double density(const Vec3& w) const {
+        double p = 0;
+        for (int i = 0; i < n; ++i) p += kDiffuseGuideProb * vmf_pdf(axis[i], kappa[i], w);
+        return p;
+    }
+};
 
 struct Renderer {
     const Scene& scene;
@@ -397,6 +426,40 @@ struct Renderer {
         return !es->occluded(o, ls.wi, 0, tmax, leaving);
     }
 
+    // The hero mixture P(k) q_k of a walk that enters medium md now, with weights ws: the
+    // probabilities the entry will choose the hero with (RenderHero::kThroughputAlbedo), else
+    // the path's own; and of a walk that goes on inside.
+    static std::array<double, 3> entry_probabilities(const WalkState<3>& ws, const MediumData& md,
+                                                     RenderHero hero) {
+        if (hero == RenderHero::kThroughputAlbedo)
+            return ws.weights.throughput_probabilities(md.region.albedo);
+        return inside_probabilities(ws);
+    }
+    std::array<double, 3> entry_probabilities(const WalkState<3>& ws, const MediumData& md) const {
+        return entry_probabilities(ws, md, opt.hero);
+    }
+    static std::array<double, 3> inside_probabilities(const WalkState<3>& ws) {
+        std::array<double, 3> pq{};
+        for (std::size_t k = 0; k < 3; ++k) pq[k] = ws.weights.prob[k] * ws.weights.q[k];
+        return pq;
+    }
+
+    // The direction `to` from x towards guide light l (a sphere light's centre, a disc's axis)
+    // and the light's angular radius seen from x; false inside a sphere light.
+    static bool towards(const Light& l, const Vec3& x, Vec3& to, double& angle) {
+        if (l.type == LightType::kSphere) {
+            const Vec3 v = l.pos - x;
+            const double dist = length(v);
+            if (!(dist > l.radius)) return false;
+            to = v * (1 / dist);
+            angle = std::asin(l.radius / dist);
+        } else {
+            to = l.dir;
+            angle = std::acos(l.cos_max);
+        }
+        return true;
+    }
+
     // The exit guide at vertex g.z of a guided medium md inside `shape` (a scattering vertex, or
     // one on its boundary from which the walk goes inwards): per guide light whose direction
     // from the vertex (inwards from a boundary vertex; towards a sphere's
@@ -421,20 +484,9 @@ struct Renderer {
         const double eta = md.eta;
         const double spread_rough = 1.5 * md.alpha * std::abs(1 - 1 / eta);
         for (int j : guide_lights) {
-            const Light& l = lights[static_cast<size_t>(j)];
             Vec3 to;
             double angle = 0;
-            if (l.type == LightType::kSphere) {
-                const Vec3 v = l.pos - g.z;
-                const double dist = length(v);
-                if (!(dist > l.radius)) continue;
-                to = v * (1 / dist);
-                angle = std::asin(l.radius / dist);
-            } else {
-                to = l.dir;
-                angle = std::acos(l.cos_max);
-            }
-            if (!g.inward(to)) continue;
+            if (!towards(lights[static_cast<size_t>(j)], g.z, to, angle) || !g.inward(to)) continue;
             ++rays;
             const RayHit hit = es->intersect(g.z, to, 0, reach, g.tri);
             if (!hit.hit() || hit.shape != static_cast<std::uint32_t>(shape)) continue;
@@ -460,6 +512,93 @@ struct Renderer {
         if (!(rng.stream_uniform() < kExitGuideProb)) return;
         exit_guide(md, shape, g, rays);
         guided_exits(g, md, shape, bs, rng, out, rays);
+    }
+
+    // The guide of diffuse vertex x (normal n, on triangle tri; DiffuseGuide): per guide light,
+    // the direction from x that, refracted into the guided medium it meets first and out of it
+    // again, leaves towards the light: the light's direction corrected kDiffuseGuideAims times
+    // by the difference between it and the way out found (exact for parallel boundaries, close
+    // for a thin medium's). The lobe's width: the light's angular radius and the spread that
+    // GGX normals of width alpha give each refraction (both 1.5 alpha |eta - 1| outside).
+    void diffuse_guide(const Vec3& x, const Vec3& n, TriangleRef tri, DiffuseGuide& g,
+                       std::uint64_t& rays) const {
+        g.n = 0;
+        for (int j : guide_lights) {
+            Vec3 to;
+            double angle = 0;
+            if (!towards(lights[static_cast<size_t>(j)], x, to, angle)) continue;
+            Vec3 a = to;
+            const MediumData* md = nullptr;
+            for (int it = 0; it < kDiffuseGuideAims; ++it) {
+                md = nullptr;
+                if (!(dot(a, n) > 0)) break;
+                ++rays;
+                const RayHit in = es->intersect(x, a, 0, kInf, tri);
+                if (!in.hit()) break;
+                const int mi = shape_medium[in.shape];
+                if (mi < 0 || !media[static_cast<size_t>(mi)].guided) break;
+                const MediumData& m = media[static_cast<size_t>(mi)];
+                const double c1 = dot(a, in.normal);
+                if (!(c1 < 0)) break;
+                const Vec3 t1 = (a - in.normal * c1) * (1 / m.eta);
+                const Vec3 b = t1 - in.normal * std::sqrt(std::max(0.0, 1 - dot(t1, t1)));
+                ++rays;
+                const RayHit out = es->intersect(x + a * in.t, b, 0, kInf, {in.shape, in.triangle});
+                if (!out.hit() || out.shape != in.shape) break;
+                const double c2 = dot(b, out.normal);
+                if (!(c2 > 0)) break;
+                const Vec3 t2 = (b - out.normal * c2) * m.eta;
+                const double s2 = dot(t2, t2);
+                if (!(s2 < 1)) break;
+                const Vec3 c = t2 + out.normal * std::sqrt(1 - s2);
+                a = normalize(a + (to - c));
+                md = &m;
+            }
+            if (!md || !(dot(a, n) > 0)) continue;
+            const double rough = 1.5 * md->alpha * std::abs(md->eta - 1);
+            const double spread = std::max(0.01, std::hypot(angle, rough, rough));
+            g.axis[g.n] = a;
+            g.kappa[g.n] = std::min(1e5, 1 / (spread * spread));
+            ++g.n;
+        }
+    }
+
+    // The diffuse guide's estimator at x (weights bs after x's albedo, i.e. times the diffuse
+    // BSDF's value over the cosine's density): per lobe, with probability kDiffuseGuideProb, a
+    // direction w from it; where w meets a guided medium from outside, the entry's exit guide,
+    // every lobe, its density (ExitGuide::prob) that of all the ways to w at x over the cosine's.
+    template <class Pq>
+    void diffuse_guided(const DiffuseGuide& g, const Vec3& x, const Vec3& n, TriangleRef tri,
+                        const double* bs, const Pq& pq_of, int depth, RngStream& rng, RGB& out,
+                        std::uint64_t& rays) const {
+        for (int i = 0; i < g.n; ++i) {
+            const double u0 = rng.stream_uniform(), u1 = rng.stream_uniform(),
+                         u2 = rng.stream_uniform();
+            if (!(u0 < kDiffuseGuideProb)) continue;
+            const Vec3 w = sample_vmf(g.axis[i], g.kappa[i], u1, u2);
+            const double cs = dot(w, n);
+            if (!(cs > 0)) continue;
+            ++rays;
+            const RayHit hit = es->intersect(x, w, 0, kInf, tri);
+            if (!hit.hit()) continue;
+            const int mi = shape_medium[hit.shape];
+            if (mi < 0) continue;
+            const MediumData& md = media[static_cast<size_t>(mi)];
+            if (!md.guided || !(dot(w, hit.normal) < 0)) continue;
+            if (opt.max_depth > 0 && depth + 2 >= opt.max_depth) continue;
+            ExitGuide e;
+            e.surface = true;
+            e.z = x + w * hit.t;
+            e.din = w;
+            e.normal = hit.normal;
+            e.tri = {hit.shape, hit.triangle};
+            const std::array<double, 3> pq = pq_of(md);
+            for (std::size_t k = 0; k < 3; ++k) e.pq[k] = pq[k];
+            exit_guide(md, static_cast<int>(hit.shape), e, rays);
+            if (e.n == 0) continue;
+            e.prob = kExitGuideProb + g.density(w) / (cs / kPi);
+            guided_exits(e, md, static_cast<int>(hit.shape), bs, rng, out, rays);
+        }
     }
 
     // The exit guide's estimator at its vertex (weights bs, before the vertex's value, which it
@@ -550,6 +689,10 @@ struct Renderer {
         ExitGuide guide;              // of the last vertex a walk went on from (exit_guide)
         bool guide_armed = false;     // it aims at the boundary the path meets next
         GuideShare exit_share;        // at the exit the path left by: its part in the next hit
+        bool left_guided = false;     // the path has just left a guided medium (diffuse_guides)
+        DiffuseGuide plate;           // of the last diffuse vertex (diffuse_guides)
+        Vec3 plate_n;                 // and its normal
+        bool plate_armed = false;     // it takes part in the entry the path meets next
         // `subsurface`: light that entered a medium whatever the path so far (an exit guide's
         // estimate at the boundary where the path is still outside).
         auto flush = [&](const RGB& contribution, bool subsurface = false) {
@@ -583,6 +726,8 @@ struct Renderer {
             const std::uint32_t shape = tri.shape;
             const bool guided_arrival = guide_armed;
             guide_armed = false;
+            const bool plate_arrival = plate_armed, left_guided_arrival = left_guided;
+            plate_armed = left_guided = false;
             exit_share = {};
             if (opt.max_depth > 0 && depth >= opt.max_depth) return false;
             const int mi = shape_medium[shape];
@@ -611,6 +756,21 @@ struct Renderer {
                 nee_normal = n;
                 nee_on_surface = true;
                 for (int k = 0; k < 3; ++k) beta[k] *= m.albedo[static_cast<size_t>(k)];
+                // Straight from a guided medium's way out: the diffuse guide (volpath-render-10).
+                if (left_guided_arrival && opt.diffuse_guides && opt.boundary_guides &&
+                    opt.rays_from_surface) {
+                    diffuse_guide(p, n, tri, plate, rays);
+                    if (plate.n > 0) {
+                        RGB g{};
+                        diffuse_guided(
+                            plate, p, n, tri, beta,
+                            [&](const MediumData& md) { return entry_probabilities(ws, md); },
+                            depth, rng, g, rays);
+                        flush(g, true);
+                        plate_n = n;
+                        plate_armed = true;
+                    }
+                }
                 leave_outside(p, n, tri);
             } else {  // a medium's dielectric boundary
                 const MediumData& md = media[static_cast<size_t>(mi)];
@@ -673,12 +833,15 @@ struct Renderer {
                         here.tri = tri;
                         // The hero mixture of the walk from here: the one inside, or the
                         // probabilities the entry will choose the hero with.
-                        const bool chooses = outside && opt.hero == RenderHero::kThroughputAlbedo;
-                        const auto prob =
-                            chooses ? ws.weights.throughput_probabilities(md.region.albedo)
-                                    : ws.weights.prob;
-                        for (std::size_t k = 0; k < 3; ++k)
-                            here.pq[k] = prob[k] * (chooses ? 1.0 : ws.weights.q[k]);
+                        const auto pq =
+                            outside ? entry_probabilities(ws, md) : inside_probabilities(ws);
+                        for (std::size_t k = 0; k < 3; ++k) here.pq[k] = pq[k];
+                        // An entry straight from a diffuse vertex with a guide: that guide's
+                        // lobes are one more way to this guide's paths.
+                        if (plate_arrival && outside) {
+                            const double pc = std::max(0.0, dot(d, plate_n)) / kPi;
+                            if (pc > 0) here.prob += plate.density(d) / pc;
+                        }
                         RGB g{};
                         run_exit_guide(here, md, static_cast<int>(shape), beta, rng, g, rays);
                         flush(g, true);
@@ -698,7 +861,10 @@ struct Renderer {
                     nee_on_surface = true;
                     reflected = smp->reflection;
                     transmitted = !smp->reflection;
-                    if (transmitted && !outside) exit_share = share;
+                    if (transmitted && !outside) {
+                        exit_share = share;
+                        left_guided = md.guided;
+                    }
                 }
                 if (depth == 0 && reflected) specular_path = true;
                 if (transmitted) {
@@ -810,6 +976,7 @@ struct Renderer {
                     // path ends at its next vertex, before any use of the guide).
                     if (R.opt.max_depth > 0 && depth >= R.opt.max_depth) return;
                     guide.aimed = false;
+                    guide.prob = kExitGuideProb;
                     guide.surface = false;
                     guide.tri = TriangleRef{};
                     guide.z = s.p;
@@ -1038,6 +1205,7 @@ std::string fingerprint_with_batch(const Scene& scene, const RenderOptions& o, i
     if (!o.rays_from_surface) k.add("rays_from_surface", false);
     if (!o.exit_guide) k.add("exit_guide", false);
     if (o.exit_guide && !o.boundary_guides) k.add("boundary_guides", false);
+    if (o.exit_guide && o.boundary_guides && !o.diffuse_guides) k.add("diffuse_guides", false);
     add_to_key(k, scene);
     return k.text();
 }

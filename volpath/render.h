@@ -156,6 +156,13 @@ struct RenderOptions : RunControl {
     /// the light) meet only in their tails (volpath-render-9; off: volpath-render-8's guides at
     /// scattering vertices only).
     bool boundary_guides = true;
+    /// With boundary_guides, a guide at a diffuse vertex that the path reached straight from
+    /// the way out of a guided medium: lobes of directions from it that the medium's two
+    /// boundaries refract towards a sphere light or a sun disc, each into the entry's exit guide
+    /// (DiffuseGuide in render.cpp). The caustic a thin medium casts on the surface under it,
+    /// seen through the medium, otherwise needs the bounce's cosine to fall into the entry's
+    /// narrow lobe (volpath-render-10; off: volpath-render-9).
+    bool diffuse_guides = true;
     /// Samples per pixel in a batch, a multiple of 3 (each channel the hero equally often).
     /// 0: 3 x 2^m, the largest with at least 32 batches in a sample budget (3 when there is a
     /// time or an error budget); a render resumed from a checkpoint keeps the size it started

@@ -131,7 +131,8 @@ int run_render(const RenderArgs& a) {
                        : a.absorption == "per-channel" ? volpath::Absorption::kPerChannel
                                                        : volpath::Absorption::kAnalog;
     o.exit_guide = a.exit_guide != "off";
-    o.boundary_guides = a.exit_guide == "on";
+    o.boundary_guides = a.exit_guide == "on" || a.exit_guide == "boundary";
+    o.diffuse_guides = a.exit_guide == "on";
     o.error_measure = a.error_of == "image-mean" ? volpath::RenderErrorMeasure::kImageMean
                                                  : volpath::RenderErrorMeasure::kMedianPixel;
     o.width = a.width;
@@ -307,10 +308,12 @@ void register_render(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--exit-guide", a->exit_guide,
                     "Inside media behind rough boundaries, the exit guide's estimator of the "
                     "light of sphere lights and sun discs that leaves straight from a vertex "
-                    "near the boundary: on (default since volpath-render-9: scattering vertices "
-                    "and the boundary's own vertices from which the walk goes on inside), "
-                    "scattering (scattering vertices only, volpath-render-8) or off")
-        ->check(one_of({"on", "scattering", "off"}));
+                    "near the boundary: on (default since volpath-render-10: scattering "
+                    "vertices, the boundary's own vertices from which the walk goes on inside, "
+                    "and diffuse vertices straight after the way out, through the medium), "
+                    "boundary (the first two, volpath-render-9), scattering (scattering vertices "
+                    "only, volpath-render-8) or off")
+        ->check(one_of({"on", "boundary", "scattering", "off"}));
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
 
