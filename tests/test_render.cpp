@@ -1214,13 +1214,15 @@ material = "floor"
 }
 
 // The puddle rendered with the walk alone (mode 0), the scattering vertices' exit guides (1),
-// those and the boundary's (2), and those and the diffuse vertices' (3).
+// those and the boundary's (2), and those, the diffuse vertices' and a wide lobe beside each
+// narrow one (3: volpath-render-11).
 std::pair<ImageEstimate, double> render_puddle(const Scene& s, double spp, int mode,
                                                std::uint64_t seed) {
     RenderOptions o = options(spp);
     o.exit_guide = mode > 0;
     o.boundary_guides = mode >= 2;
     o.diffuse_guides = mode == 3;
+    o.wide_lobes = mode == 3;
     o.seed = seed;
     return render_with_se2(s, o, "mode " + std::to_string(mode));
 }
@@ -1261,11 +1263,11 @@ TEST(Render, BoundaryGuidesAgreeWithTheWalkAloneAndLowerTheVarianceOfAThinMedium
 
 TEST(Render, DiffuseGuidesAgreeWithTheWalkAloneAndLowerTheVarianceOfACausticSeenThroughIt) {
     // volpath-render-10's guides at a diffuse vertex straight after the way out of a guided
-    // medium: the floor under the puddle, seen through it, lit by the sun through it (two rough
-    // refractions in, two out). The walk alone reaches the sun from there only where the
-    // floor's cosine falls into the entry's narrow lobe and the entry's direction into the
-    // exit's. Leaving the new density out of the entry guide's MIS (z 71 against the walk
-    // alone) or out of its own (z 284) fails here. Measured SE^2 ratio 0.14.
+    // medium (with volpath-render-11's wide lobes): the floor under the puddle, seen through it,
+    // lit by the sun through it (two rough refractions in, two out). The walk alone reaches the sun
+    // from there only where the floor's cosine falls into the entry's narrow lobe and the entry's
+    // direction into the exit's. Leaving the new density out of the entry guide's MIS (z 71 against
+    // the walk alone) or out of its own (z 284) fails here. Measured SE^2 ratio 0.14.
     check_puddle_guide(3, 2, {61, 62, 44, 45}, "diffuse guides", "boundary guides");
 }
 

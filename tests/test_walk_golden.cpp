@@ -190,11 +190,13 @@ TEST(WalkGolden, SphereEngineVolpathSphere3) {
 // them; before volpath-render-7 (v7 false) rays leaving a surface start eps off it; before
 // volpath-render-8 (guide false) no exit guides (they change only media behind rough boundaries
 // with the same g in all channels); before volpath-render-9 (boundary_guides false) none at the
-// boundary's vertices; before volpath-render-10 (diffuse_guides false) none at diffuse ones.
+// boundary's vertices; before volpath-render-10 (diffuse_guides false) none at diffuse ones;
+// before volpath-render-11 (wide_lobes false) one lobe per light.
 std::vector<double> render_pin(const std::string& material, const std::string& lights, bool legacy,
                                std::optional<Absorption> absorption = Absorption::kAnalog,
                                bool v6 = false, bool v7 = false, bool guide = false,
-                               bool boundary_guides = false, bool diffuse_guides = false) {
+                               bool boundary_guides = false, bool diffuse_guides = false,
+                               bool wide_lobes = false) {
     const std::string text = R"(
 [scene]
 name = "golden"
@@ -233,6 +235,7 @@ material = "floor"
     o.exit_guide = guide;
     o.boundary_guides = boundary_guides;
     o.diffuse_guides = diffuse_guides;
+    o.wide_lobes = wide_lobes;
     if (legacy) {
         o.nee_all_lights = false;
         o.sampler = RenderSampler::kIndependent;
@@ -386,11 +389,21 @@ TEST(WalkGolden, RenderEngineVolpathRender9) {
 // same-g rough medium draws volpath-render-9's numbers (above; agreement:
 // Render.DiffuseGuidesAgreeWithTheWalkAloneAndLowerTheVarianceOfACausticSeenThroughIt).
 TEST(WalkGolden, RenderEngineVolpathRender10) {
-    ASSERT_STREQ(render_engine_version(), "volpath-render-10");
     expect_pinned("render rough boundary, one g (v10)",
                   render_pin(kSameG, kLights, false, std::nullopt, true, true, true, true, true),
                   {27.897791076901566, 7423.3078059643785, 231.31763060594824, 64453.843216489928,
                    472.20654194532597, 108329.34933220572, 392.75731782558836, 89988.235652269519});
+}
+
+// volpath-render-11's defaults: a wide lobe beside each narrow one of every exit guide; without
+// it, volpath-render-10's numbers (above; agreement: the exit guide's and the puddle's tests).
+TEST(WalkGolden, RenderEngineVolpathRender11) {
+    ASSERT_STREQ(render_engine_version(), "volpath-render-11");
+    expect_pinned(
+        "render rough boundary, one g (v11)",
+        render_pin(kSameG, kLights, false, std::nullopt, true, true, true, true, true, true),
+        {27.863862059533044, 7409.6005739375796, 231.93037445713438, 64477.168940364318,
+         471.25849321356139, 108116.30715266379, 392.92945443372969, 90021.044284644886});
 }
 
 }  // namespace

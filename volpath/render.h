@@ -163,6 +163,11 @@ struct RenderOptions : RunControl {
     /// seen through the medium, otherwise needs the bounce's cosine to fall into the entry's
     /// narrow lobe (volpath-render-10; off: volpath-render-9).
     bool diffuse_guides = true;
+    /// With exit_guide, beside each guide light's narrow lobe a wide one (0.3 rad) about the
+    /// same axis: where the boundary's normal varies over the narrow lobe's footprint (a bumpy
+    /// surface) it aims through one exit point's normal and misses the others that refract
+    /// towards the light (volpath-render-11; off: the single lobe of volpath-render-8 to -10).
+    bool wide_lobes = true;
     /// Samples per pixel in a batch, a multiple of 3 (each channel the hero equally often).
     /// 0: 3 x 2^m, the largest with at least 32 batches in a sample budget (3 when there is a
     /// time or an error budget); a render resumed from a checkpoint keeps the size it started

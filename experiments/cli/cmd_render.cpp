@@ -133,6 +133,7 @@ int run_render(const RenderArgs& a) {
     o.exit_guide = a.exit_guide != "off";
     o.boundary_guides = a.exit_guide == "on" || a.exit_guide == "boundary";
     o.diffuse_guides = a.exit_guide == "on";
+    o.wide_lobes = a.exit_guide == "on";
     o.error_measure = a.error_of == "image-mean" ? volpath::RenderErrorMeasure::kImageMean
                                                  : volpath::RenderErrorMeasure::kMedianPixel;
     o.width = a.width;
@@ -308,9 +309,11 @@ void register_render(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--exit-guide", a->exit_guide,
                     "Inside media behind rough boundaries, the exit guide's estimator of the "
                     "light of sphere lights and sun discs that leaves straight from a vertex "
-                    "near the boundary: on (default since volpath-render-10: scattering "
+                    "near the boundary: on (default since volpath-render-11: scattering "
                     "vertices, the boundary's own vertices from which the walk goes on inside, "
-                    "and diffuse vertices straight after the way out, through the medium), "
+                    "and diffuse vertices straight after the way out, through the medium; a narrow "
+                    "and a wide "
+                    "lobe per light), "
                     "boundary (the first two, volpath-render-9), scattering (scattering vertices "
                     "only, volpath-render-8) or off")
         ->check(one_of({"on", "boundary", "scattering", "off"}));
