@@ -80,6 +80,17 @@ double mean_pixel_variance(const ImageEstimate& e, int channel) {
     return n > 0 ? sum / static_cast<double>(n) : 0.0;
 }
 
+ImageMean image_mean(const ImageEstimate& e, int channel) {
+    double sum = 0, var = 0;
+    const std::size_t n = static_cast<std::size_t>(e.width) * static_cast<std::size_t>(e.height);
+    for (std::size_t i = 0; i < n; ++i) {
+        sum += e.mean[i * 3 + static_cast<std::size_t>(channel)];
+        var += e.var[i * 3 + static_cast<std::size_t>(channel)];
+    }
+    const double npix = static_cast<double>(e.width) * e.height;
+    return {sum / npix, std::sqrt(var) / npix};
+}
+
 ImageComparison compare_images(const ImageEstimate& a, const ImageEstimate& b, int block) {
     if (a.width != b.width || a.height != b.height)
         throw std::invalid_argument("images differ in size: " + a.source + " is " +
@@ -94,22 +105,13 @@ ImageComparison compare_images(const ImageEstimate& a, const ImageEstimate& b, i
                    3 +
                static_cast<size_t>(c);
     };
-    const double npix = static_cast<double>(a.width) * a.height;
     for (int c = 0; c < 3; ++c) {
-        double sa = 0, va = 0, sb = 0, vb = 0;
-        for (int y = 0; y < a.height; ++y)
-            for (int x = 0; x < a.width; ++x) {
-                const size_t i = idx(x, y, c);
-                sa += a.mean[i];
-                va += a.var[i];
-                sb += b.mean[i];
-                vb += b.var[i];
-            }
+        const ImageMean ma = image_mean(a, c), mb = image_mean(b, c);
         const size_t k = static_cast<size_t>(c);
-        r.mean_a[k] = sa / npix;
-        r.se_a[k] = std::sqrt(va) / npix;
-        r.mean_b[k] = sb / npix;
-        r.se_b[k] = std::sqrt(vb) / npix;
+        r.mean_a[k] = ma.mean;
+        r.se_a[k] = ma.se;
+        r.mean_b[k] = mb.mean;
+        r.se_b[k] = mb.se;
         const double se = std::hypot(r.se_a[k], r.se_b[k]);
         r.z_mean[k] = se > 0 ? (r.mean_a[k] - r.mean_b[k]) / se : 0.0;
     }

@@ -72,6 +72,13 @@ struct ImageComparison {
     double rel_rms_diff = 0, rel_rms_noise = 0;
 };
 
+/// The mean over all pixels of one channel of an estimate, and its standard error (the pixels
+/// independent: the root of the summed variances over the pixel count).
+struct ImageMean {
+    double mean = 0, se = 0;
+};
+ImageMean image_mean(const ImageEstimate& e, int channel);
+
 /// The mean over pixels of the variance of an estimate's pixel means in one channel: its mean
 /// squared error if unbiased. Times the seconds it took, the inverse is the efficiency
 /// 1 / (MSE x time) that compares renderers independently of how long each ran.

@@ -259,17 +259,9 @@ material = "m"
             RenderOptions o = options(1536);
             o.absorption = absorption;
             const RenderResult r = render(scene, o);
-            const ImageLayer& L = r.image.layer("radiance");
-            const ImageLayer& E = r.image.layer("radiance.stderr");
-            const double n = 32.0 * 32.0;
+            const ImageEstimate image = estimate_with_stderr(r.image, "radiance", what);
             for (int c = 0; c < 3; ++c) {
-                double sum = 0, se2 = 0;
-                for (int y = 0; y < 32; ++y)
-                    for (int x = 0; x < 32; ++x) {
-                        sum += L.at(x, y, c);
-                        se2 += static_cast<double>(E.at(x, y, c)) * E.at(x, y, c);
-                    }
-                const double mean = sum / n, se = std::sqrt(se2) / n;
+                const auto [mean, se] = image_mean(image, c);
                 const std::size_t i = static_cast<std::size_t>(c);
                 const double expected = 1 - cover * (1 - ref.specular_expected - ref.diffuse[i]);
                 const double se_expected = cover * ref.diffuse_se[i];

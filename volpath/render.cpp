@@ -136,8 +136,8 @@ struct ExitGuide {
 // from x as NEE does). Lights it does not name keep the power heuristic.
 struct GuideShare {
     int n = 0;
-    const Light* light[kMaxLobes] = {};
-    double factor[kMaxLobes] = {};
+    const Light* light[kMaxGuides] = {};
+    double factor[kMaxGuides] = {};
     double of(const Light* l) const {
         for (int i = 0; i < n; ++i)
             if (light[i] == l) return factor[i];
@@ -158,10 +158,11 @@ GuideShare share_of(const ExitGuide& g, const MediumData& md, const std::vector<
     GuideShare share;
     const double wd = g.walk_density(md, w, t);
     for (int i = 0; i < g.n; ++i) {
-        share.light[i] = &lights[static_cast<size_t>(g.light[i])];
-        share.factor[i] = wd > 0 ? g.density(i, w) / wd : 0.0;
+        if (i > 0 && g.light[i] == g.light[i - 1]) continue;  // a light's lobes share one density
+        share.light[share.n] = &lights[static_cast<size_t>(g.light[i])];
+        share.factor[share.n] = wd > 0 ? g.density(i, w) / wd : 0.0;
+        ++share.n;
     }
-    share.n = g.n;
     return share;
 }
 
@@ -440,14 +441,10 @@ struct Renderer {
     // The hero mixture P(k) q_k of a walk that enters medium md now, with weights ws: the
     // probabilities the entry will choose the hero with (RenderHero::kThroughputAlbedo), else
     // the path's own; and of a walk that goes on inside.
-    static std::array<double, 3> entry_probabilities(const WalkState<3>& ws, const MediumData& md,
-                                                     RenderHero hero) {
-        if (hero == RenderHero::kThroughputAlbedo)
+    std::array<double, 3> entry_probabilities(const WalkState<3>& ws, const MediumData& md) const {
+        if (opt.hero == RenderHero::kThroughputAlbedo)
             return ws.weights.throughput_probabilities(md.region.albedo);
         return inside_probabilities(ws);
-    }
-    std::array<double, 3> entry_probabilities(const WalkState<3>& ws, const MediumData& md) const {
-        return entry_probabilities(ws, md, opt.hero);
     }
     static std::array<double, 3> inside_probabilities(const WalkState<3>& ws) {
         std::array<double, 3> pq{};
@@ -583,18 +580,20 @@ struct Renderer {
         }
     }
 
-    // The diffuse guide's estimator at x (weights bs after x's albedo, i.e. times the diffuse
-    // BSDF's value over the cosine's density): per lobe, with probability kDiffuseGuideProb, a
-    // direction w from it; where w meets a guided medium from outside, the entry's exit guide,
-    // every lobe, its density (ExitGuide::prob) that of all the ways to w at x over the cosine's.
-    template <class Pq>
+    // The diffuse guide's estimator at x (the path's weights ws after x's albedo, i.e. times
+    // the diffuse BSDF's value over the cosine's density): per lobe, with probability
+    // kDiffuseGuideProb, a direction w from it; where w meets a guided medium from outside, the
+    // entry's exit guide, every lobe, its density (ExitGuide::prob) that of all the ways to w at x
+    // over the cosine's. An entry beyond max_depth (the diffuse vertex at `depth`, the entry next)
+    // adds nothing.
     void diffuse_guided(const DiffuseGuide& g, const Vec3& x, const Vec3& n, TriangleRef tri,
-                        const double* bs, const Pq& pq_of, int depth, RngStream& rng, RGB& out,
+                        const WalkState<3>& ws, int depth, RngStream& rng, RGB& out,
                         std::uint64_t& rays) const {
+        const bool beyond = opt.max_depth > 0 && depth + 2 >= opt.max_depth;
         for (int i = 0; i < g.n; ++i) {
             const double u0 = rng.stream_uniform(), u1 = rng.stream_uniform(),
                          u2 = rng.stream_uniform();
-            if (!(u0 < kDiffuseGuideProb)) continue;
+            if (beyond || !(u0 < kDiffuseGuideProb)) continue;
             const Vec3 w = sample_vmf(g.axis[i], g.kappa[i], u1, u2);
             const double cs = dot(w, n);
             if (!(cs > 0)) continue;
@@ -605,19 +604,18 @@ struct Renderer {
             if (mi < 0) continue;
             const MediumData& md = media[static_cast<size_t>(mi)];
             if (!md.guided || !(dot(w, hit.normal) < 0)) continue;
-            if (opt.max_depth > 0 && depth + 2 >= opt.max_depth) continue;
             ExitGuide e;
             e.surface = true;
             e.z = x + w * hit.t;
             e.din = w;
             e.normal = hit.normal;
             e.tri = {hit.shape, hit.triangle};
-            const std::array<double, 3> pq = pq_of(md);
+            const std::array<double, 3> pq = entry_probabilities(ws, md);
             for (std::size_t k = 0; k < 3; ++k) e.pq[k] = pq[k];
             exit_guide(md, static_cast<int>(hit.shape), e, rays);
             if (e.n == 0) continue;
             e.prob = kExitGuideProb + g.density(w) / (cs / kPi);
-            guided_exits(e, md, static_cast<int>(hit.shape), bs, rng, out, rays);
+            guided_exits(e, md, static_cast<int>(hit.shape), ws.weights.beta, rng, out, rays);
         }
     }
 
@@ -782,10 +780,7 @@ struct Renderer {
                     diffuse_guide(p, n, tri, plate, rays);
                     if (plate.n > 0) {
                         RGB g{};
-                        diffuse_guided(
-                            plate, p, n, tri, beta,
-                            [&](const MediumData& md) { return entry_probabilities(ws, md); },
-                            depth, rng, g, rays);
+                        diffuse_guided(plate, p, n, tri, ws, depth, rng, g, rays);
                         flush(g, true);
                         plate_n = n;
                         plate_armed = true;
@@ -1001,8 +996,8 @@ struct Renderer {
                     guide.tri = TriangleRef{};
                     guide.z = s.p;
                     guide.din = s.w;
-                    for (std::size_t k = 0; k < 3; ++k)
-                        guide.pq[k] = s.weights.prob[k] * s.weights.q[k];
+                    const auto pq = R.inside_probabilities(s);
+                    for (std::size_t k = 0; k < 3; ++k) guide.pq[k] = pq[k];
                     R.run_exit_guide(guide, md, medium_shape, bs, rng, c, rays);
                     add(c);
                     return;
