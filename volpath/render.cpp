@@ -501,13 +501,11 @@ struct Renderer {
             const Vec3& n = hit.normal;
             const double cn = dot(to, n);
             if (!(cn > 0)) continue;
-            const Vec3 tangential =
-                (to - n * cn) * (1 / eta);  // Snell: eta sin(inside) = sin(outside)
-            const double s2 = dot(tangential, tangential);
-            if (!(s2 < 1)) continue;
+            Vec3 inside;  // the inside direction that leaves along `to`
+            if (!snell(to, n, 1 / eta, inside)) continue;
             const double spread = std::max(0.01, std::hypot(angle / eta, spread_rough));  // radians
             g.light[g.n] = j;
-            g.axis[g.n] = normalize(tangential + n * std::sqrt(1 - s2));
+            g.axis[g.n] = normalize(inside);
             g.kappa[g.n] = std::min(1e5, 1 / (spread * spread));
             ++g.n;
             // A wide lobe about the same axis (volpath-render-11): where the boundary's normal
@@ -557,17 +555,15 @@ struct Renderer {
                 const MediumData& m = media[static_cast<size_t>(mi)];
                 const double c1 = dot(a, in.normal);
                 if (!(c1 < 0)) break;
-                const Vec3 t1 = (a - in.normal * c1) * (1 / m.eta);
-                const Vec3 b = t1 - in.normal * std::sqrt(std::max(0.0, 1 - dot(t1, t1)));
+                Vec3 b;  // a refracted in
+                if (!snell(a, in.normal, 1 / m.eta, b)) break;
                 ++rays;
                 const RayHit out = es->intersect(x + a * in.t, b, 0, kInf, {in.shape, in.triangle});
                 if (!out.hit() || out.shape != in.shape) break;
                 const double c2 = dot(b, out.normal);
                 if (!(c2 > 0)) break;
-                const Vec3 t2 = (b - out.normal * c2) * m.eta;
-                const double s2 = dot(t2, t2);
-                if (!(s2 < 1)) break;
-                const Vec3 c = t2 + out.normal * std::sqrt(1 - s2);
+                Vec3 c;  // b refracted out
+                if (!snell(b, out.normal, m.eta, c)) break;
                 a = normalize(a + (to - c));
                 md = &m;
             }

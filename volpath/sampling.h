@@ -92,6 +92,20 @@ inline Vec3 refract(const Vec3& d, const Vec3& n, double eta, double cos_t) {
     return normalize(d * (1.0 / eta) + n * (cos_i / eta - cos_t));
 }
 
+/// Snell's law in tangential form, for where no Fresnel cosine is at hand (the guides' aims):
+/// the unit direction d crossing an interface with unit normal n of either orientation (d goes on
+/// to the side of sign(dot(d, n)) n), ratio = n_i / n_t. The refracted direction (unit up to
+/// rounding) in `out`, or false at total internal reflection.
+inline bool snell(const Vec3& d, const Vec3& n, double ratio, Vec3& out) {
+    const double c = dot(d, n);
+    const Vec3 t = (d - n * c) * ratio;
+    const double s2 = dot(t, t);
+    if (!(s2 < 1)) return false;
+    const double r = std::sqrt(1 - s2);
+    out = c > 0 ? t + n * r : t - n * r;
+    return true;
+}
+
 /// Mirror reflection of d about the plane with normal n.
 inline Vec3 reflect(const Vec3& d, const Vec3& n) {
     return d - n * (2.0 * dot(d, n));
