@@ -172,4 +172,35 @@ RelativeError relative_error(std::size_t n, const Value& value, const Error& err
     return r;
 }
 
+/// A weighted relative L2 distance of a curve m from a Monte Carlo reference ref,
+/// E = sqrt(N / D), N = sum_k a_k (m_k - ref_k)^2, D = sum_k a_k ref_k^2 (e.g. a radial profile's
+/// bins: a_k = dr_k r_k^2 for r R(r)), and with `ref_se` the standard error that the reference's
+/// noise gives E (m has none), by the delta method over independent elements:
+/// dE/dref_k = -a_k ((m_k - ref_k) + E^2 ref_k) / (E D). First order: valid while ref_se is small
+/// against |m - ref|; E = 0 gets no standard error.
+struct RelL2 {
+    double value = 0, se = 0;
+};
+inline RelL2 weighted_rel_l2(const std::vector<double>& a, const std::vector<double>& m,
+                             const std::vector<double>& ref,
+                             const std::vector<double>& ref_se = {}) {
+    double num = 0, den = 0;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+        num += a[k] * (m[k] - ref[k]) * (m[k] - ref[k]);
+        den += a[k] * ref[k] * ref[k];
+    }
+    RelL2 out;
+    if (!(den > 0)) return out;
+    out.value = std::sqrt(num / den);
+    if (ref_se.empty() || !(out.value > 0)) return out;
+    double var = 0;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+        const double d =
+            -a[k] * ((m[k] - ref[k]) + out.value * out.value * ref[k]) / (out.value * den);
+        var += d * d * ref_se[k] * ref_se[k];
+    }
+    out.se = std::sqrt(var);
+    return out;
+}
+
 }  // namespace ssslab

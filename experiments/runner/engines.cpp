@@ -62,35 +62,17 @@ void merge(const RadialProfile& p, int c, const Bins& b, std::vector<double>& v,
     }
 }
 
-// Relative L2 distance of r R(r) over the display bins, E = sqrt(N / D) with
-// N = sum dr_k (r_k (m_k - ref_k))^2 and D = sum dr_k (r_k ref_k)^2, r_k the bin's mid radius;
-// with `ref_se`, also the standard error that the reference's noise gives E (the model curve has
-// none), by the delta method over independent bins: dE/dref_k = -dr_k r_k^2 ((m_k - ref_k) +
-// E^2 ref_k) / (E D). (The bins of one run are slightly correlated, which this neglects.)
-struct RelL2 {
-    double value = 0, se = 0;
-};
+// Relative L2 distance of r R(r) over the display bins (weighted_rel_l2 with a_k = dr_k r_k^2,
+// r_k the bin's mid radius), with the standard error the reference's noise gives it. (The bins
+// of one run are slightly correlated, which this neglects.)
 RelL2 rel_l2_rr(const Bins& b, const std::vector<double>& m, const std::vector<double>& ref,
                 const std::vector<double>& ref_se = {}) {
-    auto width = [&](size_t k) { return b.hi(k) - b.lo(k); };
-    auto mid = [&](size_t k) { return 0.5 * (b.lo(k) + b.hi(k)); };
-    double num = 0, den = 0;
+    std::vector<double> a(b.size());
     for (size_t k = 0; k < b.size(); ++k) {
-        num += width(k) * std::pow(mid(k) * (m[k] - ref[k]), 2);
-        den += width(k) * std::pow(mid(k) * ref[k], 2);
+        const double mid = 0.5 * (b.lo(k) + b.hi(k));
+        a[k] = (b.hi(k) - b.lo(k)) * mid * mid;
     }
-    RelL2 out;
-    if (!(den > 0)) return out;
-    out.value = std::sqrt(num / den);
-    if (ref_se.empty() || !(out.value > 0)) return out;
-    double var = 0;
-    for (size_t k = 0; k < b.size(); ++k) {
-        const double d = -width(k) * mid(k) * mid(k) *
-                         ((m[k] - ref[k]) + out.value * out.value * ref[k]) / (out.value * den);
-        var += d * d * ref_se[k] * ref_se[k];
-    }
-    out.se = std::sqrt(var);
-    return out;
+    return weighted_rel_l2(a, m, ref, ref_se);
 }
 
 // What every model is compared with, per material and channel.
