@@ -85,13 +85,25 @@ struct ExitGuide {
     int light[kMaxLobes] = {};
     Vec3 axis[kMaxLobes];
     double kappa[kMaxLobes] = {};
-    Vec3 z, din;        // the vertex and the direction the path arrived along
-    double pq[3] = {};  // P(k) q_k at z, the hero mixture's weights (they sum to one)
+    Vec3 z, din;                 // the vertex and the direction the path arrived along
+    std::array<double, 3> pq{};  // P(k) q_k at z, the hero mixture's weights (they sum to one)
     // On the boundary (z on triangle tri, its outward normal normal): the walk's direction
     // comes from the rough BSDF for the incident direction -din.
     bool surface = false;
     Vec3 normal;
     TriangleRef tri;
+    // The guide (not yet aimed) of boundary vertex z, reached along din, for the hero mixture pq.
+    static ExitGuide on_boundary(const Vec3& z, const Vec3& din, const Vec3& normal,
+                                 TriangleRef tri, const std::array<double, 3>& pq) {
+        ExitGuide g;
+        g.surface = true;
+        g.z = z;
+        g.din = din;
+        g.normal = normal;
+        g.tri = tri;
+        g.pq = pq;
+        return g;
+    }
     // The vertex's value for direction w (the phase function, or the BSDF times |cos|) and
     // the density with which the walk samples w there.
     double value(const MediumData& md, const Vec3& w) const {
@@ -600,14 +612,9 @@ struct Renderer {
             if (mi < 0) continue;
             const MediumData& md = media[static_cast<size_t>(mi)];
             if (!md.guided || !(dot(w, hit.normal) < 0)) continue;
-            ExitGuide e;
-            e.surface = true;
-            e.z = x + w * hit.t;
-            e.din = w;
-            e.normal = hit.normal;
-            e.tri = {hit.shape, hit.triangle};
-            const std::array<double, 3> pq = entry_probabilities(ws, md);
-            for (std::size_t k = 0; k < 3; ++k) e.pq[k] = pq[k];
+            ExitGuide e =
+                ExitGuide::on_boundary(x + w * hit.t, w, hit.normal, {hit.shape, hit.triangle},
+                                       entry_probabilities(ws, md));
             exit_guide(md, static_cast<int>(hit.shape), e, rays);
             if (e.n == 0) continue;
             e.prob = kExitGuideProb + g.density(w) / (cs / kPi);
@@ -837,16 +844,11 @@ struct Renderer {
                     here_guided = md.guided && opt.boundary_guides &&
                                   !(opt.max_depth > 0 && depth + 1 >= opt.max_depth);
                     if (here_guided) {
-                        here.surface = true;
-                        here.z = p;
-                        here.din = d;
-                        here.normal = n;
-                        here.tri = tri;
                         // The hero mixture of the walk from here: the one inside, or the
                         // probabilities the entry will choose the hero with.
-                        const auto pq =
-                            outside ? entry_probabilities(ws, md) : inside_probabilities(ws);
-                        for (std::size_t k = 0; k < 3; ++k) here.pq[k] = pq[k];
+                        here = ExitGuide::on_boundary(
+                            p, d, n, tri,
+                            outside ? entry_probabilities(ws, md) : inside_probabilities(ws));
                         // An entry straight from a diffuse vertex with a guide: that guide's
                         // lobes are one more way to this guide's paths.
                         if (plate_arrival && outside) {
@@ -992,8 +994,7 @@ struct Renderer {
                     guide.tri = TriangleRef{};
                     guide.z = s.p;
                     guide.din = s.w;
-                    const auto pq = R.inside_probabilities(s);
-                    for (std::size_t k = 0; k < 3; ++k) guide.pq[k] = pq[k];
+                    guide.pq = R.inside_probabilities(s);
                     R.run_exit_guide(guide, md, medium_shape, bs, rng, c, rays);
                     add(c);
                     return;

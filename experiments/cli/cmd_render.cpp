@@ -312,10 +312,8 @@ void register_render(CLI::App& app, std::function<int()>& action) {
                     "near the boundary: on (default since volpath-render-11: scattering "
                     "vertices, the boundary's own vertices from which the walk goes on inside, "
                     "and diffuse vertices straight after the way out, through the medium; a narrow "
-                    "and a wide "
-                    "lobe per light), "
-                    "boundary (the first two, volpath-render-9), scattering (scattering vertices "
-                    "only, volpath-render-8) or off")
+                    "and a wide lobe per light), boundary (the first two, volpath-render-9), "
+                    "scattering (scattering vertices only, volpath-render-8) or off")
         ->check(one_of({"on", "boundary", "scattering", "off"}));
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
