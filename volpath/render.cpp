@@ -8,15 +8,10 @@
 #include "volpath/lights.h"
 #include "volpath/mesh_medium.h"
 #include "volpath/microfacet.h"
-#include "volpath/radiance_grid.h"
 #include "volpath/sampling.h"
 #include "volpath/walk.h"
 
-#include <oneapi/tbb/parallel_for.h>
-#include <oneapi/tbb/task_arena.h>
-
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -37,19 +32,6 @@ namespace {
 constexpr const char* kEngineVersion = "volpath-render-11";
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
-// The learning passes of the volume splitting (RenderOptions::volume_splitting).
-constexpr std::uint32_t kLearnDomain = rng_domain::kVolpath + 0x101;
-// Roulette and splitting at a scattering vertex of a guided medium by the ratio r of what the
-// path expects to collect from there on (its throughput times the learnt radiance there) to the
-// pixel's value [Vorba and Křivánek 2016, §4]: below kRouletteBelow a roulette that survives
-// with r / kRouletteBelow (at least kMinSurvival, so that a cell that saw no light yet still
-// lets paths through), above kSplitAbove a split into min(floor(r), kMaxSplit) paths, and at most
-// kMaxCopies split paths per camera path.
-constexpr double kRouletteBelow = 0.25;
-constexpr double kSplitAbove = 2.0;
-constexpr double kMinSurvival = 0.05;
-constexpr int kMaxSplit = 8;
-constexpr int kMaxCopies = 256;
 constexpr int kMaxBatchSpp = 3 * 1024;  // the largest automatic batch (RenderOptions::batch_spp)
 using RGB = std::array<double, 3>;
 
@@ -217,19 +199,6 @@ struct DiffuseGuide {
     }
 };
 
-// A learning pass's record of one path's scattering vertices in guided media
-// (volume_splitting): where each lies, the path's throughput there before its new direction (the
-// sum of the channels' weights) and what the path had collected before; what it collects after
-// a vertex over that throughput estimates the radiance collected from there on (RadianceGrid).
-struct LearnPath {
-    struct Vertex {
-        Vec3 p;
-        double throughput = 0, before = 0;
-    };
-    std::vector<Vertex> v;
-    double total = 0;  // the path's contributions so far (the sum of their channels)
-};
-
 struct Renderer {
     const Scene& scene;
     const RenderOptions& opt;
@@ -249,11 +218,6 @@ struct Renderer {
     // The probability that NEE samples a given light: 1 when every light is sampled at every
     // vertex (RenderOptions::nee_all_lights), else 1 / lights (one chosen uniformly).
     double sel = 1;
-    // Volume splitting (RenderOptions::volume_splitting): the learnt radiance grid and each
-    // pixel's root second moment per sample (of the sum of its channels) that roulette and
-    // splitting go by (null: none).
-    const RadianceGrid* radiance = nullptr;
-    std::vector<double> pixel_rms;
 
     Renderer(const Scene& s, const RenderOptions& o) : scene(s), opt(o) {
         width = o.width > 0 ? o.width : s.camera.width;
@@ -716,11 +680,25 @@ struct Renderer {
         }
     }
 
-    // A camera path's state between its vertices: what a split copies (volume_splitting).
-    struct PathState {
+    // One camera path through pixel (x, y); tally += its contributions. Outside media the
+    // loop below; inside a medium the one walk of volpath/walk.h, whose boundary hook is the
+    // same surface vertex as a hit from outside.
+    std::uint64_t trace(int x, int y, int hero, RngStream& rng, double* T) const {
+        std::uint64_t rays = 0;
+        const double jx = rng.uniform(), jy = rng.uniform();
+        const double ndc_x = (2 * (x + jx) / width - 1) * tan_half * aspect;
+        const double ndc_y = (1 - 2 * (y + jy) / height) * tan_half;
         WalkState<3> ws;  // position, direction, weights and events of the whole path
+        ws.p = cam_pos;
+        ws.w = normalize(cam_f + cam_r * ndc_x + cam_u * ndc_y);
+        ws.weights.hero = hero;
+        ws.weights.start(1.0);
+        Vec3& o = ws.p;
+        Vec3& d = ws.w;
+        bool& on_surface = ws.on_surface;
         // Outside media: the triangle the next ray leaves (rays_from_surface), else none.
         TriangleRef leave;
+        double* beta = ws.weights.beta;
         int medium = -1;  // index into media of the medium the path is in
         int medium_shape = -1;
         bool prev_nee = false, entered = false, specular_path = false;
@@ -736,70 +714,9 @@ struct Renderer {
         DiffuseGuide plate;           // of the last diffuse vertex (diffuse_guides)
         Vec3 plate_n;                 // and its normal
         bool plate_armed = false;     // it takes part in the entry the path meets next
-    };
-
-    // One camera path through pixel (x, y); tally += its contributions. In a learning pass
-    // (`learn`) its vertices in guided media are recorded into that tally, and `total` gets the
-    // sum of its contributions' channels.
-    std::uint64_t trace(int x, int y, int hero, RngStream& rng, double* T,
-                        RadianceGrid::Tally* learn = nullptr, double* total = nullptr) const {
-        if (!learn) return trace_path(x, y, hero, rng, T, nullptr);
-        thread_local LearnPath rec;
-        rec.v.clear();
-        rec.total = 0;
-        const std::uint64_t rays = trace_path(x, y, hero, rng, T, &rec);
-        for (const LearnPath::Vertex& v : rec.v)
-            if (v.throughput > 0) learn->record(v.p, (rec.total - v.before) / v.throughput);
-        if (total) *total = rec.total;
-        return rays;
-    }
-
-    // One camera path (trace): outside media the loop below; inside a medium the one walk of
-    // volpath/walk.h, whose boundary hook is the same surface vertex as a hit from outside. The
-    // paths split off it (volume_splitting) are traced after it, each from its state at the
-    // split.
-    std::uint64_t trace_path(int x, int y, int hero, RngStream& rng, double* T,
-                             LearnPath* rec) const {
-        std::uint64_t rays = 0;
-        const double jx = rng.uniform(), jy = rng.uniform();
-        const double ndc_x = (2 * (x + jx) / width - 1) * tan_half * aspect;
-        const double ndc_y = (1 - 2 * (y + jy) / height) * tan_half;
-        PathState st;
-        std::vector<PathState> pending;  // split paths still to trace
-        int copies = 0;                  // paths split off this camera path so far
-        const double pixel =
-            radiance ? pixel_rms[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
-                                 static_cast<std::size_t>(x)]
-                     : 0.0;
-        WalkState<3>& ws = st.ws;
-        ws.p = cam_pos;
-        ws.w = normalize(cam_f + cam_r * ndc_x + cam_u * ndc_y);
-        ws.weights.hero = hero;
-        ws.weights.start(1.0);
-        Vec3& o = ws.p;
-        Vec3& d = ws.w;
-        bool& on_surface = ws.on_surface;
-        TriangleRef& leave = st.leave;
-        double* beta = ws.weights.beta;
-        int& medium = st.medium;
-        int& medium_shape = st.medium_shape;
-        bool &prev_nee = st.prev_nee, &entered = st.entered, &specular_path = st.specular_path;
-        double& prev_pdf = st.prev_pdf;
-        Vec3& nee_pos = st.nee_pos;
-        Vec3& nee_normal = st.nee_normal;
-        bool& nee_on_surface = st.nee_on_surface;
-        int& depth = st.depth;
-        ExitGuide& guide = st.guide;
-        bool& guide_armed = st.guide_armed;
-        GuideShare& exit_share = st.exit_share;
-        bool& left_guided = st.left_guided;
-        DiffuseGuide& plate = st.plate;
-        Vec3& plate_n = st.plate_n;
-        bool& plate_armed = st.plate_armed;
         // `subsurface`: light that entered a medium whatever the path so far (an exit guide's
         // estimate at the boundary where the path is still outside).
         auto flush = [&](const RGB& contribution, bool subsurface = false) {
-            if (rec) rec->total += contribution[0] + contribution[1] + contribution[2];
             for (int c = 0; c < 3; ++c) {
                 const double v = contribution[static_cast<size_t>(c)];
                 T[RenderLayout::kRadiance + c] += v;
@@ -1029,11 +946,6 @@ struct Renderer {
             bool& nee_on_surface;
             std::uint64_t& rays;
             decltype(flush)& add;
-            LearnPath* rec;
-            PathState& st;
-            std::vector<PathState>& pending;
-            int& copies;
-            double pixel;
             // The density with which phase sampling picks a direction, as the hero MIS sees
             // it: the mixture of the channels' phase functions weighted by their probabilities
             // to be the hero times their path densities so far (prob x q), which does not
@@ -1097,51 +1009,6 @@ struct Renderer {
                     [&](const Vec3& wi) { return phase_mix(s, dot(din, wi)); }, c, rays, medium);
                 add(c);
             }
-            // Volume splitting at a scattering vertex of a guided medium: a learning pass
-            // records it; a render with learnt radiance plays roulette with the path or splits
-            // it by what it expects to collect from here on against the pixel's value.
-            bool before_direction(WalkState<3>& s, RngStream& rng) {
-                const MediumData& md = R.media[static_cast<size_t>(medium)];
-                if (!md.guided) return true;
-                const double* b = s.weights.beta;
-                const double throughput = b[0] + b[1] + b[2];
-                if (rec) {
-                    rec->v.push_back({s.p, throughput, rec->total});
-                    return true;
-                }
-                if (!R.radiance || !(pixel > 0)) return true;
-                const double L = R.radiance->rms(R.radiance->cell(s.p));
-                if (L < 0) return true;
-                const double r = throughput * L / pixel;
-                if (r < kRouletteBelow) {
-                    const double q = std::max(kMinSurvival, r / kRouletteBelow);
-                    if (!(rng.stream_uniform() < q)) return false;
-                    s.weights.survived(q);
-                    return true;
-                }
-                if (!(r > kSplitAbove) || copies >= kMaxCopies) return true;
-                const int n = std::min({static_cast<int>(r), kMaxSplit, 1 + kMaxCopies - copies});
-                s.weights.survived(n);
-                // Each copy: the path as it is here (st holds s), its own direction from the
-                // phase function, and what `scattered` sets for it.
-                for (int k = 1; k < n; ++k) {
-                    PathState c = st;
-                    const int h = c.ws.weights.hero;
-                    const double mu = sample_hg(md.g[static_cast<size_t>(h)], rng.stream_uniform());
-                    const double phi = 2.0 * kPi * rng.stream_uniform();
-                    c.ws.weights.phase(md.region, mu);
-                    c.ws.w = rotate(s.w, mu, phi);
-                    c.ws.on_surface = false;
-                    c.guide_armed = true;
-                    c.prev_pdf = phase_mix(c.ws, mu);
-                    c.prev_nee = R.passable(medium);
-                    c.nee_pos = s.p;
-                    c.nee_on_surface = false;
-                    pending.push_back(std::move(c));
-                }
-                copies += n - 1;
-                return true;
-            }
             void scattered(const WalkState<3>& s, double mu) {
                 guide_armed = R.media[static_cast<size_t>(medium)].guided;
                 prev_pdf = phase_mix(s, mu);
@@ -1151,83 +1018,71 @@ struct Renderer {
             }
         };
         Hooks hooks{{},    vertex,   *this,    medium,  medium_shape,   guide, guide_armed,
-                    depth, prev_pdf, prev_nee, nee_pos, nee_on_surface, rays,  flush,
-                    rec,   st,       pending,  copies,  pixel};
+                    depth, prev_pdf, prev_nee, nee_pos, nee_on_surface, rays,  flush};
         WalkRules rules;
         rules.flight = FlightRule::kResample;
         rules.long_events = opt.long_path_events;
 
-        // The path from its state in st until it ends.
-        auto run = [&] {
-            while (depth < 100000) {
-                if (medium >= 0) {
-                    MeshGeometry geo;
-                    geo.scene = es.get();
-                    geo.shape = static_cast<std::uint32_t>(medium_shape);
-                    geo.inside = media[static_cast<size_t>(medium)].region;
-                    if (!shape_balls.empty())
-                        geo.balls = shape_balls[static_cast<size_t>(medium_shape)].get();
-                    rules.absorption = media[static_cast<size_t>(medium)].absorption;
-                    const std::uint64_t before = ws.queries;
-                    const WalkEnd end = walk(geo, ws, rules, rng, hooks);
-                    rays += ws.queries - before;
-                    if (end != WalkEnd::kExited) return;
+        while (depth < 100000) {
+            if (medium >= 0) {
+                MeshGeometry geo;
+                geo.scene = es.get();
+                geo.shape = static_cast<std::uint32_t>(medium_shape);
+                geo.inside = media[static_cast<size_t>(medium)].region;
+                if (!shape_balls.empty())
+                    geo.balls = shape_balls[static_cast<size_t>(medium_shape)].get();
+                rules.absorption = media[static_cast<size_t>(medium)].absorption;
+                const std::uint64_t before = ws.queries;
+                const WalkEnd end = walk(geo, ws, rules, rng, hooks);
+                rays += ws.queries - before;
+                if (end != WalkEnd::kExited) return rays;
+                continue;
+            }
+            ++rays;
+            const RayHit hit = es->intersect(o, d, on_surface ? eps : 0.0, kInf, leave);
+            leave = TriangleRef{};
+            if (depth == 0 && hit.hit()) {
+                T[RenderLayout::kDepth] += hit.t;
+                for (int c = 0; c < 3; ++c) T[RenderLayout::kNormal + c] += hit.normal[c];
+            }
+            // Sphere lights are not in the BVH: the nearest of them, if before the geometry.
+            double tl = kInf;
+            const Light* hit_light = nullptr;
+            for (const Light& l : lights)
+                if (l.type == LightType::kSphere) {
+                    const double t = ray_sphere_hit(o, d, l.pos, l.radius);
+                    if (t < tl) tl = t, hit_light = &l;
+                }
+            if (hit_light && tl < hit.t) {
+                const double pl = light_pdf(*hit_light, nee_pos, d);
+                const double w =
+                    prev_nee ? exit_share.weight(hit_light, prev_pdf, sel * pl, pl) : 1.0;
+                RGB c{};
+                for (int k = 0; k < 3; ++k)
+                    c[static_cast<size_t>(k)] = beta[k] * hit_light->L[static_cast<size_t>(k)] * w;
+                flush(c);
+                return rays;
+            }
+            if (!hit.hit()) {
+                RGB c{};
+                add_escape(nee_pos, env_normal(nee_on_surface ? &nee_normal : nullptr), d, prev_nee,
+                           prev_pdf, beta, c, exit_share);
+                flush(c);
+                return rays;
+            }
+            const Vec3 p = o + d * hit.t;
+            if (shape_medium[hit.shape] >= 0 && !(dot(d, hit.normal) < 0)) {
+                // A medium's boundary met from inside while outside. Within a few epsilons: the
+                // restart point slipped across a concave crease of this mesh; cross back and go
+                // on. Farther: a leak; the path ends.
+                if (hit.t < 4 * eps) {
+                    o = p;
+                    on_surface = true;
                     continue;
                 }
-                ++rays;
-                const RayHit hit = es->intersect(o, d, on_surface ? eps : 0.0, kInf, leave);
-                leave = TriangleRef{};
-                if (depth == 0 && hit.hit()) {
-                    T[RenderLayout::kDepth] += hit.t;
-                    for (int c = 0; c < 3; ++c) T[RenderLayout::kNormal + c] += hit.normal[c];
-                }
-                // Sphere lights are not in the BVH: the nearest of them, if before the geometry.
-                double tl = kInf;
-                const Light* hit_light = nullptr;
-                for (const Light& l : lights)
-                    if (l.type == LightType::kSphere) {
-                        const double t = ray_sphere_hit(o, d, l.pos, l.radius);
-                        if (t < tl) tl = t, hit_light = &l;
-                    }
-                if (hit_light && tl < hit.t) {
-                    const double pl = light_pdf(*hit_light, nee_pos, d);
-                    const double w =
-                        prev_nee ? exit_share.weight(hit_light, prev_pdf, sel * pl, pl) : 1.0;
-                    RGB c{};
-                    for (int k = 0; k < 3; ++k)
-                        c[static_cast<size_t>(k)] =
-                            beta[k] * hit_light->L[static_cast<size_t>(k)] * w;
-                    flush(c);
-                    return;
-                }
-                if (!hit.hit()) {
-                    RGB c{};
-                    add_escape(nee_pos, env_normal(nee_on_surface ? &nee_normal : nullptr), d,
-                               prev_nee, prev_pdf, beta, c, exit_share);
-                    flush(c);
-                    return;
-                }
-                const Vec3 p = o + d * hit.t;
-                if (shape_medium[hit.shape] >= 0 && !(dot(d, hit.normal) < 0)) {
-                    // A medium's boundary met from inside while outside. Within a few epsilons: the
-                    // restart point slipped across a concave crease of this mesh; cross back and go
-                    // on. Farther: a leak; the path ends.
-                    if (hit.t < 4 * eps) {
-                        o = p;
-                        on_surface = true;
-                        continue;
-                    }
-                    return;
-                }
-                if (!vertex(p, hit.normal, TriangleRef{hit.shape, hit.triangle})) return;
+                return rays;
             }
-        };
-        run();
-        // The paths split off it, each from its state at the split (what may split again).
-        while (!pending.empty()) {
-            st = std::move(pending.back());
-            pending.pop_back();
-            run();
+            if (!vertex(p, hit.normal, TriangleRef{hit.shape, hit.triangle})) return rays;
         }
         return rays;
     }
@@ -1364,73 +1219,8 @@ std::string fingerprint_with_batch(const Scene& scene, const RenderOptions& o, i
     if (o.exit_guide && !o.boundary_guides) k.add("boundary_guides", false);
     if (o.exit_guide && o.boundary_guides && !o.diffuse_guides) k.add("diffuse_guides", false);
     if (o.exit_guide && !o.wide_lobes) k.add("wide_lobes", false);
-    if (o.volume_splitting > 0) k.add("volume_splitting_passes", o.volume_splitting);
     add_to_key(k, scene);
     return k.text();
-}
-
-// Volume splitting's learning (RenderOptions::volume_splitting): passes of 3 x 2^k samples per
-// pixel at the render's size, plain paths (no roulette or splitting of their own), whose
-// scattering vertices in guided media teach the radiance grid over those media and whose samples
-// give each pixel's root second moment (of the sum of a sample's channels, over all passes). The
-// passes' random numbers come from a domain of their own, per pass and row; the rows fall into
-// kLearnShares shares, each its own tally, learnt from in order: what is learnt depends on the
-// seed and not on the threads. Null where no medium is guided.
-constexpr int kLearnShares = 16;
-std::unique_ptr<RadianceGrid> learn_radiance(const Scene& scene, Renderer& R,
-                                             const RenderOptions& o) {
-    Vec3 lo{kInf, kInf, kInf}, hi{-kInf, -kInf, -kInf};
-    bool any = false;
-    for (std::size_t i = 0; i < scene.shapes.size(); ++i) {
-        const int mi = R.shape_medium[i];
-        if (mi < 0 || !R.media[static_cast<size_t>(mi)].guided) continue;
-        for (const Vec3& v : scene.shapes[i].mesh.positions) {
-            lo = {std::min(lo.x, v.x), std::min(lo.y, v.y), std::min(lo.z, v.z)};
-            hi = {std::max(hi.x, v.x), std::max(hi.y, v.y), std::max(hi.z, v.z)};
-            any = true;
-        }
-    }
-    if (!any) return nullptr;
-    auto grid = std::make_unique<RadianceGrid>(lo, hi);
-    const std::size_t pixels =
-        static_cast<std::size_t>(R.width) * static_cast<std::size_t>(R.height);
-    std::vector<double> moment(pixels, 0.0);  // per pixel: the sum of its samples' totals^2
-    const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
-    tbb::task_arena arena(threads);
-    std::int64_t spp_total = 0;
-    for (int pass = 0; pass < o.volume_splitting; ++pass) {
-        std::vector<RadianceGrid::Tally> shares(kLearnShares, RadianceGrid::Tally(*grid));
-        const int spp = 3 << pass;
-        arena.execute([&] {
-            tbb::parallel_for(0, kLearnShares, [&](int share) {
-                std::vector<double> T(RenderLayout::kPerPixel);
-                for (int y = share; y < R.height; y += kLearnShares) {
-                    RngStream rng(
-                        o.seed, kLearnDomain,
-                        static_cast<std::uint64_t>(pass) * static_cast<std::uint64_t>(R.height) +
-                            static_cast<std::uint64_t>(y));
-                    for (int x = 0; x < R.width; ++x) {
-                        double& m =
-                            moment[static_cast<std::size_t>(y) * static_cast<std::size_t>(R.width) +
-                                   static_cast<std::size_t>(x)];
-                        for (int k = 0; k < spp; ++k) {
-                            double total = 0;
-                            R.trace(x, y, (x + k) % 3, rng, T.data(),
-                                    &shares[static_cast<std::size_t>(share)], &total);
-                            m += total * total;
-                        }
-                    }
-                }
-            });
-        });
-        for (const RadianceGrid::Tally& t : shares) grid->learn(t);
-        spp_total += spp;
-    }
-    R.pixel_rms.assign(pixels, 0.0);
-    for (std::size_t i = 0; i < pixels; ++i)
-        R.pixel_rms[i] = std::sqrt(moment[i] / static_cast<double>(spp_total));
-    R.radiance = grid.get();
-    return grid;
 }
 
 }  // namespace
@@ -1441,16 +1231,8 @@ std::string render_fingerprint(const Scene& scene, const RenderOptions& o) {
 
 RenderResult render(const Scene& scene, const RenderOptions& o) {
     check_renderable(scene);
-    Renderer R(scene, o);
+    const Renderer R(scene, o);
     RenderResult out;
-    std::unique_ptr<RadianceGrid> grid;
-    if (o.volume_splitting > 0) {
-        const auto t0 = std::chrono::steady_clock::now();
-        grid = learn_radiance(scene, R, o);
-        out.learn_seconds =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        out.learnt_cells = grid ? grid->learnt_cells() : 0;
-    }
     out.width = R.width;
     out.height = R.height;
     for (std::size_t i = 0; i < scene.shapes.size(); ++i) {
@@ -1553,7 +1335,7 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
             }
             return rays;
         });
-    out.seconds = out.run.seconds + out.learn_seconds;
+    out.seconds = out.run.seconds;
     out.spp = out.run.samples;
     out.rays = out.run.work;
     out.interrupted = out.run.reason == BatchStop::kInterrupted;

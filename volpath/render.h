@@ -168,16 +168,6 @@ struct RenderOptions : RunControl {
     /// surface) it aims through one exit point's normal and misses the others that refract
     /// towards the light (volpath-render-11; off: the single lobe of volpath-render-8 to -10).
     bool wide_lobes = true;
-    /// Volume splitting: adjoint-driven Russian roulette and splitting [Vorba and Křivánek
-    /// 2016] at the scattering vertices of media behind rough boundaries (those of the exit
-    /// guide). This many learning passes (3, 6, 12, ... samples per pixel, plain paths) before
-    /// the render learn the radiance a path collects from a point of those media on
-    /// (volpath/radiance_grid.h) and each pixel's value; the render's paths then, at every such
-    /// vertex, end by a roulette where their throughput times that radiance falls below 1/4 of
-    /// the pixel's value, or split where it exceeds twice it. Both are frozen before the first
-    /// batch, so the batches stay i.i.d.; the learning's time counts in RenderResult::seconds.
-    /// 0: none.
-    int volume_splitting = 0;
     /// Samples per pixel in a batch, a multiple of 3 (each channel the hero equally often).
     /// 0: 3 x 2^m, the largest with at least 32 batches in a sample budget (3 when there is a
     /// time or an error budget); a render resumed from a checkpoint keeps the size it started
@@ -229,10 +219,6 @@ struct RenderResult {
     /// The absorption policy each medium material's walks used (render_absorption), by the
     /// material's name, in the order the scene's shapes first use them.
     std::vector<std::pair<std::string, Absorption>> media_absorption;
-    /// Volume splitting (RenderOptions::volume_splitting): the learning's seconds (part of
-    /// `seconds`) and the cells of the radiance grid with a learnt value.
-    double learn_seconds = 0;
-    int learnt_cells = 0;
 };
 
 /// Checks what the renderer supports beyond Scene's own validation: throws InputError (located

@@ -25,8 +25,7 @@
 // Random-number order (what the engines' golden-seed tests pin): a flight's free path, then per
 // tentative collision the null test (heterogeneous only), per boundary hit what the boundary
 // hook draws, per collision the absorption roulette (weighted: the Russian roulette, when
-// below the threshold), the long-path roulette, what the before_direction hook draws, the phase
-// function's cosine and azimuth.
+// below the threshold), the long-path roulette, the phase function's cosine and azimuth.
 #pragma once
 
 #include "core/rng.h"
@@ -312,14 +311,6 @@ struct WalkHooks {
     }
     template <class S>
     void at_vertex(S&, double /*survive*/, RngStream&) {}
-    /// At a scattering vertex that survived its roulettes, before its new direction: false ends
-    /// the walk there (a roulette of the engine's own, which then divides the weights of a
-    /// survivor by its probability); the engine may also split the path there (the renderer's
-    /// adjoint-driven roulette and splitting).
-    template <class S>
-    bool before_direction(S&, RngStream&) {
-        return true;
-    }
     /// After the phase function's cosine was sampled, before its weights are applied.
     template <class S>
     void scattered(const S&, double /*mu*/) {}
@@ -480,7 +471,6 @@ WalkEnd walk(const Geometry& geo, WalkState<NC>& s, const WalkRules& rules, RngS
             hooks.at_vertex(s, survive, rng);
             if (!(rng.uniform() < survive)) return WalkEnd::kAbsorbed;
         }
-        if (!hooks.before_direction(s, rng)) return WalkEnd::kAbsorbed;
         const double mu = sample_hg(R->g[h], rng.uniform());
         const double phi = 2.0 * kPi * rng.uniform();
         hooks.scattered(s, mu);

@@ -39,7 +39,6 @@ struct RenderArgs {
     std::string absorption = "auto";
     std::string hero = "throughput-albedo";
     std::string exit_guide = "on";
-    int volume_splitting = 0;
     CommonOptions common;
 };
 
@@ -62,11 +61,6 @@ std::string render_toml(const RenderArgs& a, const Scene& scene, const volpath::
     st.record("absorption", a.absorption);
     st.record("hero", a.hero);
     st.record("exit_guide", a.exit_guide);
-    st.record("volume_splitting", static_cast<std::int64_t>(a.volume_splitting));
-    if (a.volume_splitting > 0) {
-        st.record("learn_seconds", r.learn_seconds);
-        st.record("learnt_cells", static_cast<std::int64_t>(r.learnt_cells));
-    }
     // What "auto" (or the requested policy) came to in each medium.
     ConfigTable media = st.table_or_empty("media_absorption");
     for (const auto& [name, policy] : r.media_absorption)
@@ -140,7 +134,6 @@ int run_render(const RenderArgs& a) {
     o.boundary_guides = a.exit_guide == "on" || a.exit_guide == "boundary";
     o.diffuse_guides = a.exit_guide == "on";
     o.wide_lobes = a.exit_guide == "on";
-    o.volume_splitting = a.volume_splitting;
     o.error_measure = a.error_of == "image-mean" ? volpath::RenderErrorMeasure::kImageMean
                                                  : volpath::RenderErrorMeasure::kMedianPixel;
     o.width = a.width;
@@ -322,14 +315,6 @@ void register_render(CLI::App& app, std::function<int()>& action) {
                     "and a wide lobe per light), boundary (the first two, volpath-render-9), "
                     "scattering (scattering vertices only, volpath-render-8) or off")
         ->check(one_of({"on", "boundary", "scattering", "off"}));
-    sub->add_option("--volume-splitting", a->volume_splitting,
-                    "Adjoint-driven roulette and splitting in media behind rough boundaries: "
-                    "this many learning passes (3, 6, 12, ... spp) learn the radiance a path "
-                    "collects from each point of those media and each pixel's value; the render's "
-                    "paths then end by a roulette or split at their scattering vertices by what "
-                    "they expect to collect against the pixel's value. 0 (default): none. The "
-                    "learning's time counts in the run's seconds")
-        ->check(CLI::Range(0, 8));
     sub->callback([a, &action] { action = [a] { return run_render(*a); }; });
 }
 
