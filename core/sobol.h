@@ -26,12 +26,13 @@ namespace ssslab {
 
 namespace sobol_detail {
 
+// The bits of x in reverse order: the bits within each byte swapped in three steps, then the
+// bytes by one instruction.
 inline std::uint32_t reverse_bits(std::uint32_t x) {
     x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
     x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
     x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
-    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
-    return (x >> 16) | (x << 16);
+    return __builtin_bswap32(x);
 }
 
 // Burley's variant of the Laine-Karras hash: on the bit-reversed value, bit j of the result
@@ -99,11 +100,42 @@ inline void sobol_2d_bitwise(std::uint32_t index, std::uint32_t& x, std::uint32_
         if (index & 1u) y ^= v;
 }
 
-/// Point `index` of the shuffled, Owen-scrambled 2D Sobol sequence of `seed`, each coordinate
-/// (k + 1/2) / 2^32 for a 32-bit k: in the open interval (0, 1).
+/// The shuffled, Owen-scrambled 2D Sobol sequence of one seed: the index shuffled by an Owen
+/// scramble of `seed`, the two coordinates scrambled by seeds hashed from it. `at(index)` is
+/// point `index`, each coordinate (k + 1/2) / 2^32 for a 32-bit k: in the open interval (0, 1).
+/// The hashed seeds are made once per sequence, and the first coordinate is the shuffle's
+/// Laine-Karras hash itself (the van der Corput sequence reverses the bits that owen_scramble
+/// has just reversed): the same values as the definition, scrambled_sobol_2d_reference.
+struct ScrambledSobol2D {
+    std::uint32_t seed, seed_x, seed_y;
+    ScrambledSobol2D() : ScrambledSobol2D(0) {}
+    explicit ScrambledSobol2D(std::uint32_t s)
+        : seed(s), seed_x(hash32(s ^ 0x9e3779b9u)), seed_y(hash32(s ^ 0x7f4a7c15u)) {}
+    void at(std::uint32_t index, double& u, double& v) const {
+        using namespace sobol_detail;
+        const std::uint32_t lk = laine_karras(reverse_bits(index), seed);
+        const std::uint32_t shuffled = reverse_bits(lk);  // owen_scramble(index, seed)
+        const auto& t = kSecondDimension.table;
+        const std::uint32_t y = t[shuffled & 0xffu] ^ t[256 + ((shuffled >> 8) & 0xffu)] ^
+                                t[512 + ((shuffled >> 16) & 0xffu)] ^ t[768 + (shuffled >> 24)];
+        // x = reverse_bits(shuffled) = lk; its scramble reverses it back to `shuffled`.
+        const std::uint32_t xs = reverse_bits(laine_karras(shuffled, seed_x));
+        const std::uint32_t ys = owen_scramble(y, seed_y);
+        u = (static_cast<double>(xs) + 0.5) * 0x1p-32;
+        v = (static_cast<double>(ys) + 0.5) * 0x1p-32;
+    }
+};
+
+/// Point `index` of the shuffled, Owen-scrambled 2D Sobol sequence of `seed` (ScrambledSobol2D).
 inline void scrambled_sobol_2d(std::uint32_t index, std::uint32_t seed, double& u, double& v) {
+    ScrambledSobol2D(seed).at(index, u, v);
+}
+
+/// scrambled_sobol_2d by its definition, step by step (for the test that the two agree).
+inline void scrambled_sobol_2d_reference(std::uint32_t index, std::uint32_t seed, double& u,
+                                         double& v) {
     std::uint32_t x = 0, y = 0;
-    sobol_2d(owen_scramble(index, seed), x, y);
+    sobol_2d_bitwise(owen_scramble(index, seed), x, y);
     x = owen_scramble(x, hash32(seed ^ 0x9e3779b9u));
     y = owen_scramble(y, hash32(seed ^ 0x7f4a7c15u));
     u = (static_cast<double>(x) + 0.5) * 0x1p-32;

@@ -112,5 +112,44 @@ TEST(Sobol, TablesEqualTheDefinitionAndTheFirstPointsFormNets) {
         }
 }
 
+TEST(Sobol, ScrambledPointsEqualTheDefinitionAndFormNets) {
+    // reverse_bits against the bit-by-bit reversal.
+    std::mt19937_64 pick(11);
+    for (int k = 0; k < 100000; ++k) {
+        const auto x = static_cast<std::uint32_t>(pick());
+        std::uint32_t r = 0;
+        for (int b = 0; b < 32; ++b) r |= ((x >> b) & 1u) << (31 - b);
+        ASSERT_EQ(sobol_detail::reverse_bits(x), r) << x;
+    }
+    // The sequence object (hashed seeds made once, the double reversal left out) against the
+    // definition step by step, bit for bit.
+    for (int k = 0; k < 200000; ++k) {
+        const auto seed = static_cast<std::uint32_t>(pick());
+        const auto index = static_cast<std::uint32_t>(k < 100000 ? k : pick());
+        double u = 0, v = 0, ur = 0, vr = 0;
+        ScrambledSobol2D(seed).at(index, u, v);
+        scrambled_sobol_2d_reference(index, seed, ur, vr);
+        ASSERT_EQ(u, ur) << seed << " " << index;
+        ASSERT_EQ(v, vr) << seed << " " << index;
+    }
+    // Independent of both: the scrambles keep the net, the first 2^m points of every seed's
+    // sequence a (0, m, 2)-net in base 2 [Burley 2020, §3-4].
+    for (std::uint32_t seed : {1u, 0x9e3779b9u, 123456789u})
+        for (int m = 1; m <= 10; ++m)
+            for (int j = 0; j <= m; ++j) {
+                std::vector<int> count(std::size_t{1} << m, 0);
+                const ScrambledSobol2D seq(seed);
+                for (std::uint32_t i = 0; i < (1u << m); ++i) {
+                    double u = 0, v = 0;
+                    seq.at(i, u, v);
+                    const auto a = static_cast<std::uint32_t>(u * (1u << j));
+                    const auto b = static_cast<std::uint32_t>(v * (1u << (m - j)));
+                    ++count[(a << (m - j)) | b];
+                }
+                for (int c : count)
+                    ASSERT_EQ(c, 1) << "seed " << seed << ", m " << m << ", j " << j;
+            }
+}
+
 }  // namespace
 }  // namespace ssslab

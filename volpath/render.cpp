@@ -1312,7 +1312,7 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
                        key_hi = static_cast<std::uint32_t>(key >> 32);
             const auto per_hero = static_cast<std::uint32_t>(samples / 3);
             std::array<double, 2 * kSobolPairs> prefix{};
-            std::array<std::uint32_t, kSobolPairs> pair_seed{};
+            std::array<ScrambledSobol2D, kSobolPairs> pairs;  // per pixel and hero
             for (std::size_t i = 0; i < pixels; ++i) {
                 const int x = static_cast<int>(i % static_cast<std::size_t>(R.width));
                 const int y = static_cast<int>(i / static_cast<std::size_t>(R.width));
@@ -1322,11 +1322,11 @@ RenderResult render(const Scene& scene, const RenderOptions& o) {
                         hash32(hash32(static_cast<std::uint32_t>(i) ^ key_lo) +
                                static_cast<std::uint32_t>(h) * 0x9e3779b9u + key_hi);
                     for (int j = 0; j < kSobolPairs; ++j)
-                        pair_seed[static_cast<std::size_t>(j)] =
-                            hash32(ph ^ (static_cast<std::uint32_t>(j) * 0x85ebca6bu));
+                        pairs[static_cast<std::size_t>(j)] = ScrambledSobol2D(
+                            hash32(ph ^ (static_cast<std::uint32_t>(j) * 0x85ebca6bu)));
                     for (std::uint32_t q = 0; q < per_hero; ++q) {
                         for (std::size_t j = 0; j < kSobolPairs; ++j)
-                            scrambled_sobol_2d(q, pair_seed[j], prefix[2 * j], prefix[2 * j + 1]);
+                            pairs[j].at(q, prefix[2 * j], prefix[2 * j + 1]);
                         rng.set_prefix(prefix.data(), 2 * kSobolPairs);
                         rays += R.trace(x, y, hero, rng, tally + i * RenderLayout::kPerPixel);
                         rng.set_prefix(nullptr, 0);
