@@ -26,16 +26,34 @@ if [[ ! -f build/fuzz/CMakeCache.txt ]]; then
 fi
 cmake --build build/fuzz -j "$(nproc)" $(printf -- '--target fuzz_%s ' "${targets[@]}")
 
-failed=0
-for t in "${targets[@]}"; do
-  out="results/fuzz/$t"
+# The targets run side by side, as many at a time as there are cores (each fuzzer is one
+# process), each for the given seconds; their results are printed in order once all are done.
+run_target() {
+  local t="$1" out="results/fuzz/$1"
   mkdir -p "$out/corpus"
-  echo "== fuzz_$t: $seconds s"
-  if ! ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  if ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp \
       "build/fuzz/fuzz/fuzz_$t" "$out/corpus" "fuzz/corpus/$t" \
       -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=1024 \
       -max_len=16384 -artifact_prefix="$out/" -print_final_stats=1 2> "$out/log.txt"; then
+    echo 0 > "$out/status"
+  else
+    echo 1 > "$out/status"
+  fi
+}
+cores=$(nproc)
+for t in "${targets[@]}"; do
+  rm -f "results/fuzz/$t/status"
+  while (( $(jobs -rp | wc -l) >= cores )); do wait -n || true; done
+  run_target "$t" &
+done
+wait
+
+failed=0
+for t in "${targets[@]}"; do
+  out="results/fuzz/$t"
+  echo "== fuzz_$t: $seconds s"
+  if [[ "$(cat "$out/status" 2>/dev/null)" != "0" ]]; then
     failed=1
     tail -60 "$out/log.txt"
     echo "fuzz_$t FAILED: the input is in $out/ (crash-*, timeout-*, oom-*)"
