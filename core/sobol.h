@@ -126,12 +126,8 @@ struct ScrambledSobol2D {
     }
 };
 
-/// Point `index` of the shuffled, Owen-scrambled 2D Sobol sequence of `seed` (ScrambledSobol2D).
-inline void scrambled_sobol_2d(std::uint32_t index, std::uint32_t seed, double& u, double& v) {
-    ScrambledSobol2D(seed).at(index, u, v);
-}
-
-/// scrambled_sobol_2d by its definition, step by step (for the test that the two agree).
+/// Point `index` of ScrambledSobol2D(seed) by its definition, step by step (for the test that
+/// the two agree).
 inline void scrambled_sobol_2d_reference(std::uint32_t index, std::uint32_t seed, double& u,
                                          double& v) {
     std::uint32_t x = 0, y = 0;
