@@ -56,6 +56,16 @@ LayeredImage read_image(const std::string& path) {
         in->close();
         return read_exr(path);  // every layer, the standard errors and the metadata
     }
+    // A file of several images (a multi-page TIFF, an animated GIF) is
+    // refused: which of them a comparison should read is not ours to guess.
+    if (in->seek_subimage(1, 0)) {
+        int n = 2;
+        while (n < 1000 && in->seek_subimage(n, 0)) ++n;
+        return fail("a " + format + " file of " + (n < 1000 ? std::to_string(n) : "1000 or more") +
+                    " images (subimages); ssslab reads a file of one image: save the one to use "
+                    "as a file of its own");
+    }
+    if (!in->seek_subimage(0, 0)) return fail("cannot read its first image: " + in->geterror());
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1)
         return fail("a " + format + " image of " + std::to_string(spec.width) + " x " +

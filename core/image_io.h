@@ -21,9 +21,11 @@ std::string encode_png_rgb8(int width, int height, const std::vector<unsigned ch
 /// names (R, G, B, ...; an alpha channel beside three colours goes to a layer "alpha"), as
 /// float, linear: integer pixels are decoded by the transfer function the file declares (sRGB:
 /// PNG, JPEG and files that declare none; Rec. 709: PNM; alpha as stored); float formats (HDR,
-/// float TIFF) are taken as linear. The first subimage, level 0. Metadata "ssslab.format" (the
+/// float TIFF) are taken as linear. Level 0 of a file of one image: a file of several (subimages:
+/// a multi-page TIFF, an animated GIF) is refused. Metadata "ssslab.format" (the
 /// reader's name) and "ssslab.decoding" (how the values became linear). Throws InputError naming
-/// the file for a missing or unreadable file or one OpenImageIO cannot read.
+/// the file for a missing or unreadable file, one OpenImageIO cannot read or one of several
+/// images.
 LayeredImage read_image(const std::string& path);
 
 }  // namespace ssslab

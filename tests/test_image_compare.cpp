@@ -11,6 +11,7 @@
 #include "core/stats.h"
 #include "testing.h"
 
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -434,6 +435,49 @@ TEST(ImageIo, WhatIsNotAnImageIsRefusedNamingTheFile) {
             EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
         }
     }
+}
+
+// A TIFF of `pages` float RGB images of 3 x 2 pixels, page k all k + 1, written by OpenImageIO's
+// own TIFF writer.
+void write_tiff_pages(const std::string& path, int pages) {
+    std::vector<OIIO::ImageSpec> specs(static_cast<size_t>(pages),
+                                       OIIO::ImageSpec(3, 2, 3, OIIO::TypeDesc::FLOAT));
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    ASSERT_TRUE(out->open(path, pages, specs.data())) << out->geterror();
+    for (int k = 0; k < pages; ++k) {
+        if (k > 0) {
+            ASSERT_TRUE(out->open(path, specs[0], OIIO::ImageOutput::AppendSubimage));
+        }
+        const std::vector<float> px(18, static_cast<float>(k + 1));
+        ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data())) << out->geterror();
+    }
+    ASSERT_TRUE(out->close());
+}
+
+TEST(ImageIo, AFileOfSeveralImagesIsRefusedNotReadAsItsFirst) {
+    testing::TempDir dir;
+    const std::string one = (dir / "one.tif").string(), three = (dir / "three.tif").string();
+    write_tiff_pages(one, 1);
+    write_tiff_pages(three, 3);
+    // One page: read, its pixels as written.
+    const LayeredImage img = read_image(one);
+    ASSERT_EQ(img.width(), 3);
+    EXPECT_EQ(img.layer("").at(2, 1, 2), 1.0f);
+    // Three pages: refused, naming the file and how many images it holds.
+    try {
+        read_image(three);
+        ADD_FAILURE() << "a three-page TIFF was read";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("three.tif"), std::string::npos) << what;
+        EXPECT_NE(what.find("3 images"), std::string::npos) << what;
+    }
+    // On the command line: exit 2, the file named.
+    const auto r = testing::run_ssslab(
+        {"compare", "--a", "three.tif", "one.tif", "--b", "one.tif", "one.tif"}, dir.path());
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find("three.tif"), std::string::npos) << r.err;
 }
 
 TEST(CompareCommand, ComparesRunsOfAnyFormatOpenImageIoReads) {

@@ -286,8 +286,6 @@ TEST(Lights, VonMisesFisherDirectionsFollowTheirDensity) {
         const double p = chi_square_p(chi2, dof);
         EXPECT_GT(p, alpha) << "chi2 " << chi2 << " over " << dof;
         std::printf("  [measured] kappa %g: chi2 %.1f / %d, p %.3f\n", kappa, chi2, dof, p);
-        // The inverse of the sampler's first number.
-        EXPECT_NEAR(vmf_cdf(kappa, std::cos(t_max / 2)), 1 - mass(0, t_max / 2), 1e-6);
     }
 }
 

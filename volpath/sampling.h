@@ -68,12 +68,6 @@ inline double vmf_pdf(const Vec3& mu, double kappa, const Vec3& w) {
     return kappa * std::exp(kappa * (dot(w, mu) - 1.0)) / (2.0 * kPi * -std::expm1(-2.0 * kappa));
 }
 
-/// The probability that a von Mises-Fisher direction has a cosine to its axis below c (the
-/// inverse of sample_vmf's first number).
-inline double vmf_cdf(double kappa, double c) {
-    return 1.0 - std::expm1(kappa * (c - 1.0)) / std::expm1(-2.0 * kappa);
-}
-
 /// A direction with density vmf_pdf(mu, kappa, .) for uniform u1, u2: the cosine by the inverse
 /// of its distribution, cos = 1 + ln(u1 + (1 - u1) exp(-2 kappa)) / kappa, the azimuth 2 pi u2.
 inline Vec3 sample_vmf(const Vec3& mu, double kappa, double u1, double u2) {
