@@ -167,6 +167,144 @@ std::optional<std::string> batch_checkpoint_fingerprint(const std::string& path)
     });
 }
 
+namespace {
+
+// One batch in flight: its index, samples, the work it reported and its tally.
+struct BatchWork {
+    std::uint64_t index = 0, work = 0;
+    std::int64_t samples = 0;
+    std::vector<double> tally;
+};
+
+// Rank 0 of a distributed run (core/distributed.h): batches arrive out of order (its own
+// through the pipeline, the others' as kBatch messages) and wait in `pending_` until every
+// batch before them is folded. Only the pipeline's last (serial) stage and the code after the
+// pipeline call it, so it needs no lock.
+class InOrderFolds {
+  public:
+    InOrderFolds(std::size_t tally_size, int ranks)
+        : tally_size_(tally_size), ranks_(ranks), done_(static_cast<std::size_t>(ranks), 0) {}
+
+    int owner(std::uint64_t index) const {
+        return static_cast<int>(index % static_cast<std::uint64_t>(ranks_));
+    }
+    // Whether a worker stopped (interrupted) before sending a batch rank 0 needs.
+    bool lost() const { return lost_; }
+    // Rank 0's own batch w, simulated: it waits for its turn.
+    void hold(BatchWork* w) { pending_[w->index] = w; }
+
+    // Folds (fold(w)) every batch that is next in order, then gives it back (own: free_own(w));
+    // waits for the others' batches while rank 0 needs one. Returns when the next batch is rank
+    // 0's own, the run is over (stop or max_batches), or a worker has stopped without it.
+    template <class Fold, class Free>
+    void fold_in_order(const BatchAccumulator& acc, std::uint64_t max_batches,
+                       const std::atomic<bool>& stop, Fold&& fold, Free&& free_own) {
+        while (!stop.load(std::memory_order_relaxed) && !lost_) {
+            const std::uint64_t k = acc.batches();
+            if (auto it = pending_.find(k); it != pending_.end()) {
+                BatchWork* w = it->second;
+                pending_.erase(it);
+                fold(w);
+                release(w, free_own);
+                continue;
+            }
+            if (k >= max_batches || owner(k) == 0) return;
+            if (done_[static_cast<std::size_t>(owner(k))]) {
+                lost_ = true;
+                return;
+            }
+            receive_one(acc);
+        }
+    }
+
+    // After the pipeline: tells the workers to stop, waits for every one's kDone and gives
+    // back what is still pending (batches past the stop).
+    template <class Free>
+    void finish(const BatchAccumulator& acc, Free&& free_own) {
+        for (int r = 1; r < ranks_; ++r) dist::notify(r, kStop);
+        while (std::count(done_.begin() + 1, done_.end(), 1) < ranks_ - 1) receive_one(acc);
+        dist::complete_notifications();
+        for (auto& [index, w] : pending_) release(w, free_own);
+        pending_.clear();
+    }
+
+  private:
+    template <class Free>
+    void release(BatchWork* w, Free& free_own) {
+        if (owner(w->index) != 0)
+            received_free_.push_back(w);
+        else
+            free_own(w);
+    }
+
+    // One message from a worker: a batch (into pending_) or its kDone.
+    void receive_one(const BatchAccumulator& acc) {
+        dist::Message m = dist::receive();
+        if (m.tag == kDone) {
+            done_[static_cast<std::size_t>(m.source)] = 1;
+            return;
+        }
+        if (m.tag != kBatch || m.bytes.size() != kBatchHeader + tally_size_ * sizeof(double))
+            throw std::runtime_error("MPI: an unexpected message from rank " +
+                                     std::to_string(m.source));
+        BatchWork* w = nullptr;
+        if (received_free_.empty()) {
+            received_pool_.push_back(std::make_unique<BatchWork>());
+            w = received_pool_.back().get();
+            w->tally.resize(tally_size_);
+        } else {
+            w = received_free_.back();
+            received_free_.pop_back();
+        }
+        std::uint64_t h[3];
+        static_assert(sizeof h == kBatchHeader);
+        std::memcpy(h, m.bytes.data(), kBatchHeader);
+        w->index = h[0];
+        w->samples = static_cast<std::int64_t>(h[1]);
+        w->work = h[2];
+        std::memcpy(w->tally.data(), m.bytes.data() + kBatchHeader, tally_size_ * sizeof(double));
+        if (owner(w->index) == 0 || w->index < acc.batches() || pending_.count(w->index))
+            throw std::runtime_error("MPI: batch " + std::to_string(w->index) + " came from rank " +
+                                     std::to_string(m.source));
+        pending_[w->index] = w;
+    }
+
+    std::size_t tally_size_;
+    int ranks_;
+    std::map<std::uint64_t, BatchWork*> pending_;
+    std::vector<std::unique_ptr<BatchWork>> received_pool_;  // Works of received batches
+    std::vector<BatchWork*> received_free_;
+    std::vector<char> done_;  // per rank: its kDone arrived
+    bool lost_ = false;
+};
+
+// A worker rank of a distributed run: sends each batch to rank 0 in order and looks for rank
+// 0's kStop after each.
+struct BatchSender {
+    bool stop_received = false;
+
+    // Sends w; sets `stop` once rank 0 has said so.
+    void send(const BatchWork& w, std::size_t tally_size, std::atomic<bool>& stop) {
+        std::vector<char> msg(kBatchHeader + tally_size * sizeof(double));
+        const std::uint64_t h[3] = {w.index, static_cast<std::uint64_t>(w.samples), w.work};
+        std::memcpy(msg.data(), h, kBatchHeader);
+        std::memcpy(msg.data() + kBatchHeader, w.tally.data(), tally_size * sizeof(double));
+        dist::send(0, kBatch, msg.data(), msg.size());
+        if (!stop_received && dist::poll(0, kStop)) {
+            dist::receive(0);
+            stop_received = true;
+            stop = true;
+        }
+    }
+    // After the pipeline: kDone, then (unless it came already) rank 0's kStop.
+    void finish() {
+        dist::send(0, kDone, nullptr, 0);
+        if (!stop_received) dist::receive(0);
+    }
+};
+
+}  // namespace
+
 InputError checkpoint_refusal(const std::string& path, const std::string& before,
                               const std::string& now) {
     std::string what = key_difference(before, now);
@@ -226,11 +364,7 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
         }
     }
 
-    struct Work {
-        std::uint64_t index = 0, work = 0;
-        std::int64_t samples = 0;
-        std::vector<double> tally;
-    };
+    using Work = BatchWork;
     const size_t tokens = static_cast<size_t>(2 * res.threads);
     std::vector<std::unique_ptr<Work>> pool;
     tbb::concurrent_queue<Work*> free_list;
@@ -322,87 +456,11 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
     };
     auto cancelled = [&] { return opt.cancel && opt.cancel->load(std::memory_order_relaxed); };
 
-    // Rank 0 of a distributed run: batches arrive out of order (its own through the pipeline,
-    // the others' as messages) and wait in `pending` until every batch before them is folded.
-    // Only the pipeline's last (serial) stage and the code after the pipeline touch these.
-    std::map<std::uint64_t, Work*> pending;
-    std::vector<std::unique_ptr<Work>> received_pool;  // Works of received batches
-    std::vector<Work*> received_free;
-    std::vector<char> done(static_cast<size_t>(ranks), 0);
-    bool lost = false;  // a worker stopped (interrupted) before sending a batch rank 0 needs
-    auto is_received = [&](Work* w) { return owner(w->index) != rank; };
-    auto release = [&](Work* w) {
-        if (is_received(w))
-            received_free.push_back(w);
-        else
-            free_list.push(w);
-    };
-    auto receive_one = [&] {
-        dist::Message m = dist::receive();
-        if (m.tag == kDone) {
-            done[static_cast<size_t>(m.source)] = 1;
-            return;
-        }
-        if (m.tag != kBatch || m.bytes.size() != kBatchHeader + opt.tally_size * sizeof(double))
-            throw std::runtime_error("MPI: an unexpected message from rank " +
-                                     std::to_string(m.source));
-        Work* w = nullptr;
-        if (received_free.empty()) {
-            received_pool.push_back(std::make_unique<Work>());
-            w = received_pool.back().get();
-            w->tally.resize(opt.tally_size);
-        } else {
-            w = received_free.back();
-            received_free.pop_back();
-        }
-        std::uint64_t h[3];
-        static_assert(sizeof h == kBatchHeader);
-        std::memcpy(h, m.bytes.data(), kBatchHeader);
-        w->index = h[0];
-        w->samples = static_cast<std::int64_t>(h[1]);
-        w->work = h[2];
-        std::memcpy(w->tally.data(), m.bytes.data() + kBatchHeader,
-                    opt.tally_size * sizeof(double));
-        if (owner(w->index) == 0 || w->index < acc.batches() || pending.count(w->index))
-            throw std::runtime_error("MPI: batch " + std::to_string(w->index) + " came from rank " +
-                                     std::to_string(m.source));
-        pending[w->index] = w;
-    };
-    // Fold every batch that is next in order; wait for others' batches while rank 0 needs one
-    // (its own come through the pipeline). Returns when the next batch is rank 0's own, the run
-    // is over, or a worker has stopped without it.
+    InOrderFolds in_order(opt.tally_size, ranks);  // rank 0 of a distributed run
+    BatchSender sender;                            // a worker rank
+    auto free_own = [&](Work* w) { free_list.push(w); };
     auto fold_in_order = [&] {
-        while (!stop_flag.load(std::memory_order_relaxed) && !lost) {
-            const std::uint64_t k = acc.batches();
-            if (auto it = pending.find(k); it != pending.end()) {
-                Work* w = it->second;
-                pending.erase(it);
-                fold(w);
-                release(w);
-                continue;
-            }
-            if (k >= max_batches || owner(k) == rank) return;
-            if (done[static_cast<size_t>(owner(k))]) {
-                lost = true;
-                return;
-            }
-            receive_one();
-        }
-    };
-
-    // Worker ranks: send each batch to rank 0 in order; look for rank 0's "stop" after each.
-    bool stop_received = false;
-    auto send_batch = [&](Work* w) {
-        std::vector<char> msg(kBatchHeader + opt.tally_size * sizeof(double));
-        const std::uint64_t h[3] = {w->index, static_cast<std::uint64_t>(w->samples), w->work};
-        std::memcpy(msg.data(), h, kBatchHeader);
-        std::memcpy(msg.data() + kBatchHeader, w->tally.data(), opt.tally_size * sizeof(double));
-        dist::send(0, kBatch, msg.data(), msg.size());
-        if (!stop_received && dist::poll(0, kStop)) {
-            dist::receive(0);
-            stop_received = true;
-            stop_flag = true;
-        }
+        in_order.fold_in_order(acc, max_batches, stop_flag, fold, free_own);
     };
 
     const std::uint64_t stride = static_cast<std::uint64_t>(ranks);
@@ -439,12 +497,12 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
                         fold(w);
                         free_list.push(w);
                     } else if (!root) {
-                        if (!stop_received) send_batch(w);
+                        if (!sender.stop_received) sender.send(*w, opt.tally_size, stop_flag);
                         free_list.push(w);
-                    } else if (stop_flag.load(std::memory_order_relaxed) || lost) {
+                    } else if (stop_flag.load(std::memory_order_relaxed) || in_order.lost()) {
                         free_list.push(w);
                     } else {
-                        pending[w->index] = w;
+                        in_order.hold(w);
                         fold_in_order();
                     }
                 }));
@@ -458,17 +516,12 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
 
     if (distributed && root) {
         // Rank 0's own batches are done; the others' may still be on their way.
-        while (!stop_flag && !lost && !cancelled() && acc.batches() < max_batches &&
+        while (!stop_flag && !in_order.lost() && !cancelled() && acc.batches() < max_batches &&
                owner(acc.batches()) != rank)
             fold_in_order();
-        for (int r = 1; r < ranks; ++r) dist::notify(r, kStop);
-        while (std::count(done.begin() + 1, done.end(), 1) < ranks - 1) receive_one();
-        dist::complete_notifications();
-        for (auto& [index, w] : pending) release(w);
-        pending.clear();
+        in_order.finish(acc, free_own);
     } else if (distributed) {
-        dist::send(0, kDone, nullptr, 0);
-        if (!stop_received) dist::receive(0);  // rank 0's kStop
+        sender.finish();
     }
 
     if (!distributed || root) {
