@@ -169,6 +169,11 @@ std::optional<std::string> batch_checkpoint_fingerprint(const std::string& path)
 
 namespace {
 
+// The rank that simulates batch `index` of a run over `ranks` ranks: batches are dealt in turn.
+int batch_owner(std::uint64_t index, int ranks) {
+    return static_cast<int>(index % static_cast<std::uint64_t>(ranks));
+}
+
 // One batch in flight: its index, samples, the work it reported and its tally.
 struct BatchWork {
     std::uint64_t index = 0, work = 0;
@@ -185,9 +190,7 @@ class InOrderFolds {
     InOrderFolds(std::size_t tally_size, int ranks)
         : tally_size_(tally_size), ranks_(ranks), done_(static_cast<std::size_t>(ranks), 0) {}
 
-    int owner(std::uint64_t index) const {
-        return static_cast<int>(index % static_cast<std::uint64_t>(ranks_));
-    }
+    int owner(std::uint64_t index) const { return batch_owner(index, ranks_); }
     // Whether a worker stopped (interrupted) before sending a batch rank 0 needs.
     bool lost() const { return lost_; }
     // Rank 0's own batch w, simulated: it waits for its turn.
@@ -337,9 +340,7 @@ BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simu
     const bool distributed = dist::active();
     const int rank = dist::rank(), ranks = dist::size();
     const bool root = rank == 0;
-    auto owner = [&](std::uint64_t index) {
-        return static_cast<int>(index % static_cast<std::uint64_t>(ranks));
-    };
+    auto owner = [&](std::uint64_t index) { return batch_owner(index, ranks); };
 
     BatchAccumulator acc(opt.tally_size);
     double resumed_seconds = 0.0;
