@@ -513,6 +513,20 @@ void ConfigTable::record(std::string_view key, std::int64_t value) {
 void ConfigTable::record(std::string_view key, const std::string& value) {
     resolved_->insert_or_assign(key, value);
 }
+void ConfigTable::record(std::string_view key, const std::vector<double>& values) {
+    toml::array arr;
+    for (double v : values) arr.push_back(v);
+    resolved_->insert_or_assign(key, std::move(arr));
+}
+void ConfigTable::record(std::string_view key, const std::vector<std::vector<double>>& rows) {
+    toml::array arr;
+    for (const auto& row : rows) {
+        toml::array r;
+        for (double v : row) r.push_back(v);
+        arr.push_back(std::move(r));
+    }
+    resolved_->insert_or_assign(key, std::move(arr));
+}
 
 namespace {
 

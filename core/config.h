@@ -118,6 +118,9 @@ class ConfigTable {
     void record(std::string_view key, double value);
     void record(std::string_view key, std::int64_t value);
     void record(std::string_view key, const std::string& value);
+    /// ... an array of numbers (an RGB triple), or of such arrays (one per layer).
+    void record(std::string_view key, const std::vector<double>& values);
+    void record(std::string_view key, const std::vector<std::vector<double>>& rows);
 
   private:
     friend class ConfigDocument;

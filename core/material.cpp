@@ -242,4 +242,28 @@ void add_to_key(ContentKey& k, const std::string& prefix, const Medium& m) {
     }
 }
 
+void record_simulated(ConfigTable& t, const Medium& m) {
+    auto rgb = [](const std::array<double, 3>& v) {
+        return std::vector<double>(v.begin(), v.end());
+    };
+    if (!m.name.empty()) t.record("name", m.name);
+    std::vector<std::vector<double>> sa, ss, g;
+    std::vector<double> eta, thickness;
+    for (const MediumLayer& l : m.layers()) {
+        sa.push_back(rgb(l.sigma_a_per_cm));
+        ss.push_back(rgb(l.sigma_s_per_cm));
+        g.push_back(rgb(l.g));
+        eta.push_back(l.eta);
+        thickness.push_back(l.thickness_cm);
+    }
+    t.record("sigma_a_per_cm", sa);
+    t.record("sigma_s_per_cm", ss);
+    t.record("g", g);
+    t.record("eta", eta);
+    t.record("thickness_cm", thickness);
+    t.record("eta_above", m.eta_above);
+    t.record("eta_below", m.eta_below);
+    t.record("boundary", std::string("smooth dielectric (Fresnel) at every interface"));
+}
+
 }  // namespace ssslab

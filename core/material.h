@@ -120,6 +120,12 @@ std::optional<double> optional_length_cm(ConfigTable& t, const std::string& base
 /// quasi-infinite).
 Medium medium_from_config(ConfigTable& t);
 
+/// Records into `t` the medium as simulated, whatever it was read from (a preset by name, explicit
+/// coefficients, layers): per layer, top first, sigma_a_per_cm, sigma_s_per_cm, g (RGB), eta and
+/// thickness_cm, and the ambient indices eta_above and eta_below (the boundary both engines
+/// simulate: smooth Fresnel interfaces between them and the layers).
+void record_simulated(ConfigTable& t, const Medium& m);
+
 /// Only the coefficients and index of a medium from a config table (a preset or explicit
 /// coefficients as above, no thickness or ambient indices): for media bound to scene shapes.
 Medium medium_coefficients_from_config(ConfigTable& t);

@@ -38,34 +38,6 @@ void read_camera(ConfigTable& t, SceneCamera& c) {
         t.fail("up", "the up vector is parallel to the viewing direction");
 }
 
-SceneLight read_light(ConfigTable& t) {
-    SceneLight l;
-    l.where = t.location("type");
-    const std::string type =
-        required_choice(t, "type", {"directional", "point", "sphere", "environment"});
-    if (type == "directional") {
-        l.type = LightType::kDirectional;
-        const Vec3 d = t.vec3("direction");
-        if (!(length(d) > 0)) t.fail("direction", "the direction towards the light is zero");
-        l.direction = normalize(d);
-        l.color = t.rgb("irradiance", Range::nonnegative());
-        l.angular_radius_deg = t.number("angular_radius_deg", 0.0, Range::right_open(0, 90));
-    } else if (type == "point") {
-        l.type = LightType::kPoint;
-        l.position = t.vec3("position");
-        l.color = t.rgb("intensity", Range::nonnegative());
-    } else if (type == "sphere") {
-        l.type = LightType::kSphere;
-        l.position = t.vec3("position");
-        l.radius = t.number("radius", Range::positive());
-        l.color = t.rgb("radiance", Range::nonnegative());
-    } else {
-        l.type = LightType::kEnvironment;
-        l.color = t.rgb("radiance", Range::nonnegative());
-    }
-    return l;
-}
-
 SceneMaterial read_material(ConfigTable& t, const std::string& base_dir) {
     SceneMaterial m;
     m.where = t.location("name");
@@ -256,20 +228,6 @@ Scene parse(std::shared_ptr<ConfigDocument> doc, const std::string& path,
 
 }  // namespace
 
-const char* to_string(LightType t) {
-    switch (t) {
-        case LightType::kDirectional:
-            return "directional";
-        case LightType::kPoint:
-            return "point";
-        case LightType::kSphere:
-            return "sphere";
-        case LightType::kEnvironment:
-            return "environment";
-    }
-    return "?";
-}
-
 std::size_t Scene::triangles() const {
     std::size_t n = 0;
     for (const SceneShape& sh : shapes) n += sh.mesh.triangles.size();
@@ -296,9 +254,7 @@ bool Scene::delta_light_through_smooth_boundary() const {
     }
     if (!smooth_medium) return false;
     for (const SceneLight& l : lights)
-        if (l.type == LightType::kPoint ||
-            (l.type == LightType::kDirectional && l.angular_radius_deg == 0))
-            return true;
+        if (Light(l).is_delta()) return true;
     return false;
 }
 
@@ -311,13 +267,7 @@ void add_to_key(ContentKey& k, const Scene& s) {
         .add("camera.width", s.camera.width)
         .add("camera.height", s.camera.height);
     for (std::size_t i = 0; i < s.lights.size(); ++i) {
-        const SceneLight& l = s.lights[i];
-        const std::string p = "lights[" + std::to_string(i) + "].";
-        k.add(p + "type", to_string(l.type)).add(p + "color", l.color);
-        k.add(p + "direction", l.direction);
-        k.add(p + "angular_radius_deg", l.angular_radius_deg);
-        k.add(p + "position", l.position);
-        k.add(p + "radius", l.radius);
+        add_to_key(k, "lights[" + std::to_string(i) + "].", s.lights[i]);
     }
     for (std::size_t i = 0; i < s.materials.size(); ++i) {
         const SceneMaterial& m = s.materials[i];
@@ -379,9 +329,7 @@ std::string describe(const Scene& s) {
                   c.fov_y_deg, c.width, c.height);
     out += buf;
     for (const SceneLight& l : s.lights) {
-        std::snprintf(buf, sizeof buf, "  light %s (%g, %g, %g)\n", to_string(l.type), l.color[0],
-                      l.color[1], l.color[2]);
-        out += buf;
+        out += "  light " + describe(l) + "\n";
     }
     for (const SceneMaterial& m : s.materials) {
         if (m.kind == SceneMaterial::Kind::kMedium)

@@ -10,7 +10,9 @@
 //   [camera]     position, target, up ([0, 1, 0]), fov_y_deg, width, height
 //   [[lights]]   type = "directional" (direction towards the light, irradiance [RGB],
 //                angular_radius_deg = 0), "point" (position, intensity [RGB]), "sphere"
-//                (position, radius, radiance [RGB]) or "environment" (radiance [RGB]);
+//                (position, radius, radiance [RGB]), "environment" (radiance [RGB]) or "spot"
+//                (position, direction it points in, intensity [RGB] on its axis,
+//                inner_cone_angle_deg = 0, outer_cone_angle_deg = 45: KHR_lights_punctual);
 //                relative linear RGB units (irradiance per unit area, intensity per steradian)
 //   [[materials]] name; type = "medium" (a Freude14 preset or sigma_a/sigma_s per mm or per cm,
 //                g, eta: the keys of a [material] table; roughness = GGX alpha of the boundary,
@@ -25,6 +27,7 @@
 
 #include "core/error.h"
 #include "core/hash.h"
+#include "core/light.h"
 #include "core/material.h"
 #include "core/mesh.h"
 #include "core/vec3.h"
@@ -45,28 +48,11 @@ struct SceneCamera {
     int width = 512, height = 512;
 };
 
-enum class LightType { kDirectional, kPoint, kSphere, kEnvironment };
-const char* to_string(LightType t);
-
-struct SceneLight {
-    LightType type = LightType::kDirectional;
-    /// Directional: irradiance on a surface facing the light; point: intensity [per sr];
-    /// sphere and environment: radiance. Linear RGB, relative units.
-    std::array<double, 3> color{};
-    Vec3 direction{0, 0, 1};        ///< directional: unit vector towards the light
-    double angular_radius_deg = 0;  ///< directional: 0 is a delta light
-    Vec3 position{};                ///< point, sphere [world units]
-    double radius = 0;              ///< sphere [world units]
-    SourceLocation where;
-
-    /// A directional light of angular radius a > 0 is a disc: cos(a), the cosine of its rim...
-    double disc_cos_max() const { return std::cos(angular_radius_deg * std::numbers::pi / 180); }
-    /// ... and pi sin^2(a), the cosine-weighted solid angle of the disc seen face-on: its
-    /// radiance is the irradiance `color` over this (both renderers).
-    double disc_projected_solid_angle() const {
-        const double a = angular_radius_deg * std::numbers::pi / 180;
-        return std::numbers::pi * std::sin(a) * std::sin(a);
-    }
+/// A medium's boundary as every engine resolves it: the relative index of refraction and the GGX
+/// alpha of the interface (0 where the index matches: nothing to be rough about).
+struct SurfaceBoundary {
+    double eta = 1;
+    double alpha = 0;
 };
 
 struct SceneMaterial {
@@ -84,6 +70,9 @@ struct SceneMaterial {
     std::string density_file, density_grid = "density";
     std::array<double, 3> albedo{};  ///< kDiffuse
     SourceLocation where;
+
+    /// kMedium: the boundary the engines render (path tracer, CPU lighting, GL twin).
+    SurfaceBoundary boundary() const { return {medium.eta, medium.eta == 1.0 ? 0.0 : roughness}; }
 };
 
 struct SceneShape {

@@ -122,6 +122,18 @@ const char* to_string(SssMethod m) {
     return "?";
 }
 
+std::string sss_kernel_name(SssMethod m, const std::string& model_spec) {
+    switch (m) {
+        case SssMethod::kSeparable:
+            return model_spec;
+        case SssMethod::kReference:
+            return "reference:2d";
+        case SssMethod::kNone:
+            return "none";
+    }
+    return "?";
+}
+
 FrameMaterial make_frame_material(const RadialProfile& profile, const approx::ModelSpec& model,
                                   int taps, bool exact) {
     if (model.name == "manual" && model.flag("fit"))

@@ -72,6 +72,10 @@ enum class SssMethod {
     kNone,       ///< no SSS pass: subsurface = exit_weight (albedo E + translucency)
 };
 const char* to_string(SssMethod m);
+/// The kernel a frame's SSS pass applied, as outputs name it: the model's spec for the separable
+/// pass, "reference:2d" (the material's exact 2D kernel, the name Table 6.4's rows give it) for
+/// the reference, "none" without a pass.
+std::string sss_kernel_name(SssMethod m, const std::string& model_spec);
 
 /// The raster options of a frame: RasterOptions' defaults without barycentrics and fragment
 /// counts, which no pass of a frame reads.

@@ -37,24 +37,6 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 using RGB = std::array<double, 3>;
 
-// Fibonacci lattice point i of n: (i + 1/2) / n and the fractional golden-ratio turn.
-double fib_u(int i, int n) {
-    return (i + 0.5) / n;
-}
-double fib_v(int i) {
-    const double g = 0.5 * (std::sqrt(5.0) - 1);  // 1 / golden ratio
-    const double x = i * g;
-    return x - std::floor(x);
-}
-
-// Direction at cosine c to axis and azimuth 2 pi v.
-Vec3 around(const Vec3& axis, double c, double v) {
-    Vec3 s, t;
-    basis(axis, s, t);
-    const double sn = std::sqrt(std::max(0.0, 1 - c * c)), phi = 2 * kPi * v;
-    return normalize(s * (sn * std::cos(phi)) + t * (sn * std::sin(phi)) + axis * c);
-}
-
 enum class Kind : std::uint8_t { kNone, kDiffuse, kMedium };
 
 struct Receiver {
@@ -78,7 +60,7 @@ bool incident_light(const LightSample& s, const Vec3& p, Vec3& wi, RGB& E) {
     if (!(d2 > 0)) return false;
     wi = d * (1 / std::sqrt(d2));
     double k = 1 / d2;
-    if (s.lobe) k *= std::max(0.0, -dot(s.lobe_n, wi));
+    if (s.lobe) k *= s.factor(wi);
     if (!(k > 0)) return false;
     for (std::size_t c = 0; c < 3; ++c) E[c] = s.value[c] * k;
     return true;
@@ -87,21 +69,20 @@ bool incident_light(const LightSample& s, const Vec3& p, Vec3& wi, RGB& E) {
 // Sphere lights are not in the shadow maps (as they are not in volpath's BVH), but they occlude
 // what lies behind them: whether one of `spheres` (indices into scene.lights) other than the
 // sample's own lies between p and the sample along wi.
-bool behind_sphere(const Scene& scene, const std::vector<int>& spheres, const LightSample& s,
-                   const Vec3& p, const Vec3& wi) {
+bool behind_sphere(const std::vector<Light>& lights, const std::vector<int>& spheres,
+                   const LightSample& s, const Vec3& p, const Vec3& wi) {
     const double dist = s.directional ? kInf : length(s.pos - p);
     for (int k : spheres) {
         if (k == s.light) continue;
-        const SceneLight& l = scene.lights[static_cast<std::size_t>(k)];
-        if (ray_sphere_hit(p, wi, l.position, l.radius) < dist) return true;
+        if (lights[static_cast<std::size_t>(k)].hit(p, wi) < dist) return true;
     }
     return false;
 }
 
-std::vector<int> sphere_lights(const Scene& scene) {
+std::vector<int> sphere_lights(const std::vector<Light>& lights) {
     std::vector<int> spheres;
-    for (std::size_t k = 0; k < scene.lights.size(); ++k)
-        if (scene.lights[k].type == LightType::kSphere) spheres.push_back(static_cast<int>(k));
+    for (std::size_t k = 0; k < lights.size(); ++k)
+        if (lights[k].has_surface()) spheres.push_back(static_cast<int>(k));
     return spheres;
 }
 
@@ -114,7 +95,7 @@ std::vector<const BoundaryTransmittance*> boundary_tables(const Scene& scene,
     for (std::size_t m = 0; m < scene.materials.size(); ++m) {
         const SceneMaterial& sm = scene.materials[m];
         if (sm.kind != SceneMaterial::Kind::kMedium) continue;
-        const double eta = sm.medium.eta, alpha = eta == 1.0 ? 0.0 : sm.roughness;
+        const auto [eta, alpha] = sm.boundary();
         mat_T[m] =
             &tabulated_boundary(eta, alpha, o.transmittance_cosines, o.transmittance_quadrature);
     }
@@ -403,111 +384,30 @@ LightPlan plan_lights(const Scene& scene, const Box& receivers, const LightingOp
         casters.empty() ? 1.0 : std::max(1e-300, length(casters.hi - casters.lo));
     plan.near = 1e-6 * scene_size;
 
-    // Light samples, in scene order.
+    // Light samples, in scene order: each light's stratified emitters (core/light.h), and the
+    // first light's single view for the thickness layer (the emitter itself for a delta light).
     std::vector<LightSample>& samples = plan.samples;
+    for (const SceneLight& sl : scene.lights) plan.lights.emplace_back(sl);
     bool thickness_taken = false;
-    for (const SceneLight& l : scene.lights) {
-        const std::size_t first_sample = samples.size();
-        const bool first =
-            o.thickness_layer && !thickness_taken && l.type != LightType::kEnvironment;
+    for (std::size_t li = 0; li < plan.lights.size(); ++li) {
+        const Light& l = plan.lights[li];
+        LightEmitter centre;
+        const bool has_centre = l.centre(centre);
+        const bool first = o.thickness_layer && !thickness_taken && has_centre;
         thickness_taken = thickness_taken || first;
-        switch (l.type) {
-            case LightType::kDirectional: {
-                const Vec3 axis = normalize(l.direction);
-                if (l.angular_radius_deg <= 0) {
-                    LightSample s;
-                    s.w = axis;
-                    s.value = l.color;
-                    s.thickness_view = first;
-                    samples.push_back(s);
-                    break;
-                }
-                const double cos_max = l.disc_cos_max();
-                const double L_per = 1.0 / l.disc_projected_solid_angle();
-                const double omega = 2 * kPi * (1 - cos_max);
-                const int n = o.light_samples;
-                for (int k = 0; k < n; ++k) {
-                    LightSample s;
-                    // Uniform in solid angle over the cone: cos theta uniform in [cos_max, 1].
-                    s.w = around(axis, 1 - fib_u(k, n) * (1 - cos_max), fib_v(k));
-                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * L_per * omega / n;
-                    samples.push_back(s);
-                }
-                if (first) {
-                    LightSample s;
-                    s.w = axis;
-                    s.thickness_view = true;
-                    s.lights = false;
-                    samples.push_back(s);
-                }
-                break;
-            }
-            case LightType::kPoint: {
-                LightSample s;
-                s.directional = false;
-                s.pos = l.position;
-                s.value = l.color;
-                s.thickness_view = first;
-                samples.push_back(s);
-                break;
-            }
-            case LightType::kSphere: {
-                if (receivers.empty()) break;
-                // The cap every receiver could see: around the axis towards the receivers' box,
-                // half-angle (largest angle of a box corner off the axis) + arccos(r / (largest
-                // corner distance)), the visible cap of the farthest point.
-                const Vec3 c0 = l.position;
-                const Vec3 centre = (receivers.lo + receivers.hi) * 0.5;
-                const Vec3 axis = length(centre - c0) > 0 ? normalize(centre - c0) : Vec3{0, 0, 1};
-                double ang = 0, dmax = 0;
-                for (const Vec3& c : receivers.corners()) {
-                    const Vec3 d = c - c0;
-                    const double len = length(d);
-                    dmax = std::max(dmax, len);
-                    if (len > 0)
-                        ang = std::max(ang, std::acos(std::clamp(dot(d, axis) / len, -1.0, 1.0)));
-                }
-                const double rim =
-                    std::acos(std::clamp(l.radius / std::max(dmax, 1e-300), 0.0, 1.0));
-                const double cap = std::min(kPi, ang + rim), cos_cap = std::cos(cap);
-                const double area = 2 * kPi * l.radius * l.radius * (1 - cos_cap);
-                const int n = o.light_samples;
-                for (int k = 0; k < n; ++k) {
-                    LightSample s;
-                    s.directional = false;
-                    s.lobe = true;
-                    s.lobe_n = around(axis, 1 - fib_u(k, n) * (1 - cos_cap), fib_v(k));
-                    s.pos = c0 + s.lobe_n * l.radius;
-                    // A patch of area A / n with radiance L: intensity L (A / n) cos towards w.
-                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * area / n;
-                    samples.push_back(s);
-                }
-                if (first) {
-                    LightSample s;
-                    s.directional = false;
-                    s.pos = c0;
-                    s.thickness_view = true;
-                    s.lights = false;
-                    samples.push_back(s);
-                }
-                break;
-            }
-            case LightType::kEnvironment: {
-                const int n = o.environment_samples;
-                for (int k = 0; k < n; ++k) {
-                    LightSample s;
-                    const double z = 1 - 2 * fib_u(k, n), rr = std::sqrt(std::max(0.0, 1 - z * z));
-                    const double phi = 2 * kPi * fib_v(k);
-                    s.w = {rr * std::cos(phi), rr * std::sin(phi), z};
-                    for (std::size_t c = 0; c < 3; ++c) s.value[c] = l.color[c] * 4 * kPi / n;
-                    s.environment = true;
-                    samples.push_back(s);
-                }
-                break;
-            }
-        }
-        for (std::size_t k = first_sample; k < samples.size(); ++k)
-            samples[k].light = static_cast<int>(&l - scene.lights.data());
+        const std::vector<LightEmitter> emitters =
+            l.stratify(o.light_samples, o.environment_samples, receivers.lo, receivers.hi);
+        auto push = [&](const LightEmitter& e, bool thickness, bool lights) {
+            LightSample s;
+            static_cast<LightEmitter&>(s) = e;
+            s.thickness_view = thickness;
+            s.lights = lights;
+            s.light = static_cast<int>(li);
+            samples.push_back(s);
+        };
+        const bool single = l.is_delta();
+        for (const LightEmitter& e : emitters) push(e, first && single, true);
+        if (first && !single && !emitters.empty()) push(centre, true, false);
     }
     return plan;
 }
@@ -618,32 +518,12 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
     };
     // The nearest sphere light along from + t d (t in tl; nullptr and inf if none), and what a ray
     // that meets no geometry sees: the environment and the suns' discs.
+    const std::vector<Light> lights(scene.lights.begin(), scene.lights.end());
     auto nearest_sphere = [&](const Vec3& from, const Vec3& d, double& tl) {
-        const SceneLight* hit = nullptr;
-        tl = kInf;
-        for (const SceneLight& l : scene.lights)
-            if (l.type == LightType::kSphere) {
-                const double t = ray_sphere_hit(from, d, l.position, l.radius);
-                if (t < tl) tl = t, hit = &l;
-            }
-        return hit;
+        return nearest_light_surface(lights, from, d, tl);
     };
-    auto sky = [&](const Vec3& d) {
-        RGB L{};
-        for (const SceneLight& l : scene.lights) {
-            if (l.type == LightType::kEnvironment)
-                for (std::size_t c = 0; c < 3; ++c) L[c] += l.color[c];
-            if (l.type == LightType::kDirectional && l.angular_radius_deg > 0) {
-                if (dot(d, l.direction) >= l.disc_cos_max())
-                    for (std::size_t c = 0; c < 3; ++c)
-                        L[c] += l.color[c] / l.disc_projected_solid_angle();
-            }
-        }
-        return L;
-    };
-    const bool any_sphere =
-        std::any_of(scene.lights.begin(), scene.lights.end(),
-                    [](const SceneLight& l) { return l.type == LightType::kSphere; });
+    auto sky = [&](const Vec3& d) { return escaped_radiance(lights, d); };
+    const bool any_sphere = !sphere_lights(lights).empty();
     // Per shape: its material and whether that is a medium.
     std::vector<int> shape_material(scene.shapes.size());
     std::vector<char> shape_medium(scene.shapes.size());
@@ -693,14 +573,14 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                     kind[i] = Kind::kNone;
                     // Sphere lights are not rasterized (nor in volpath's BVH): the nearest in
                     // front of the geometry is what the sample shows.
-                    const SceneLight* light_in_front = nullptr;
+                    const Light* light_in_front = nullptr;
                     if (any_sphere || s < 0) {
                         const Vec3 d = rays.direction(sx, sy);
                         double tl = kInf;
-                        const SceneLight* hit = nearest_sphere(camera.position, d, tl);
+                        const Light* hit = nearest_sphere(camera.position, d, tl);
                         if (hit && (s < 0 || tl < frame.ray_t[i])) light_in_front = hit;
                         if (s < 0) {
-                            const RGB surf = hit ? hit->color : sky(d);
+                            const RGB surf = hit ? hit->L : sky(d);
                             for (std::size_t c = 0; c < 3; ++c)
                                 g.surface[3 * i + c] = static_cast<float>(surf[c]);
                         }
@@ -719,7 +599,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                         g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(fn[c]);
                     if (light_in_front) {  // a sphere light in front: nothing to light
                         for (std::size_t c = 0; c < 3; ++c)
-                            g.surface[3 * i + c] = static_cast<float>(light_in_front->color[c]);
+                            g.surface[3 * i + c] = static_cast<float>(light_in_front->L[c]);
                         continue;
                     }
                     if (!medium) {
@@ -743,8 +623,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                         const Vec3 rd = r.n * (2 * dot(r.n, r.wo)) - r.wo;
                         const double F = dielectric::fresnel_dielectric(dot(r.n, r.wo), T.eta());
                         double tb = kInf;
-                        const SceneLight* sl = nearest_sphere(r.p, rd, tb);
-                        const RGB Lr = sl ? sl->color : sky(rd);
+                        const Light* sl = nearest_sphere(r.p, rd, tb);
+                        const RGB Lr = sl ? sl->L : sky(rd);
                         for (std::size_t c = 0; c < 3; ++c)
                             g.specular[3 * i + c] = static_cast<float>(F * Lr[c]);
                     }
@@ -764,7 +644,7 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
 
     const LightPlan plan = plan_lights(scene, receivers, o);
     const std::vector<LightSample>& samples = plan.samples;
-    const std::vector<int> spheres = sphere_lights(scene);
+    const std::vector<int> spheres = sphere_lights(plan.lights);
     // Whether the sample can light r at all (before shadows), or give it translucency.
     auto reaches = [&](const LightSample& s, const Receiver& r) {
         if (r.kind == Kind::kNone) return false;
@@ -930,8 +810,8 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
                                 bool lit = true;
                                 if (o.shadows)
                                     lit = lit_in_map(sm, views[vi], proj, pc, r.n, wi, o);
-                                if (!lit ||
-                                    (!spheres.empty() && behind_sphere(scene, spheres, s, r.p, wi)))
+                                if (!lit || (!spheres.empty() &&
+                                             behind_sphere(plan.lights, spheres, s, r.p, wi)))
                                     continue;
                                 if (r.kind == Kind::kDiffuse) {
                                     add_diffuse(r.material, E, cs, i);
@@ -985,8 +865,8 @@ std::vector<std::array<double, 3>> boundary_irradiance(const Scene& scene,
     }
     if (n == 0) return E;
     const std::vector<const BoundaryTransmittance*> mat_T = boundary_tables(scene, o);
-    const std::vector<int> spheres = sphere_lights(scene);
     const LightPlan plan = plan_lights(scene, receivers.empty() ? box : receivers, o);
+    const std::vector<int> spheres = sphere_lights(plan.lights);
     static thread_local ShadowMap scratch_map;
     ShadowMap& sm = scratch_map;
     std::vector<std::uint8_t> face(n, 0);
@@ -1023,7 +903,8 @@ std::vector<std::array<double, 3>> boundary_irradiance(const Scene& scene,
                         if (!(cs > 0)) continue;
                         if (o.shadows && !lit_in_map(sm, views[vi], proj, proj.at(q.p), q.n, wi, o))
                             continue;
-                        if (!spheres.empty() && behind_sphere(scene, spheres, s, q.p, wi)) continue;
+                        if (!spheres.empty() && behind_sphere(plan.lights, spheres, s, q.p, wi))
+                            continue;
                         const double t = (*mat_T[static_cast<std::size_t>(q.material)])(cs);
                         for (std::size_t c = 0; c < 3; ++c) E[i][c] += t * Ei[c] * cs;
                     }

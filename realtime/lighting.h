@@ -157,17 +157,9 @@ const BoundaryTransmittance& tabulated_boundary(double eta, double alpha, int co
 /// One shadow-mapped light sample of pass 1: a direction (orthographic map) or a point
 /// (perspective map, or cube faces). What every backend of the pass lights with (the GL twin,
 /// realtime/gl/lighting_gl.h, uploads them as they are).
-struct LightSample {
-    bool directional = true;
-    Vec3 w{};    ///< directional: unit vector towards the light
-    Vec3 pos{};  ///< point
-    /// Directional: irradiance at normal incidence; point: intensity [per sr].
-    std::array<double, 3> value{};
-    /// Sphere-light patch: intensity value * max(0, -lobe_n . w_i) towards the receiver
-    /// (Lambertian emitter; w_i points from the receiver to the patch).
-    bool lobe = false;
-    Vec3 lobe_n{};
-    bool environment = false;     ///< a direction of the environment (its own map size)
+struct LightSample : LightEmitter {
+    // The emitter (core/light.h LightEmitter: a direction or a point, its value and angular
+    // profile), and what pass 1 does with it:
     bool thickness_view = false;  ///< its map gives GBuffer::thickness
     bool lights = true;           ///< false: a thickness view only
     int light = -1;               ///< index in Scene::lights
@@ -179,6 +171,7 @@ struct LightPlan {
     Box casters;      ///< every shape of the scene
     double near = 0;  ///< point lights' near plane: 1e-6 of the casters' diagonal
     std::vector<LightSample> samples;  ///< in scene order, each light's samples in turn
+    std::vector<Light> lights;         ///< the scene's lights resolved (core/light.h), in order
     /// The shadow views of sample s: one orthographic map for a direction (the environment's
     /// at environment_map_size), fit_point's frustum or cube faces for a point.
     std::vector<ShadowView> views(const LightSample& s, const LightingOptions& o) const;

@@ -5,6 +5,7 @@
 #include "testing.h"
 
 #include <gtest/gtest.h>
+#include <toml++/toml.h>
 
 #include <csignal>
 #include <cstdlib>
@@ -152,10 +153,20 @@ TEST(Cli, ProfileWritesCsvWithResolvedConfigurationBesideIt) {
         EXPECT_GT(p.se_per_cm2[c][0], 0.0);
     }
     const std::string rec = testing::read_text(dir / "p.csv.toml");
-    for (const char* key :
-         {"preset = 'Skin1'", "seed = 1", "photons = 3000", "rule = ", "[result_R]", "Rd_se",
-          "stop_reason = 'photons'", "[provenance]", "git_revision", "command_line"})
+    for (const char* key : {"preset = 'Skin1'", "seed = 1", "photons = 3000",
+                            "rule = ", "[result_R]", "Rd_se", "stop_reason = 'photons'",
+                            "[provenance]", "git_revision", "command_line", "[simulated_medium]",
+                            "eta = [ 1.3 ]", "eta_above = 1.0", "eta_below = 1.0", "boundary = "})
         EXPECT_NE(rec.find(key), std::string::npos) << key << " in\n" << rec;
+    // The medium as simulated, not only the preset's name: Skin1 of Freude14 Table 6.2 (sigma_a
+    // 0.032, 0.17, 0.48 and sigma_s 0.74, 0.88, 1.01 per mm, g 0, eta 1.3).
+    const toml::table t = toml::parse(rec);
+    const double sa[3] = {0.32, 1.7, 4.8}, ss[3] = {7.4, 8.8, 10.1};
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_DOUBLE_EQ(t["simulated_medium"]["sigma_a_per_cm"][0][c].value_or(-1.0), sa[c]);
+        EXPECT_DOUBLE_EQ(t["simulated_medium"]["sigma_s_per_cm"][0][c].value_or(-1.0), ss[c]);
+        EXPECT_EQ(t["simulated_medium"]["g"][0][c].value_or(-1.0), 0.0);
+    }
 }
 
 // The GL twin's rows (realtime/gl): the SSS pass's draws and its whole call, per scene, and its

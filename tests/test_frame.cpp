@@ -288,6 +288,14 @@ TEST(RasterCommand, WritesTheLayersThePassTimesAndRefusesBadInput) {
         dir.path());
     ASSERT_EQ(again.exit_code, 0) << again.err;
     EXPECT_NE(again.out.find("0 MCML runs computed"), std::string::npos) << again.out;
+    // The header names the kernel that ran: with --sss reference the exact 2D one, not --model.
+    const auto ref = testing::run_ssslab(
+        {"raster", scene.string(), "--photons", "2000", "--cache", (dir / "res").string(), "--out",
+         (dir / "b3.exr").string(), "--no-translucency", "--sss", "reference", "--shadow-map",
+         "256", "--env-samples", "8"},
+        dir.path());
+    ASSERT_EQ(ref.exit_code, 0) << ref.err;
+    EXPECT_EQ(read_exr((dir / "b3.exr").string()).metadata().at("ssslab.model"), "reference:2d");
 
     // Bad input: exit 2, a message naming the option, no output.
     const auto bad = testing::run_ssslab(

@@ -340,6 +340,78 @@ TEST_P(GlSssPassTest, LightingOfTheBuiltInScenesMatchesTheCpuPass) {
     }
 }
 
+// A spot light (core/light.h: KHR_lights_punctual's cone, the emitter's angular profile) lights
+// a diffuse floor and a rough medium: the GL pass's layers against the CPU pass's, and the cone
+// is there (lit floor inside it, none far outside).
+TEST_P(GlSssPassTest, ASpotLightIsLitAsTheCpuPassLightsIt) {
+    const Scene scene = parse_scene(R"(
+[scene]
+name = "spot"
+[camera]
+position = [0, 6, 5]
+target = [0, 0.5, 0]
+fov_y_deg = 55
+width = 160
+height = 120
+[[lights]]
+type = "spot"
+position = [0.5, 4, 0.5]
+direction = [-0.1, -1, -0.1]
+intensity = [20, 15, 10]
+inner_cone_angle_deg = 12
+outer_cone_angle_deg = 30
+[[materials]]
+name = "floor"
+type = "diffuse"
+albedo = [0.7, 0.6, 0.5]
+[[materials]]
+name = "skin"
+preset = "Skin1"
+roughness = 0.3
+[[shapes]]
+type = "plane"
+size_x = 10
+size_z = 10
+material = "floor"
+[[shapes]]
+type = "sphere"
+radius = 0.8
+subdivisions = 4
+translate = [0, 0.85, 0]
+material = "skin"
+)",
+                                    "spot.toml", ".");
+    const int w = 160, h = 120;
+    const realtime::RasterFrame frame = realtime::rasterize(scene, {}, w, h);
+    const realtime::RasterCamera camera = realtime::RasterCamera::from_scene(scene.camera, w, h);
+    realtime::LightingOptions o;
+    o.thickness_layer = true;
+    o.shadow_map_size = 512;
+    const std::vector<realtime::SlabTransmittance> slabs = synthetic_slabs(scene);
+    const realtime::GBuffer cpu = realtime::shade(scene, camera, frame, o, slabs);
+    realtime::gl::GlLighting lighting(*ctx);
+    realtime::GBuffer gpu;
+    lighting.shade(scene, camera, frame, o, slabs, nullptr, gpu);
+    for (const auto& [name, a, b] : {std::tuple{"surface", &gpu.surface, &cpu.surface},
+                                     std::tuple{"irradiance", &gpu.irradiance, &cpu.irradiance},
+                                     std::tuple{"specular", &gpu.specular, &cpu.specular}}) {
+        const double p = psnr(*a, *b);
+        std::printf("  [measured] spot, %s: PSNR %.1f dB\n", name, p);
+        EXPECT_GT(p, 45.0) << name;
+    }
+    // The floor's radiance under the cone's axis and at the image's corner (far outside it).
+    int lit = 0, dark = 0;
+    for (std::size_t i = 0; i < cpu.shape.size(); ++i) {
+        if (cpu.shape[i] != 0) continue;
+        (cpu.surface[3 * i] > 0.1f ? lit : dark) += 1;
+        if (cpu.surface[3 * i] == 0.0f) {
+            EXPECT_LT(gpu.surface[3 * i], 1e-4f);
+        }
+    }
+    EXPECT_GT(lit, 500);
+    EXPECT_GT(dark, 500);
+}
+
 // ---- Whole frames (realtime/gl/frame_gl.h): every layer of the GL twin's image against the
 // software renderer's, each backend from its own raster ----
 

@@ -340,6 +340,18 @@ TEST(Scene, BadScenesAreRefusedWithFileLineAndKey) {
         {"misspelt light key",
          with("type = \"directional\"", "tipe = \"directional\""),
          {"lights[0].tipe", "did you mean 'type'"}},
+        {"spot: inner cone wider than the outer",
+         std::string(kScene) +
+             "[[lights]]\ntype = \"spot\"\nposition = [0, 20, 0]\ndirection = [0, -1, 0]\n"
+             "intensity = [1, 1, 1]\ninner_cone_angle_deg = 30\nouter_cone_angle_deg = 20\n",
+         {"lights[2].inner_cone_angle_deg", "[0, 20)"}},
+        {"spot: no direction",
+         std::string(kScene) +
+             "[[lights]]\ntype = \"spot\"\nposition = [0, 20, 0]\nintensity = [1, 1, 1]\n",
+         {"lights[2].direction"}},
+        {"unknown light type",
+         with("type = \"directional\"", "type = \"spotlight\""),
+         {"lights[0].type", "spot"}},
         {"g = 1", with("\ng = 0.5", "\ng = 1.0"), {"materials[1].g", "(-1, 1)"}},
         {"albedo 1",
          with("albedo = [0.5, 0.5, 0.5]", "albedo = [0.5, 1.0, 0.5]"),

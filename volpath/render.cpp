@@ -1,11 +1,11 @@
 #include "volpath/render.h"
 
 #include "core/error.h"
+#include "core/light.h"
 #include "core/rng.h"
 #include "core/sobol.h"
 #include "volpath/density_grid.h"
 #include "volpath/embree_scene.h"
-#include "volpath/lights.h"
 #include "volpath/mesh_medium.h"
 #include "volpath/microfacet.h"
 #include "volpath/sampling.h"
@@ -226,15 +226,10 @@ struct Renderer {
         for (const SceneShape& sh : s.shapes) meshes.push_back(&sh.mesh);
         es = std::make_unique<EmbreeScene>(meshes);
         eps = es->epsilon();
-        for (const SceneLight& sl : s.lights) {
-            lights.push_back(make_light(sl));
-        }
+        for (const SceneLight& sl : s.lights) lights.emplace_back(sl);
         sel = o.nee_all_lights || lights.empty() ? 1.0 : 1.0 / static_cast<double>(lights.size());
         for (std::size_t j = 0; j < lights.size() && guide_lights.size() < kMaxGuides; ++j) {
-            const Light& l = lights[j];
-            if (l.type == LightType::kSphere ||
-                (l.type == LightType::kDirectional && l.cos_max < 1))
-                guide_lights.push_back(static_cast<int>(j));
+            if (lights[j].subtends_cone()) guide_lights.push_back(static_cast<int>(j));
         }
         for (const SceneShape& sh : s.shapes) {
             const SceneMaterial& m = s.materials[static_cast<size_t>(sh.material)];
@@ -259,7 +254,7 @@ struct Renderer {
                     throw InputError(m.where, "density_vdb", e.what());
                 }
             }
-            md.alpha = md.eta == 1.0 ? 0.0 : m.roughness;  // nothing to be rough about
+            md.alpha = m.boundary().alpha;
             md.region = WalkRegion::make(md.sigma_t, md.sigma_s, md.g, md.density.get());
             md.guided = o.exit_guide && md.eta != 1.0 && md.alpha > 0 && md.same_g && !md.density &&
                         !guide_lights.empty();
@@ -404,7 +399,7 @@ struct Renderer {
                    const double* beta, F& f_of, P& pdf_of, RGB& out, std::uint64_t& rays,
                    int medium, const GuideShare& share) const {
         const double u1 = rng.uniform(), u2 = rng.uniform();
-        const LightSample ls = sample_light(light, p, u1, u2, env_normal(at ? &at->n : nullptr));
+        const LightSample ls = light.sample(p, u1, u2, env_normal(at ? &at->n : nullptr));
         if (!ls.ok) return;
         if (at && !(dot(ls.wi, at->n) > 0)) return;
         const RGB fc = f_of(ls.wi);
@@ -441,9 +436,7 @@ struct Renderer {
         // the sun were sampled through them, too bright by their MIS share of the sphere's
         // solid angle.
         for (const Light& other : lights)
-            if (other.type == LightType::kSphere && &other != &light &&
-                ray_sphere_hit(o, ls.wi, other.pos, other.radius) < tmax)
-                return false;
+            if (&other != &light && other.hit(o, ls.wi) < tmax) return false;
         T = {1, 1, 1};
         if (has_passable) return shadow(o, ls.wi, tmax, medium, T, rays, leaving);
         ++rays;
@@ -462,22 +455,6 @@ struct Renderer {
         std::array<double, 3> pq{};
         for (std::size_t k = 0; k < 3; ++k) pq[k] = ws.weights.prob[k] * ws.weights.q[k];
         return pq;
-    }
-
-    // The direction `to` from x towards guide light l (a sphere light's centre, a disc's axis)
-    // and the light's angular radius seen from x; false inside a sphere light.
-    static bool towards(const Light& l, const Vec3& x, Vec3& to, double& angle) {
-        if (l.type == LightType::kSphere) {
-            const Vec3 v = l.pos - x;
-            const double dist = length(v);
-            if (!(dist > l.radius)) return false;
-            to = v * (1 / dist);
-            angle = std::asin(l.radius / dist);
-        } else {
-            to = l.dir;
-            angle = std::acos(l.cos_max);
-        }
-        return true;
     }
 
     // The exit guide at vertex g.z of a guided medium md inside `shape` (a scattering vertex, or
@@ -506,7 +483,7 @@ struct Renderer {
         for (int j : guide_lights) {
             Vec3 to;
             double angle = 0;
-            if (!towards(lights[static_cast<size_t>(j)], g.z, to, angle) || !g.inward(to)) continue;
+            if (!lights[static_cast<size_t>(j)].cone(g.z, to, angle) || !g.inward(to)) continue;
             ++rays;
             const RayHit hit = es->intersect(g.z, to, 0, reach, g.tri);
             if (!hit.hit() || hit.shape != static_cast<std::uint32_t>(shape)) continue;
@@ -553,7 +530,7 @@ struct Renderer {
         for (int j : guide_lights) {
             Vec3 to;
             double angle = 0;
-            if (!towards(lights[static_cast<size_t>(j)], x, to, angle)) continue;
+            if (!lights[static_cast<size_t>(j)].cone(x, to, angle)) continue;
             Vec3 a = to;
             const MediumData* md = nullptr;
             for (int it = 0; it < kDiffuseGuideAims; ++it) {
@@ -643,7 +620,7 @@ struct Renderer {
             const Vec3 x = g.z + w * hit.t;
             const SurfaceAt at{hit.normal, {hit.shape, hit.triangle}};
             const Light& light = lights[static_cast<size_t>(g.light[i])];
-            const LightSample ls = sample_light(light, x, u3, u4, env_normal(&at.n));
+            const LightSample ls = light.sample(x, u3, u4, env_normal(&at.n));
             if (!ls.ok || !(ls.pdf > 0) || !(dot(ls.wi, at.n) > 0)) continue;
             const Frame fr(at.n);
             const Vec3 wo_l = fr.local(-w), wi_l = fr.local(ls.wi);
@@ -669,10 +646,8 @@ struct Renderer {
     void add_escape(const Vec3& from, const Vec3* from_normal, const Vec3& d, bool prev_nee,
                     double prev_pdf, const double* beta, RGB& out, const GuideShare& share) const {
         for (const Light& l : lights) {
-            if (l.type == LightType::kEnvironment ||
-                (l.type == LightType::kDirectional && l.cos_max < 1 &&
-                 dot(d, l.dir) >= l.cos_max)) {
-                const double pl = light_pdf(l, from, d, from_normal);
+            if (l.seen_escaping(d)) {
+                const double pl = l.pdf(from, d, from_normal);
                 const double w = prev_nee ? share.weight(&l, prev_pdf, sel * pl, pl) : 1.0;
                 for (int c = 0; c < 3; ++c)
                     out[static_cast<size_t>(c)] += beta[c] * l.L[static_cast<size_t>(c)] * w;
@@ -705,7 +680,7 @@ struct Renderer {
         double prev_pdf = 0;
         Vec3 nee_pos;     // where NEE was last done (MIS of a light hit found by sampling)
         Vec3 nee_normal;  // and there the normal of the lit side, if on a surface
-        bool nee_on_surface = false;  // (the environment is sampled about it: sample_light)
+        bool nee_on_surface = false;  // (the environment is sampled about it: Light::sample)
         int depth = 0;                // surface vertices (medium events do not count)
         ExitGuide guide;              // of the last vertex a walk went on from (exit_guide)
         bool guide_armed = false;     // it aims at the boundary the path meets next
@@ -1047,14 +1022,9 @@ struct Renderer {
             }
             // Sphere lights are not in the BVH: the nearest of them, if before the geometry.
             double tl = kInf;
-            const Light* hit_light = nullptr;
-            for (const Light& l : lights)
-                if (l.type == LightType::kSphere) {
-                    const double t = ray_sphere_hit(o, d, l.pos, l.radius);
-                    if (t < tl) tl = t, hit_light = &l;
-                }
+            const Light* hit_light = nearest_light_surface(lights, o, d, tl);
             if (hit_light && tl < hit.t) {
-                const double pl = light_pdf(*hit_light, nee_pos, d);
+                const double pl = hit_light->pdf(nee_pos, d);
                 const double w =
                     prev_nee ? exit_share.weight(hit_light, prev_pdf, sel * pl, pl) : 1.0;
                 RGB c{};
@@ -1110,8 +1080,7 @@ const char* render_engine_version() {
 void check_renderable(const Scene& scene) {
     if (!scene.delta_light_through_smooth_boundary()) return;
     for (const SceneLight& l : scene.lights)
-        if (l.type == LightType::kPoint ||
-            (l.type == LightType::kDirectional && l.angular_radius_deg == 0))
+        if (Light(l).is_delta())
             throw InputError(l.where, "type",
                              std::string("a ") + to_string(l.type) +
                                  " light cannot reach a medium behind a smooth boundary in a path "

@@ -127,7 +127,7 @@ struct RenderOptions : RunControl {
     /// since volpath-render-6, kUniform before.
     RenderHero hero = RenderHero::kThroughputAlbedo;
     /// NEE at a surface samples the environment in proportion to cos(theta) about the lit
-    /// side's normal (volpath/lights.h sample_light) instead of uniformly over the sphere (half
+    /// side's normal (core/light.h Light::sample) instead of uniformly over the sphere (half
     /// of whose samples fell below the surface). Off: as before volpath-render-6.
     bool environment_cosine = true;
     /// Rays leave a surface from the surface point itself, skipping its triangle (the way

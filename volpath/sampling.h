@@ -7,6 +7,7 @@
 
 #include "core/dielectric.h"
 #include "core/vec3.h"
+#include "core/warp.h"
 
 #include <algorithm>
 #include <cmath>
@@ -19,21 +20,11 @@ inline constexpr double kInv4Pi = 0.25 / std::numbers::pi;
 
 using ssslab::basis;  // core/vec3.h, shared with realtime/
 
-/// An orthonormal frame about a unit normal n (core/vec3.h basis): local (x, y, z) with z
-/// along n, and back.
-struct Frame {
-    Vec3 s, t, n;
-    explicit Frame(const Vec3& normal) : n(normal) { basis(n, s, t); }
-    Vec3 local(const Vec3& v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
-    Vec3 world(const Vec3& v) const { return s * v.x + t * v.y + n * v.z; }
-};
-
-/// A direction on the hemisphere of +z with density cos(theta) / pi (Malley's method: a uniform
-/// point on the unit disc lifted onto the hemisphere), for uniform u1, u2.
-inline Vec3 sample_cosine_hemisphere(double u1, double u2) {
-    const double r = std::sqrt(u1), phi = 2 * kPi * u2;
-    return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0, 1 - u1))};
-}
+// The frame about a normal and the cosine-weighted hemisphere: core/warp.h, shared with the light
+// model (core/light.h).
+using ssslab::Frame;
+using ssslab::sample_cone;
+using ssslab::sample_cosine_hemisphere;
 
 /// The direction with cosine `mu` to `w` and azimuth `phi` about it (w a unit vector).
 inline Vec3 rotate(const Vec3& w, double mu, double phi) {

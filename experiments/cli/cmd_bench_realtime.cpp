@@ -82,14 +82,8 @@ Scene one_light(const Scene& scene) {
     Scene s = scene;
     s.lights.clear();
     for (const SceneLight& l : scene.lights) {
-        if (l.type == LightType::kEnvironment) continue;
-        SceneLight d = l;
-        if (l.type == LightType::kDirectional) d.angular_radius_deg = 0;
-        if (l.type == LightType::kSphere) {
-            d.type = LightType::kPoint;
-            for (double& c : d.color) c *= std::numbers::pi * l.radius * l.radius;
-            d.radius = 0;
-        }
+        SceneLight d;
+        if (!delta_equivalent(l, d)) continue;
         s.lights.push_back(d);
         break;
     }

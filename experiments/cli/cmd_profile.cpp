@@ -46,6 +46,9 @@ ProfileJob read_profile_job(const std::string& config_path, const std::string& m
                                  ") or a [material] table in --config");
         job.medium = medium_from_config(mt);
     }
+    // The medium as simulated, whichever way it was given (issue 51: provenance complete).
+    ConfigTable simulated = root.table_or_empty("simulated_medium");
+    record_simulated(simulated, job.medium);
     job.seed = static_cast<std::uint64_t>(root.integer("seed", 1, Range::nonnegative()));
     if (c.seed) {
         job.seed = *c.seed;

@@ -86,6 +86,7 @@ std::string raster_toml(const RasterArgs& a, const Scene& scene, const realtime:
     st.record("backend", a.backend);
     if (!gl.context.empty()) st.record("gl_context", gl.context);
     st.record("model", a.model);
+    st.record("kernel", realtime::sss_kernel_name(o.method, a.model));  // what the pass applied
     st.record("taps", static_cast<std::int64_t>(a.taps));
     st.record("sss", std::string(realtime::to_string(o.method)));
     st.record("edge", a.edge);
@@ -246,7 +247,7 @@ int run_raster(const RasterArgs& a) {
     md["ssslab.git_revision"] = git_revision();
     md["ssslab.command_line"] = command_line();
     md["ssslab.scene_file"] = a.scene;
-    md["ssslab.model"] = a.model;
+    md["ssslab.model"] = realtime::sss_kernel_name(o.method, a.model);
     md["ssslab.provenance"] = toml;
     OutputTransaction tx;
     tx.stage(out, encode_exr(r.image, out.string()));

@@ -60,23 +60,7 @@ std::string scene_json(const Scene& s) {
     for (std::size_t i = 0; i < s.lights.size(); ++i) {
         const SceneLight& l = s.lights[i];
         o << (i ? "," : "") << "\n    {\"type\": " << json_string(to_string(l.type));
-        switch (l.type) {
-            case LightType::kDirectional:
-                o << ", \"direction\": " << vec(l.direction) << ", \"irradiance\": " << rgb(l.color)
-                  << ", \"angular_radius_deg\": " << format_g(l.angular_radius_deg, 17);
-                break;
-            case LightType::kPoint:
-                o << ", \"position\": " << vec(l.position) << ", \"intensity\": " << rgb(l.color);
-                break;
-            case LightType::kSphere:
-                o << ", \"position\": " << vec(l.position)
-                  << ", \"radius\": " << format_g(l.radius, 17)
-                  << ", \"radiance\": " << rgb(l.color);
-                break;
-            case LightType::kEnvironment:
-                o << ", \"radiance\": " << rgb(l.color);
-                break;
-        }
+        o << json_members(l);
         o << "}";
     }
     o << "\n  ],\n  \"materials\": [";

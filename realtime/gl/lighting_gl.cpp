@@ -132,10 +132,15 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
                        LightingStats* stats, GBuffer& g, GlLightingTimes* times) {
     const auto t_start = std::chrono::steady_clock::now();
     check_lighting_inputs(camera, frame, o);
+    // What camera and reflection rays see of the lights, as uniforms: their surfaces (spheres),
+    // the cones escaping rays see them in (suns' discs) and the environment (the whole sphere).
+    const std::vector<Light> lights(scene.lights.begin(), scene.lights.end());
     int spheres = 0, suns = 0;
-    for (const SceneLight& l : scene.lights) {
-        spheres += l.type == LightType::kSphere;
-        suns += l.type == LightType::kDirectional && l.angular_radius_deg > 0;
+    for (const Light& l : lights) {
+        Vec3 axis;
+        double cos_half = 0;
+        spheres += l.has_surface();
+        suns += l.escape_cone(axis, cos_half) && cos_half > -1;
     }
     if (spheres > kMaxSpheres || suns > kMaxSuns)
         throw std::invalid_argument("the GL lighting takes at most " + std::to_string(kMaxSpheres) +
@@ -234,7 +239,7 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
         float* r1 = &mat[4 * (static_cast<size_t>(M) + k)];
         for (size_t c = 0; c < 3; ++c) r1[c] = static_cast<float>(sm.albedo[c] / std::numbers::pi);
         if (sm.kind != SceneMaterial::Kind::kMedium) continue;
-        const double eta = sm.medium.eta, alpha = eta == 1.0 ? 0.0 : sm.roughness;
+        const auto [eta, alpha] = sm.boundary();
         const BoundaryTransmittance& T =
             tabulated_boundary(eta, alpha, o.transmittance_cosines, o.transmittance_quadrature);
         r0[0] = static_cast<float>(T.eta());
@@ -295,28 +300,26 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
         set_int(p, "u_cosines", C);
         int ks = 0, kn = 0;
         Vec3 env{};
-        for (size_t li = 0; li < scene.lights.size(); ++li) {
-            const SceneLight& l = scene.lights[li];
+        for (size_t li = 0; li < lights.size(); ++li) {
+            const Light& l = lights[li];
             const std::string k = std::to_string(ks), n = std::to_string(kn);
-            if (l.type == LightType::kSphere) {
-                const Vec3 c = l.position - cam;
+            Vec3 axis;
+            double cos_half = 0;
+            if (l.has_surface()) {
+                const Vec3 c = l.pos - cam;
                 glUniform4f(glGetUniformLocation(p, ("u_sphere[" + k + "]").c_str()),
                             static_cast<float>(c.x), static_cast<float>(c.y),
                             static_cast<float>(c.z), static_cast<float>(l.radius));
-                set(p, ("u_sphere_color[" + k + "]").c_str(), l.color);
+                set(p, ("u_sphere_color[" + k + "]").c_str(), l.L);
                 set_int(p, ("u_sphere_light[" + k + "]").c_str(), static_cast<int>(li));
                 ++ks;
-            }
-            if (l.type == LightType::kEnvironment)
-                env = env + Vec3{l.color[0], l.color[1], l.color[2]};
-            if (l.type == LightType::kDirectional && l.angular_radius_deg > 0) {
+            } else if (l.escape_cone(axis, cos_half) && cos_half <= -1) {
+                env = env + Vec3{l.L[0], l.L[1], l.L[2]};
+            } else if (l.escape_cone(axis, cos_half)) {
                 glUniform4f(glGetUniformLocation(p, ("u_sun[" + n + "]").c_str()),
-                            static_cast<float>(l.direction.x), static_cast<float>(l.direction.y),
-                            static_cast<float>(l.direction.z),
-                            static_cast<float>(l.disc_cos_max()));
-                const double inv = 1.0 / l.disc_projected_solid_angle();
-                set(p, ("u_sun_radiance[" + n + "]").c_str(),
-                    Vec3{l.color[0] * inv, l.color[1] * inv, l.color[2] * inv});
+                            static_cast<float>(axis.x), static_cast<float>(axis.y),
+                            static_cast<float>(axis.z), static_cast<float>(cos_half));
+                set(p, ("u_sun_radiance[" + n + "]").c_str(), Vec3{l.L[0], l.L[1], l.L[2]});
                 ++kn;
             }
         }
@@ -390,6 +393,9 @@ void GlLighting::shade(const Scene& scene, const RasterCamera& camera, const Ras
         set(p, "u_w", s.w);
         set(p, "u_pos_rel", s.pos - cam);
         set(p, "u_lobe_n", s.lobe_n);
+        set(p, "u_lobe_scale", s.lobe_scale);
+        set(p, "u_lobe_offset", s.lobe_offset);
+        set_int(p, "u_lobe_squared", s.lobe_squared);
         set(p, "u_value", s.value);
         set_int(p, "u_light", s.light);
         set_int(p, "u_need_map", need_map);

@@ -12,7 +12,8 @@ uniform sampler2D u_slab;    // per material (row): thickness_mm, T rgb; u_mat r
 uniform float u_unit_mm;
 
 // The light sample (lighting.h LightSample), positions relative to the camera.
-uniform bool u_directional, u_lobe, u_thickness_view, u_lights;
+uniform bool u_directional, u_lobe, u_lobe_squared, u_thickness_view, u_lights;
+uniform float u_lobe_scale, u_lobe_offset;  // the emitter's angular profile (core/light.h)
 uniform vec3 u_w, u_pos_rel, u_lobe_n, u_value;
 uniform int u_light;  // index in Scene::lights (sphere lights do not occlude themselves)
 
@@ -130,7 +131,10 @@ void main() {
         if (!(d2 > 0.0)) discard;
         wi = d * (1.0 / sqrt(d2));
         float k = 1.0 / d2;
-        if (u_lobe) k *= max(0.0, -dot(u_lobe_n, wi));
+        if (u_lobe) {  // LightEmitter::factor
+            float f = max(0.0, -dot(u_lobe_n, wi) * u_lobe_scale + u_lobe_offset);
+            k *= u_lobe_squared ? min(1.0, f) * min(1.0, f) : f;
+        }
         if (!(k > 0.0)) discard;
         E = u_value * k;
     }
