@@ -378,7 +378,7 @@ double dot(const std::array<double, 3>& a, const std::array<double, 3>& b) {
 }  // namespace
 
 const char* to_string(EntryWeight w) {
-    return w == EntryWeight::kFresnel ? "fresnel" : "cosine";
+    return name_of(w).data();
 }
 
 double dielectric_reflectance(double mu, double eta) {

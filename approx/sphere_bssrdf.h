@@ -77,6 +77,7 @@
 #include <memory>
 #include <string>
 #include <vector>
+#include "core/enum_names.h"
 
 namespace ssslab::approx {
 
@@ -92,6 +93,14 @@ enum class EntryWeight {
     kCosineOnly,  ///< T = 1
 };
 const char* to_string(EntryWeight w);
+}  // namespace ssslab::approx
+template <>
+struct ssslab::EnumNames<ssslab::approx::EntryWeight> {
+    using E = ssslab::approx::EntryWeight;
+    static constexpr std::array<std::pair<E, std::string_view>, 2> table = {
+        {{E::kFresnel, "fresnel"}, {E::kCosineOnly, "cosine"}}};
+};
+namespace ssslab::approx {
 
 /// Unpolarised Fresnel reflectance of a smooth dielectric boundary for light arriving from the
 /// outside at cos theta_i = mu in [0, 1]; eta = n_inside / n_outside > 0. 1 beyond the critical

@@ -355,17 +355,19 @@ std::string ConfigTable::string(std::string_view key) {
 
 std::string ConfigTable::choice(std::string_view key, std::string fallback,
                                 std::initializer_list<std::string_view> choices) {
+    return choice(key, std::move(fallback),
+                  std::vector<std::string>(choices.begin(), choices.end()));
+}
+
+std::string ConfigTable::choice(std::string_view key, std::string fallback,
+                                const std::vector<std::string>& choices) {
     const std::string v = string(key, std::move(fallback));
-    for (auto c : choices)
+    for (const auto& c : choices)
         if (c == v) return v;
     std::string list;
-    std::vector<std::string> names;
-    for (auto c : choices) {
-        list += (list.empty() ? "" : ", ") + std::string("\"") + std::string(c) + "\"";
-        names.emplace_back(c);
-    }
+    for (const auto& c : choices) list += (list.empty() ? "" : ", ") + std::string("\"") + c + "\"";
     std::string msg = "expected one of " + list + ", got \"" + v + "\"";
-    const std::string best = nearest_name(v, names, 2);
+    const std::string best = nearest_name(v, choices, 2);
     if (!best.empty()) msg += " (did you mean \"" + best + "\"?)";
     fail(key, msg);
 }

@@ -9,6 +9,7 @@
 
 #include "core/vec3.h"
 
+#include "core/enum_names.h"
 #include "core/error.h"
 
 #include <array>
@@ -69,6 +70,14 @@ class ConfigTable {
     /// A string from a fixed set of choices (the error lists them).
     std::string choice(std::string_view key, std::string fallback,
                        std::initializer_list<std::string_view> choices);
+    std::string choice(std::string_view key, std::string fallback,
+                       const std::vector<std::string>& choices);
+    /// An enum value by its spelling (core/enum_names.h); the resolved config records the
+    /// spelling of the value taken, fallback included.
+    template <class E>
+    E enumerated(std::string_view key, E fallback) {
+        return *parse_name<E>(choice(key, std::string(name_of(fallback)), names_of<E>()));
+    }
     /// A required array of strings (may be empty).
     std::vector<std::string> string_list(std::string_view key);
     /// An optional array of strings (the key is known to "did you mean" even when absent).

@@ -17,9 +17,6 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr std::array<LightType, 5> kLightTypes = {LightType::kDirectional, LightType::kPoint,
-                                                  LightType::kSphere, LightType::kEnvironment,
-                                                  LightType::kSpot};
 
 // Direction at cosine c to axis and azimuth 2 pi v (the real-time renderer's stratification).
 Vec3 around(const Vec3& axis, double c, double v) {
@@ -38,30 +35,15 @@ Vec3 disc_point(const Vec3& c, const Vec3& d, double r, double u1, double u2) {
 }  // namespace
 
 const char* to_string(LightType t) {
-    switch (t) {
-        case LightType::kDirectional:
-            return "directional";
-        case LightType::kPoint:
-            return "point";
-        case LightType::kSphere:
-            return "sphere";
-        case LightType::kEnvironment:
-            return "environment";
-        case LightType::kSpot:
-            return "spot";
-    }
-    return "?";
+    return name_of(t).data();
 }
 
 std::string light_type_names() {
-    std::string s;
-    for (LightType t : kLightTypes) s += (s.empty() ? "" : ", ") + std::string(to_string(t));
-    return s;
+    return names_joined<LightType>();
 }
 
 LightType parse_light_type(std::string_view name) {
-    for (LightType t : kLightTypes)
-        if (name == to_string(t)) return t;
+    if (const auto t = parse_name<LightType>(name)) return *t;
     throw std::invalid_argument("unknown light type \"" + std::string(name) + "\" (one of " +
                                 light_type_names() + ")");
 }
@@ -70,8 +52,7 @@ SceneLight read_light(ConfigTable& t) {
     SceneLight l;
     l.where = t.location("type");
     if (!t.has("type")) t.fail("type", "required: one of " + light_type_names());
-    l.type = parse_light_type(
-        t.choice("type", "", {"directional", "point", "sphere", "environment", "spot"}));
+    l.type = parse_light_type(t.choice("type", "", names_of<LightType>()));
     switch (l.type) {
         case LightType::kDirectional: {
             const Vec3 d = t.vec3("direction");

@@ -21,6 +21,7 @@
 //                (delta).
 #pragma once
 
+#include "core/enum_names.h"
 #include "core/error.h"
 #include "core/vec3.h"
 
@@ -39,6 +40,15 @@ class ConfigTable;
 class ContentKey;
 
 enum class LightType { kDirectional, kPoint, kSphere, kEnvironment, kSpot };
+template <>
+struct EnumNames<LightType> {
+    static constexpr std::array<std::pair<LightType, std::string_view>, 5> table = {
+        {{LightType::kDirectional, "directional"},
+         {LightType::kPoint, "point"},
+         {LightType::kSphere, "sphere"},
+         {LightType::kEnvironment, "environment"},
+         {LightType::kSpot, "spot"}}};
+};
 /// The scene file's spelling of a type ("directional", ...), and back (std::invalid_argument
 /// naming the choices for an unknown name).
 const char* to_string(LightType t);

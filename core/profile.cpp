@@ -10,7 +10,7 @@
 namespace ssslab {
 
 const char* unit_name(LengthUnit u) {
-    return u == LengthUnit::kMm ? "mm" : "cm";
+    return name_of(u).data();
 }
 
 std::string RadialProfile::to_csv(LengthUnit unit) const {

@@ -6,10 +6,16 @@
 #include <array>
 #include <string>
 #include <vector>
+#include "core/enum_names.h"
 
 namespace ssslab {
 
 enum class LengthUnit { kMm, kCm };
+template <>
+struct EnumNames<LengthUnit> {
+    static constexpr std::array<std::pair<LengthUnit, std::string_view>, 2> table = {
+        {{LengthUnit::kMm, "mm"}, {LengthUnit::kCm, "cm"}}};
+};
 const char* unit_name(LengthUnit u);  ///< "mm" or "cm"
 
 struct RadialProfile {

@@ -111,15 +111,7 @@ void check_drawable(const Scene& scene) {
 }
 
 const char* to_string(SssMethod m) {
-    switch (m) {
-        case SssMethod::kSeparable:
-            return "separable";
-        case SssMethod::kReference:
-            return "reference";
-        case SssMethod::kNone:
-            return "none";
-    }
-    return "?";
+    return name_of(m).data();
 }
 
 std::string sss_kernel_name(SssMethod m, const std::string& model_spec) {

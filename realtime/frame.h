@@ -31,6 +31,7 @@
 #pragma once
 
 #include "approx/model_spec.h"
+#include "core/enum_names.h"
 #include "core/film_image.h"
 #include "core/profile.h"
 #include "core/scene.h"
@@ -71,6 +72,14 @@ enum class SssMethod {
     kReference,  ///< realtime::sss_reference: the exact 2D kernel (screen-space ground truth)
     kNone,       ///< no SSS pass: subsurface = exit_weight (albedo E + translucency)
 };
+}  // namespace ssslab::realtime
+template <>
+struct ssslab::EnumNames<ssslab::realtime::SssMethod> {
+    using E = ssslab::realtime::SssMethod;
+    static constexpr std::array<std::pair<E, std::string_view>, 3> table = {
+        {{E::kSeparable, "separable"}, {E::kReference, "reference"}, {E::kNone, "none"}}};
+};
+namespace ssslab::realtime {
 const char* to_string(SssMethod m);
 /// The kernel a frame's SSS pass applied, as outputs name it: the model's spec for the separable
 /// pass, "reference:2d" (the material's exact 2D kernel, the name Table 6.4's rows give it) for

@@ -60,6 +60,8 @@
 // taps reach.
 #pragma once
 
+#include "core/enum_names.h"
+
 #include "approx/convolve.h"
 #include "approx/separable.h"
 
@@ -109,6 +111,14 @@ enum class SssEdgeMode {
     kFollowSurface,  ///< blend toward the centre by depth difference [Freude14 Eq. 4.12]
     kReject,         ///< drop samples across depth or material edges, renormalise per channel
 };
+}  // namespace ssslab::realtime
+template <>
+struct ssslab::EnumNames<ssslab::realtime::SssEdgeMode> {
+    using E = ssslab::realtime::SssEdgeMode;
+    static constexpr std::array<std::pair<E, std::string_view>, 3> table = {
+        {{E::kFollowSurface, "follow"}, {E::kReject, "reject"}, {E::kNone, "none"}}};
+};
+namespace ssslab::realtime {
 
 /// Parameters of the pass. Units: world units unless stated.
 struct SssParams {

@@ -630,7 +630,7 @@ std::vector<BadInputCase> toml_cases() {
          skin1 + "[output]\nunit = \"inch\"\n",
          profile(),
          2,
-         {"cfg.toml:4:8: error: key 'output.unit'", "expected one of \"cm\", \"mm\", got \"inch\"",
+         {"cfg.toml:4:8: error: key 'output.unit'", "expected one of \"mm\", \"cm\", got \"inch\"",
           "unit = \"inch\""}},
 
         // Conflicting, missing and unknown material descriptions.

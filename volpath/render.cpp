@@ -1090,11 +1090,11 @@ void check_renderable(const Scene& scene) {
 }
 
 const char* to_string(RenderHero h) {
-    return h == RenderHero::kUniform ? "uniform" : "throughput-albedo";
+    return name_of(h).data();
 }
 
 const char* to_string(RenderErrorMeasure m) {
-    return m == RenderErrorMeasure::kImageMean ? "image-mean" : "median-pixel";
+    return name_of(m).data();
 }
 
 RelativeError radiance_rel_error(const std::vector<double>& mean, const std::vector<double>& se) {
@@ -1177,7 +1177,7 @@ std::string fingerprint_with_batch(const Scene& scene, const RenderOptions& o, i
         .add("index_matched_nee", o.index_matched_nee)
         .add("samples_per_batch", batch_spp)
         .add("nee", o.nee_all_lights ? "all lights" : "one light")
-        .add("sampler", o.sampler == RenderSampler::kSobol ? "sobol" : "independent");
+        .add("sampler", std::string(name_of(o.sampler)));
     // Only when set, so that the keys of existing checkpoints stay what they were.
     if (o.max_depth != 0) k.add("max_depth", o.max_depth);
     if (o.absorption) k.add("absorption", to_string(*o.absorption));

@@ -34,6 +34,7 @@
 #pragma once
 
 #include "core/batch_runner.h"
+#include "core/enum_names.h"
 #include "core/film_image.h"
 #include "core/scene.h"
 #include "core/stats.h"
@@ -85,6 +86,26 @@ enum class RenderHero {
     kThroughputAlbedo,
 };
 const char* to_string(RenderHero h);
+}  // namespace ssslab::volpath
+template <>
+struct ssslab::EnumNames<ssslab::volpath::RenderErrorMeasure> {
+    using E = ssslab::volpath::RenderErrorMeasure;
+    static constexpr std::array<std::pair<E, std::string_view>, 2> table = {
+        {{E::kMedianPixel, "median-pixel"}, {E::kImageMean, "image-mean"}}};
+};
+template <>
+struct ssslab::EnumNames<ssslab::volpath::RenderSampler> {
+    using E = ssslab::volpath::RenderSampler;
+    static constexpr std::array<std::pair<E, std::string_view>, 2> table = {
+        {{E::kSobol, "sobol"}, {E::kIndependent, "independent"}}};
+};
+template <>
+struct ssslab::EnumNames<ssslab::volpath::RenderHero> {
+    using E = ssslab::volpath::RenderHero;
+    static constexpr std::array<std::pair<E, std::string_view>, 2> table = {
+        {{E::kThroughputAlbedo, "throughput-albedo"}, {E::kUniform, "uniform"}}};
+};
+namespace ssslab::volpath {
 
 /// Run control: RunControl (core/batch_runner.h); the budget is samples per pixel (batch_spp per
 /// batch), seconds, or a relative error (error_measure). Snapshots keep the image after 4, 8,

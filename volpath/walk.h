@@ -28,6 +28,7 @@
 // below the threshold), the long-path roulette, the phase function's cosine and azimuth.
 #pragma once
 
+#include "core/enum_names.h"
 #include "core/rng.h"
 #include "core/vec3.h"
 #include "volpath/density_grid.h"
@@ -65,11 +66,18 @@ inline Absorption channel_absorption(Absorption a, double albedo) {
     return albedo >= kPerChannelWeightedAlbedo ? Absorption::kWeighted : Absorption::kAnalog;
 }
 
+}  // namespace ssslab::volpath
+template <>
+struct ssslab::EnumNames<ssslab::volpath::Absorption> {
+    using E = ssslab::volpath::Absorption;
+    static constexpr std::array<std::pair<E, std::string_view>, 3> table = {
+        {{E::kAnalog, "analog"}, {E::kWeighted, "weighted"}, {E::kPerChannel, "per-channel"}}};
+};
+namespace ssslab::volpath {
+
 /// "analog", "weighted" or "per-channel": the policy's name in keys, settings and reports.
 inline const char* to_string(Absorption a) {
-    return a == Absorption::kWeighted ? "weighted"
-           : a == Absorption::kAnalog ? "analog"
-                                      : "per-channel";
+    return name_of(a).data();
 }
 
 /// What happens to the sampled free path when it reaches the boundary and is reflected.

@@ -87,8 +87,8 @@ ProfileJob read_profile_job(const std::string& config_path, const std::string& m
                          "[volpath] and --mode apply to engine = \"volpath\" only");
 
     ConfigTable output = root.table_or_empty("output");
-    const std::string unit = output.choice("unit", "mm", {"cm", "mm"});
-    job.unit = (unit_flag.empty() ? unit : unit_flag) == "mm" ? LengthUnit::kMm : LengthUnit::kCm;
+    job.unit = output.enumerated("unit", LengthUnit::kMm);
+    if (!unit_flag.empty()) job.unit = *parse_name<LengthUnit>(unit_flag);  // one_of_enum
     if (!unit_flag.empty()) output.record("unit", unit_flag);
     root.finish();
     return job;
@@ -294,7 +294,7 @@ void register_profile(CLI::App& app, std::function<int()>& action) {
         ->check(existing_file("config file"));
     sub->add_option("--unit", a->unit,
                     "Length unit of the CSV: mm (default, as the experiments and reports) or cm")
-        ->check(one_of({"mm", "cm"}));
+        ->check(one_of_enum<LengthUnit>());
     sub->add_option("--engine", a->engine,
                     "Ground-truth engine: mcml (default) or volpath (the volumetric path tracer; "
                     "also writes <out>.single.csv, the single-scattering part)")

@@ -146,12 +146,8 @@ int run_raster(const RasterArgs& a) {
     o.lighting.environment_samples = a.environment_samples;
     o.lighting.shadow_map_size = a.shadow_map;
     o.lighting.environment_map_size = a.environment_map;
-    o.method = a.sss == "reference" ? realtime::SssMethod::kReference
-               : a.sss == "none"    ? realtime::SssMethod::kNone
-                                    : realtime::SssMethod::kSeparable;
-    o.sss.mode = a.edge == "reject" ? realtime::SssEdgeMode::kReject
-                 : a.edge == "none" ? realtime::SssEdgeMode::kNone
-                                    : realtime::SssEdgeMode::kFollowSurface;
+    o.method = *parse_name<realtime::SssMethod>(a.sss);  // validated by one_of_enum
+    o.sss.mode = *parse_name<realtime::SssEdgeMode>(a.edge);
     o.sss.follow_strength =
         a.follow_strength >= 0 ? a.follow_strength : realtime::default_follow_strength(scene);
     o.sss.reject_depth =
@@ -297,11 +293,11 @@ void register_raster(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--sss", a->sss,
                     "separable (default: the model's passes), reference (the exact 2D kernel: "
                     "screen-space ground truth) or none")
-        ->check(one_of({"separable", "reference", "none"}));
+        ->check(one_of_enum<realtime::SssMethod>());
     sub->add_option("--edge", a->edge,
                     "Depth and material edges: follow (follow-surface, Freude14 Eq. 4.12; "
                     "default), reject (drop samples across edges, renormalise) or none")
-        ->check(one_of({"follow", "reject", "none"}));
+        ->check(one_of_enum<realtime::SssEdgeMode>());
     sub->add_option("--follow-strength", a->follow_strength,
                     "Follow-surface strength per world unit of depth difference (default 3.6 "
                     "per mm)")

@@ -56,8 +56,7 @@ std::string render_toml(const RenderArgs& a, const Scene& scene, const volpath::
     ConfigTable st = root.table_or_empty("render");
     st.record("engine", std::string(volpath::render_engine_version()));
     st.record("seed", static_cast<std::int64_t>(o.seed));
-    st.record("sampler",
-              std::string(o.sampler == volpath::RenderSampler::kSobol ? "sobol" : "independent"));
+    st.record("sampler", std::string(name_of(o.sampler)));
     st.record("absorption", a.absorption);
     st.record("hero", a.hero);
     st.record("exit_guide", a.exit_guide);
@@ -122,20 +121,15 @@ int run_render(const RenderArgs& a) {
     if (a.common.rel_error) o.budget.rel_error = *a.common.rel_error;
     if (!o.budget.any()) o.budget.samples = 64;
     o.batch_spp = a.batch_spp;
-    o.sampler = a.sampler == "independent" ? volpath::RenderSampler::kIndependent
-                                           : volpath::RenderSampler::kSobol;
-    o.hero = a.hero == "throughput-albedo" ? volpath::RenderHero::kThroughputAlbedo
-                                           : volpath::RenderHero::kUniform;
-    if (a.absorption != "auto")
-        o.absorption = a.absorption == "weighted"      ? volpath::Absorption::kWeighted
-                       : a.absorption == "per-channel" ? volpath::Absorption::kPerChannel
-                                                       : volpath::Absorption::kAnalog;
+    // (each validated by its one_of_enum below)
+    o.sampler = *parse_name<volpath::RenderSampler>(a.sampler);
+    o.hero = *parse_name<volpath::RenderHero>(a.hero);
+    if (a.absorption != "auto") o.absorption = *parse_name<volpath::Absorption>(a.absorption);
     o.exit_guide = a.exit_guide != "off";
     o.boundary_guides = a.exit_guide == "on" || a.exit_guide == "boundary";
     o.diffuse_guides = a.exit_guide == "on";
     o.wide_lobes = a.exit_guide == "on";
-    o.error_measure = a.error_of == "image-mean" ? volpath::RenderErrorMeasure::kImageMean
-                                                 : volpath::RenderErrorMeasure::kMedianPixel;
+    o.error_measure = *parse_name<volpath::RenderErrorMeasure>(a.error_of);
     o.width = a.width;
     o.height = a.height;
     o.fresh = a.common.fresh;
@@ -272,7 +266,7 @@ void register_render(CLI::App& app, std::function<int()>& action) {
                     "What --rel-error measures: median-pixel (default; the median over the lit "
                     "pixel channels of the radiance's relative standard error) or image-mean (the "
                     "relative standard error of the image mean, far smaller than any pixel's)")
-        ->check(one_of({"median-pixel", "image-mean"}));
+        ->check(one_of_enum<volpath::RenderErrorMeasure>());
     sub->add_option("--batch-spp", a->batch_spp,
                     "Samples per pixel in a batch, a multiple of 3 (default: 3 x 2^m, the largest "
                     "with at least 32 batches in an --spp budget, else 3; a resumed render keeps "
@@ -292,20 +286,20 @@ void register_render(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--sampler", a->sampler,
                     "The first random numbers of a path: sobol (default; Owen-scrambled Sobol "
                     "points, scrambled anew in every batch) or independent (the stream alone)")
-        ->check(one_of({"sobol", "independent"}));
+        ->check(one_of_enum<volpath::RenderSampler>());
     sub->add_option("--absorption", a->absorption,
                     "Absorption inside media: auto (default; weighted where every channel's "
                     "albedo is at least 0.9, else analog), analog (the hero's roulette with its "
                     "albedo) or weighted (the albedos in the path's weights, Russian roulette on "
                     "small weights) or per-channel (each channel's strategy weighted where its "
                     "albedo is at least 0.5, analog below)")
-        ->check(one_of({"auto", "analog", "weighted", "per-channel"}));
+        ->check(one_of_enum<volpath::Absorption>({"auto"}));
     sub->add_option("--hero", a->hero,
                     "The hero channel of walks in media: throughput-albedo (default; chosen "
                     "anew at every entry into a medium, with probability proportional to the "
                     "path's throughput times the medium's albedo) or uniform (R, G, B in turn "
                     "per camera path, as before volpath-render-6)")
-        ->check(one_of({"uniform", "throughput-albedo"}));
+        ->check(one_of_enum<volpath::RenderHero>());
     sub->add_option("--exit-guide", a->exit_guide,
                     "Inside media behind rough boundaries, the exit guide's estimator of the "
                     "light of sphere lights and sun discs that leaves straight from a vertex "

@@ -64,6 +64,13 @@ CLI::Validator nonnegative_integer();
 CLI::Validator number_in(double lo, double hi, bool open);
 CLI::Validator positive_number();
 CLI::Validator one_of(std::vector<std::string> choices);
+/// one_of the spellings of enum E (core/enum_names.h), and `extra` ones (e.g. "auto").
+template <class E>
+CLI::Validator one_of_enum(std::vector<std::string> extra = {}) {
+    std::vector<std::string> names = names_of<E>();
+    names.insert(names.end(), extra.begin(), extra.end());
+    return one_of(std::move(names));
+}
 /// An existing regular file; `what` names it in the message ("scene file 'x.toml' does not
 /// exist"). On a positional argument the message stands alone (main drops the argument's name).
 CLI::Validator existing_file(const std::string& what);

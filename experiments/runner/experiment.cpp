@@ -124,8 +124,7 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
     }
     if (auto t = outs.table("profiles")) {
         e.profiles.enabled = true;
-        e.profiles.unit =
-            t->choice("unit", "mm", {"mm", "cm"}) == "mm" ? LengthUnit::kMm : LengthUnit::kCm;
+        e.profiles.unit = t->enumerated("unit", LengthUnit::kMm);
     }
     if (auto t = outs.table("profile_plots")) {
         e.profile_plots.enabled = true;

@@ -237,7 +237,7 @@ RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_
     s.height = static_cast<int>(t.integer("height", 512, Range::closed(0, 16384)));
     if ((s.width == 0) != (s.height == 0))
         t.fail("width", "give both width and height, or neither");
-    s.edge = t.choice("edge", "follow", {"follow", "reject", "none"});
+    s.edge = t.enumerated("edge", realtime::SssEdgeMode::kFollowSurface);
     s.backend = t.choice("backend", "software", {"software", "gl"});
     s.platform = t.choice("platform", "auto", {"auto", "osmesa", "egl"});
     if (s.backend == "gl" && !SSSLAB_HAVE_GL)
@@ -331,10 +331,7 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         gl_pass = std::make_unique<realtime::gl::GlSssPass>(*gl_context);
     }
 #endif
-    const realtime::SssEdgeMode mode = spec.edge == "reject" ? realtime::SssEdgeMode::kReject
-                                       : spec.edge == "none"
-                                           ? realtime::SssEdgeMode::kNone
-                                           : realtime::SssEdgeMode::kFollowSurface;
+    const realtime::SssEdgeMode mode = spec.edge;
 
     for (const std::string& path : spec.scenes) {
         const Scene scene = read_scene(path);

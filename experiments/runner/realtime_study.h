@@ -49,6 +49,7 @@
 #include "core/config.h"
 #include "experiments/runner/cache.h"
 #include "experiments/runner/render_study.h"
+#include "realtime/sss_pass.h"
 
 #include <filesystem>
 #include <string>
@@ -70,7 +71,7 @@ struct RealtimeStudySpec {
     /// (SssParams::rotate, JimenezSupp Fig. S.7), without jitter.
     bool rotate = false;
     int width = 512, height = 512;
-    std::string edge = "follow";
+    realtime::SssEdgeMode edge = realtime::SssEdgeMode::kFollowSurface;
     /// The separable pass's backend: "software" (realtime/sss_pass.h) or "gl" (the GL twin,
     /// realtime/gl) on `platform` ("auto", "osmesa", "egl").
     std::string backend = "software", platform = "auto";

@@ -272,16 +272,17 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
     }
 
     ConfigTable in = root.table_or_empty("integration");
-    std::string entry = in.choice("entry", "fresnel", {"fresnel", "cosine"});
-    if (!a.entry.empty()) {
-        if (a.entry != "fresnel" && a.entry != "cosine")
-            throw InputError({kCommandLine, 0, 0}, "--entry",
-                             "expected fresnel or cosine, got \"" + a.entry + "\"");
-        entry = a.entry;
-        in.record("entry", entry);
-    }
     approx::SphereIntegration& ig = job.integration;
-    ig.entry = entry == "cosine" ? approx::EntryWeight::kCosineOnly : approx::EntryWeight::kFresnel;
+    ig.entry = in.enumerated("entry", approx::EntryWeight::kFresnel);
+    if (!a.entry.empty()) {
+        const auto e = parse_name<approx::EntryWeight>(a.entry);
+        if (!e)
+            throw InputError({kCommandLine, 0, 0}, "--entry",
+                             "expected " + names_joined<approx::EntryWeight>(" or ") + ", got \"" +
+                                 a.entry + "\"");
+        ig.entry = *e;
+        in.record("entry", a.entry);
+    }
     ig.nodes_per_bin = static_cast<int>(in.integer("nodes_per_bin", 4, Range::closed(1, 16)));
     ig.rel_tol = in.number("rel_tol", 1e-10, Range::closed(1e-15, 1e-2));
     job.supersampling = static_cast<int>(in.integer("supersampling", 4, Range::closed(1, 16)));
