@@ -1,5 +1,6 @@
 // Results are written atomically: to a temporary name in the target directory, then renamed, so
-// that a reader (or a rerun after a kill) never sees a half-written file (design.md, "Bad input").
+// that a reader (or a rerun after a kill) never sees a half-written file (docs/architecture.md,
+// "Bad input").
 #pragma once
 
 #include <filesystem>

@@ -1,5 +1,6 @@
 // A Monte Carlo run as a sequence of fixed batches: the engine-independent driver that gives every
-// ssslab engine built on it the same guarantees (design.md, "Determinism", "Uncertainty", "Cost"):
+// ssslab engine built on it the same guarantees (docs/architecture.md, "Determinism",
+// "Uncertainty", "Cost"):
 //
 // - batch b draws its random numbers from its own counter-based stream (the engine creates it from
 //   the batch index), and batches are folded into the statistics in batch order, so a result is

@@ -1,6 +1,6 @@
-// Scale-out over MPI (design.md, "Determinism"): every rank runs the same command on the same
-// input, so each builds the same simulation; the batch driver (core/batch_runner.cpp) deals the
-// batches out over the ranks and folds them on rank 0 in batch order, so a result is
+// Scale-out over MPI (docs/architecture.md, "Determinism"): every rank runs the same command on the
+// same input, so each builds the same simulation; the batch driver (core/batch_runner.cpp) deals
+// the batches out over the ranks and folds them on rank 0 in batch order, so a result is
 // bit-identical to one process with any thread count. Rank 0 alone touches the outputs: the
 // other ranks write nothing (core/atomic_file.cpp), and what a run reads of earlier runs'
 // outputs (a checkpoint's fingerprint, an artifact cache entry) is rank 0's, sent to the others.

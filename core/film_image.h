@@ -1,5 +1,6 @@
 // A multi-layer float image (the ground-truth renders: radiance, subsurface, specular, stderr,
-// depth, normal, ...) with OpenEXR I/O and an 8-bit sRGB PNG preview (design.md, "Formats").
+// depth, normal, ...) with OpenEXR I/O and an 8-bit sRGB PNG preview (docs/architecture.md,
+// "Formats").
 //
 // In an EXR file a layer is a group of channels named "<layer>.<channel>", OpenEXR's convention
 // for layered files (the layer name is everything before the last dot), so that exrheader,

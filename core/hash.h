@@ -1,7 +1,7 @@
 // Content hashes: the key of every cached artifact is a hash of everything that determines it
-// (design.md, "Data flow"). The hashed text is canonical: fields are named, numbers are written
-// with every significant digit, so a value read as 1e6 or 1000000 hashes alike and a change in
-// the 17th digit does not go unnoticed. XXH3-128 (libxxhash) is the hash.
+// (docs/architecture.md, "Data flow"). The hashed text is canonical: fields are named, numbers are
+// written with every significant digit, so a value read as 1e6 or 1000000 hashes alike and a change
+// in the 17th digit does not go unnoticed. XXH3-128 (libxxhash) is the hash.
 #pragma once
 
 #include "core/vec3.h"

@@ -1,6 +1,6 @@
 // A radially symmetric diffuse reflectance profile R_d(r) per RGB channel, with the standard error
-// of every bin: what the ground-truth engines produce and the kernel models consume (design.md,
-// "Data flow").
+// of every bin: what the ground-truth engines produce and the kernel models consume
+// (docs/architecture.md, "Data flow").
 #pragma once
 
 #include <array>

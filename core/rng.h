@@ -4,7 +4,7 @@
 // (seed, domain, index): the seed is the user's, the domain separates independent uses (an RGB
 // channel, an engine, a test), and the index is the batch number. Work is split into fixed
 // batches, each with its own stream, so results do not depend on how batches are spread over
-// threads or processes, and an interrupted run can resume at any batch (design.md,
+// threads or processes, and an interrupted run can resume at any batch (docs/architecture.md,
 // "Determinism").
 //
 // The generator is Philox4x32-10 (Salmon et al., SC'11; Random123's philox4x32): it passes

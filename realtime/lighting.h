@@ -1,6 +1,6 @@
-// Pass 1 of the real-time renderer: the G-buffer and its lighting (issue 13; design.md, "The
-// real-time renderer"). From a rasterized frame (realtime/raster.h) and the scene: per sample the
-// facet normal and material, the irradiance transmitted into a medium through its dielectric
+// Pass 1 of the real-time renderer: the G-buffer and its lighting (issue 13; docs/architecture.md,
+// "The real-time renderer"). From a rasterized frame (realtime/raster.h) and the scene: per sample
+// the facet normal and material, the irradiance transmitted into a medium through its dielectric
 // boundary, the exit weight that turns the medium's exitance into radiance towards the camera,
 // the first-surface reflection ("specular"), the radiance of diffuse surfaces and of what is
 // seen directly ("surface"), and the thickness and translucency of thin parts

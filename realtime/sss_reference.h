@@ -3,8 +3,8 @@
 // kernel of the material [Freude14 §6.1, "simple rotation"; the ground truth the separable models
 // approximate, §6.2] instead of a separable model. A separable model against this reference
 // measures the model's approximation and the pass's sampling only; this reference against the path
-// tracer measures the screen-space diffusion assumption itself (design.md, "The real-time
-// renderer").
+// tracer measures the screen-space diffusion assumption itself (docs/architecture.md, "The
+// real-time renderer").
 //
 // The kernel of a channel is approx::Kernel2D (cell masses on the thesis grid, unit L1), taken as a
 // piecewise-constant density: cell mass / h^2 over each cell of side h (mm). For the pixel c being

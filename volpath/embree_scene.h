@@ -1,7 +1,7 @@
 // Ray queries against a scene's triangle meshes through Embree 3 [Wald et al. 2014] (Debian's
 // libembree-dev). One Embree geometry per scene shape, so a hit names the shape (and with it the
-// material) and the triangle. Built only for scenes that have meshes (design.md: compute only
-// what a scene needs); the pencil and sphere engines never open it.
+// material) and the triangle. Built only for scenes that have meshes (docs/architecture.md: compute
+// only what a scene needs); the pencil and sphere engines never open it.
 //
 // Embree works in single precision: hits are exact to about 1e-7 of the scene's extent, and a
 // ray leaving a surface must start a little off it or skip that surface's triangle

@@ -1,8 +1,8 @@
 // The volumetric path tracer's own sampling and optics: vectors, Henyey-Greenstein phase
 // function, refraction (the Fresnel reflectance is core/dielectric.h's and the orthonormal basis
-// core/vec3.h's, shared with realtime/). Written independently of mcml/transport.h (design.md:
-// the two engines are independent witnesses), with different formulas where a choice exists (HG
-// inversion, direction frames).
+// core/vec3.h's, shared with realtime/). Written independently of mcml/transport.h
+// (docs/architecture.md: the two engines are independent witnesses), with different formulas where
+// a choice exists (HG inversion, direction frames).
 #pragma once
 
 #include "core/dielectric.h"
