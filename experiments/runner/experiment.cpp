@@ -1,4 +1,5 @@
 #include "experiments/runner/experiment.h"
+#include "experiments/runner/study.h"
 
 #include "approx/diffusion.h"
 #include "core/error.h"
@@ -165,15 +166,24 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
         e.realtime =
             read_realtime_study(*t, std::filesystem::path(e.source).parent_path().string());
     if (auto t = outs.table("stiff")) e.stiff = read_stiff_study(*t);
+    for (const auto& [name, factory] : study_registry())
+        if (auto t = outs.table(name))
+            e.studies.push_back(
+                {name, factory(*t, std::filesystem::path(e.source).parent_path().string())});
     const bool material_outputs = e.profiles.enabled || e.profile_plots.enabled ||
                                   e.convergence.enabled || !e.kernel_studies.empty() ||
                                   e.crossval.enabled || e.pencil.enabled || e.efficiency.enabled;
-    if (!material_outputs && !e.render.enabled && !e.realtime.enabled && !e.stiff.enabled)
+    if (!material_outputs && !e.render.enabled && !e.realtime.enabled && !e.stiff.enabled &&
+        e.studies.empty()) {
+        std::string plugins;
+        for (const auto& [name, factory] : study_registry()) plugins += ", [outputs." + name + "]";
         outs.fail("profiles",
                   "no outputs: give at least one of [outputs.profiles], "
                   "[outputs.profile_plots], [outputs.convergence], [[outputs.kernels]], "
                   "[outputs.crossval], [outputs.pencil], [outputs.efficiency], [outputs.render], "
-                  "[outputs.realtime], [outputs.stiff]");
+                  "[outputs.realtime], [outputs.stiff]" +
+                      plugins);
+    }
     if (material_outputs && e.materials.empty())
         mats.fail("presets", "no materials: give presets = [...] or [[materials.custom]] tables");
     if (!material_outputs && !e.materials.empty())

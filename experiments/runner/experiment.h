@@ -30,6 +30,8 @@
 //                            (experiments/runner/realtime_study.h); needs no [materials]
 //   [outputs.stiff]          the stiff sweep: every engine and model on the extremes of its
 //                            inputs (experiments/runner/stiff_study.h); needs no [materials]
+//   [outputs.<name>]         a plugin study of experiments/runner/studies/<name>/
+//                            (experiments/runner/study.h); needs no [materials]
 // Every error names file:line:column and the key.
 #pragma once
 
@@ -118,6 +120,13 @@ struct Experiment {
     RenderStudySpec render;                       ///< [outputs.render]
     RealtimeStudySpec realtime;                   ///< [outputs.realtime]
     StiffStudySpec stiff;                         ///< [outputs.stiff]
+    /// The plugin studies (experiments/runner/study.h) this config has an [outputs.<name>] of,
+    /// in the registry's order.
+    struct PluginStudy {
+        std::string name;
+        std::shared_ptr<const class Study> study;
+    };
+    std::vector<PluginStudy> studies;
 
     std::shared_ptr<ConfigDocument> doc;  ///< parsed config; holds the resolved configuration
 };

@@ -469,6 +469,16 @@ void metrics_tables(std::ostringstream& os, const std::vector<Metric>& ms) {
     os << "</div>\n";
 }
 
+// A plugin study's section (study.h): its title, paragraphs, tables and images, every text
+// escaped.
+void study_section_html(std::ostringstream& os, const StudySection& s) {
+    os << "<h2 id=\"" << esc(s.id) << "\">" << esc(s.title) << "</h2>\n";
+    for (const std::string& p : s.paragraphs) os << "<p>" << esc(p) << "</p>\n";
+    for (const StudySection::Table& t : s.tables) csv_table(os, t.csv, esc(t.title).c_str());
+    for (const std::string& img : s.images)
+        os << "<figure><img src=\"" << esc(img) << "\" alt=\"" << esc(img) << "\"></figure>\n";
+}
+
 // A table of contents of the page's sections: every <h2 id> of `body`, with its <h3 id>s.
 std::string contents(const std::string& body) {
     struct Entry {
@@ -613,6 +623,7 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
     os << c.render_html;
     os << c.realtime_html;
     os << c.stiff_html;
+    for (const StudySection& s : c.sections) study_section_html(os, s);
 
     os << "<h2 id=\"metrics\">Metrics</h2>\n<p>What <code>ssslab check</code> compares with the "
           "baselines in <code>results/baselines/</code>: stochastic metrics by z-score with "

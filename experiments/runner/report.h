@@ -3,6 +3,7 @@
 #pragma once
 
 #include "experiments/runner/plots.h"
+#include "experiments/runner/study.h"
 
 #include <map>
 #include <sstream>
@@ -31,6 +32,8 @@ struct ReportContent {
     std::string render_html;    ///< [outputs.render] (render_study.h)
     std::string realtime_html;  ///< [outputs.realtime] (realtime_study.h)
     std::string stiff_html;     ///< [outputs.stiff] (stiff_study.h)
+    /// The plugin studies' sections (study.h), in the experiment's order.
+    std::vector<StudySection> sections;
 };
 
 std::string render_report(const ExperimentRun& r, const ReportContent& c);

@@ -12,6 +12,7 @@
 #include "experiments/runner/kernel_study.h"
 #include "experiments/runner/plots.h"
 #include "experiments/runner/report.h"
+#include "experiments/runner/study.h"
 #include "mcml/transport.h"
 #include "volpath/pencil.h"
 
@@ -404,6 +405,7 @@ void print_plan(const ExperimentRun& r, std::ostream& os, bool verbose) {
            << r.exp.realtime.models.size() << " models; profiles and renders reused or computed "
            << "when run)";
     if (r.exp.stiff.enabled) os << " stiff (the sweep, computed when run)";
+    for (const auto& s : r.exp.studies) os << " " << s.study->describe();
     os << " report\n";
 }
 
@@ -744,6 +746,26 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
             std::printf("  stiff sweep: %d checks, %d failed, %d refused\n", sr.checks, sr.failed,
                         sr.refused);
         report.stiff_html = std::move(sr.html);
+    }
+    // The plugin studies (study.h): what each returns is written and rendered here.
+    for (const auto& s : r.exp.studies) {
+        StudyInputs in;
+        in.ctx = study_context(r, o);
+        in.cache = &cache;
+        StudyResult sr = s.study->run(in);
+        if (sr.interrupted) {
+            fs::remove_all(stage, ec);
+            r.interrupted = true;
+            return false;
+        }
+        r.computed += sr.computed;
+        r.reused += sr.reused;
+        for (const auto& [name, content] : sr.files)
+            write_file_atomic(stage / s.name / name, content);
+        r.metrics.insert(r.metrics.end(), sr.metrics.begin(), sr.metrics.end());
+        if (!o.quiet && !sr.summary.empty())
+            std::printf("  %s: %s\n", s.name.c_str(), sr.summary.c_str());
+        report.sections.push_back(std::move(sr.section));
     }
     write_file_atomic(stage / "metrics.csv", metrics_csv(r.metrics));
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -1,0 +1,85 @@
+// Studies as plugins: a study is read from its [outputs.<name>] table of an experiment config,
+// runs on what the run gives it (seed, --quick, threads, the artifact cache, cancellation), and
+// returns its metrics, files and report section as data (StudyResult): the runner loops over the
+// registry (runner.cpp), writes the files under results/<experiment>/<name>/ and one writer
+// renders every section (report.cpp, study_section_html). Adding a study is a folder
+// experiments/runner/studies/<name>/ whose .cpp files define the study and register it with
+// SSSLAB_REGISTER_STUDY(<name>, factory); the build compiles the folder and calls the registration
+// (experiments/CMakeLists.txt, by glob); no runner file changes (docs/architecture.md, "Studies as
+// plugins").
+//
+// The older studies (profiles, convergence, the engines' tables, kernel studies, render, realtime,
+// stiff) are still wired into runner.cpp by hand; they move here one by one.
+#pragma once
+
+#include "core/config.h"
+#include "experiments/runner/nodes.h"
+#include "experiments/runner/render_study.h"
+
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ssslab::runner {
+
+/// A study's section of the report, as data: the writer escapes the text and renders the tables
+/// (CSV text, the header its first row) and the images (paths relative to the results folder).
+struct StudySection {
+    std::string id, title;
+    std::vector<std::string> paragraphs;
+    struct Table {
+        std::string title, csv;
+    };
+    std::vector<Table> tables;
+    std::vector<std::string> images;
+};
+
+struct StudyResult {
+    bool interrupted = false;
+    int computed = 0, reused = 0;
+    /// Files relative to results/<experiment>/<name>/ and their content.
+    std::map<std::string, std::string> files;
+    std::vector<Metric> metrics;
+    StudySection section;
+    std::string summary;  ///< one line for the terminal
+};
+
+/// What a study gets of the run: the scene studies' context (seed, --quick, threads, quiet,
+/// checkpoint interval, cancellation) and the artifact cache.
+struct StudyInputs {
+    RenderStudyContext ctx;
+    const ArtifactCache* cache = nullptr;
+};
+
+class Study {
+  public:
+    virtual ~Study() = default;
+    /// What --dry-run lists for it ("spot_light (2 scenes, computed when run)").
+    virtual std::string describe() const = 0;
+    virtual StudyResult run(const StudyInputs& in) const = 0;
+};
+
+/// A study from its config table (InputError naming the key for bad values); `config_dir` is the
+/// experiment config's folder, against which paths in the table resolve.
+using StudyFactory =
+    std::function<std::shared_ptr<const Study>(ConfigTable& table, const std::string& config_dir)>;
+
+/// Every registered study by name (the key of its [outputs.<name>] table), in name order.
+const std::map<std::string, StudyFactory>& study_registry();
+
+namespace detail {
+void register_study(const std::string& name, StudyFactory factory);
+}
+
+}  // namespace ssslab::runner
+
+/// In a study's .cpp under experiments/runner/studies/<name>/: registers `factory` as the study
+/// read from [outputs.<name>] (the build calls ssslab_register_study_<name>() from
+/// study_registry()).
+#define SSSLAB_REGISTER_STUDY(name, factory)                      \
+    void ssslab_register_study_##name() {                         \
+        ::ssslab::runner::detail::register_study(#name, factory); \
+    }
