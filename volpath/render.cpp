@@ -655,25 +655,17 @@ struct Renderer {
         }
     }
 
-    // One camera path through pixel (x, y); tally += its contributions. Outside media the
-    // loop below; inside a medium the one walk of volpath/walk.h, whose boundary hook is the
-    // same surface vertex as a hit from outside.
-    std::uint64_t trace(int x, int y, int hero, RngStream& rng, double* T) const {
+    // The state of one camera path (trace): position, direction and weights of the whole path
+    // (ws), where it is, and what the MIS of its next hit needs of the vertex before.
+    struct CameraPath {
+        CameraPath(int hero_, RngStream& rng_, double* T_) : hero(hero_), rng(rng_), T(T_) {}
+        int hero;
+        RngStream& rng;
+        double* T;  // the pixel's tally
         std::uint64_t rays = 0;
-        const double jx = rng.uniform(), jy = rng.uniform();
-        const double ndc_x = (2 * (x + jx) / width - 1) * tan_half * aspect;
-        const double ndc_y = (1 - 2 * (y + jy) / height) * tan_half;
         WalkState<3> ws;  // position, direction, weights and events of the whole path
-        ws.p = cam_pos;
-        ws.w = normalize(cam_f + cam_r * ndc_x + cam_u * ndc_y);
-        ws.weights.hero = hero;
-        ws.weights.start(1.0);
-        Vec3& o = ws.p;
-        Vec3& d = ws.w;
-        bool& on_surface = ws.on_surface;
         // Outside media: the triangle the next ray leaves (rays_from_surface), else none.
         TriangleRef leave;
-        double* beta = ws.weights.beta;
         int medium = -1;  // index into media of the medium the path is in
         int medium_shape = -1;
         bool prev_nee = false, entered = false, specular_path = false;
@@ -689,356 +681,399 @@ struct Renderer {
         DiffuseGuide plate;           // of the last diffuse vertex (diffuse_guides)
         Vec3 plate_n;                 // and its normal
         bool plate_armed = false;     // it takes part in the entry the path meets next
-        // `subsurface`: light that entered a medium whatever the path so far (an exit guide's
-        // estimate at the boundary where the path is still outside).
-        auto flush = [&](const RGB& contribution, bool subsurface = false) {
-            for (int c = 0; c < 3; ++c) {
-                const double v = contribution[static_cast<size_t>(c)];
-                T[RenderLayout::kRadiance + c] += v;
-                if (entered || subsurface)
-                    T[RenderLayout::kSubsurface + c] += v;
-                else if (specular_path)
-                    T[RenderLayout::kSpecular + c] += v;
-            }
-        };
+    };
 
-        // The next ray outside media leaves the surface at p (triangle tri) on the side of n:
-        // from p itself, that triangle and hits within rounding skipped (volpath-render-7), or
-        // (the option) from eps off it.
-        auto leave_outside = [&](const Vec3& p, const Vec3& n, TriangleRef tri) {
-            on_surface = false;
-            if (opt.rays_from_surface) {
-                o = p;
-                leave = tri;
+    // Adds a contribution of path c to its pixel's layers. `subsurface`: light that entered a
+    // medium whatever the path so far (an exit guide's estimate at the boundary where the path is
+    // still outside).
+    static void flush(CameraPath& c, const RGB& contribution, bool subsurface = false) {
+        for (int k = 0; k < 3; ++k) {
+            const double v = contribution[static_cast<size_t>(k)];
+            c.T[RenderLayout::kRadiance + k] += v;
+            if (c.entered || subsurface)
+                c.T[RenderLayout::kSubsurface + k] += v;
+            else if (c.specular_path)
+                c.T[RenderLayout::kSpecular + k] += v;
+        }
+    }
+
+    // The next ray outside media leaves the surface at p (triangle tri) on the side of n: from p
+    // itself, that triangle and hits within rounding skipped (volpath-render-7), or (the option)
+    // from eps off it.
+    void leave_outside(CameraPath& c, const Vec3& p, const Vec3& n, TriangleRef tri) const {
+        c.ws.on_surface = false;
+        if (opt.rays_from_surface) {
+            c.ws.p = p;
+            c.leave = tri;
+        } else {
+            c.ws.p = p + n * eps;
+        }
+    }
+
+    // A surface vertex at p (shape `shape`, its normal n), reached along the path's direction
+    // from either side of a medium's boundary or from outside a diffuse surface: the surface
+    // model, NEE, the next direction and the throughput roulette. False: the path ends.
+    bool vertex(CameraPath& c, const Vec3& p, Vec3 n, TriangleRef tri) const {
+        const std::uint32_t shape = tri.shape;
+        const bool guided_arrival = c.guide_armed;
+        c.guide_armed = false;
+        const bool plate_arrival = c.plate_armed, left_guided_arrival = c.left_guided;
+        c.plate_armed = c.left_guided = false;
+        c.exit_share = {};
+        if (opt.max_depth > 0 && c.depth >= opt.max_depth) return false;
+        const int mi = shape_medium[shape];
+        if (mi < 0) {  // diffuse, two-sided
+            if (c.medium >= 0) return false;
+            diffuse_vertex(c, p, n, tri, left_guided_arrival);
+        } else if (!boundary_vertex(c, p, n, tri, mi, guided_arrival, plate_arrival)) {
+            return false;
+        }
+        // Russian roulette on the throughput.
+        double* beta = c.ws.weights.beta;
+        if (c.depth + 1 >= opt.roulette_depth) {
+            const double m = std::max({beta[0], beta[1], beta[2]});
+            if (!(m > 0) || !std::isfinite(m)) return false;
+            if (m < 1) {
+                const double survive = std::max(0.05, m);
+                if (!(c.rng.uniform() < survive)) return false;
+                for (int k = 0; k < 3; ++k) beta[k] /= survive;
+            }
+        }
+        ++c.depth;
+        return true;
+    }
+
+    // vertex() on a diffuse surface: NEE, the cosine-weighted next direction, and straight from a
+    // guided medium's way out the diffuse guide (volpath-render-10).
+    void diffuse_vertex(CameraPath& c, const Vec3& p, Vec3 n, TriangleRef tri,
+                        bool left_guided_arrival) const {
+        RngStream& rng = c.rng;
+        double* beta = c.ws.weights.beta;
+        Vec3& d = c.ws.w;
+        const Vec3 wo = -d;
+        const SceneMaterial& m =
+            scene.materials[static_cast<size_t>(scene.shapes[tri.shape].material)];
+        if (dot(n, wo) < 0) n = -n;
+        const SurfaceAt at{n, tri};
+        RGB e{};
+        nee(
+            p, &at, rng, beta,
+            [&](const Vec3& wi) {
+                const double cs = std::max(0.0, dot(wi, n)) / kPi;
+                return RGB{m.albedo[0] * cs, m.albedo[1] * cs, m.albedo[2] * cs};
+            },
+            [&](const Vec3& wi) { return std::max(0.0, dot(wi, n)) / kPi; }, e, c.rays);
+        flush(c, e);
+        const double u1 = rng.uniform(), u2 = rng.uniform();
+        const Vec3 wl = sample_cosine_hemisphere(u1, u2);
+        d = Frame(n).world(wl);
+        c.prev_pdf = wl.z / kPi;
+        c.prev_nee = true;
+        c.nee_pos = p;
+        c.nee_normal = n;
+        c.nee_on_surface = true;
+        for (int k = 0; k < 3; ++k) beta[k] *= m.albedo[static_cast<size_t>(k)];
+        // Straight from a guided medium's way out: the diffuse guide (volpath-render-10).
+        if (left_guided_arrival && opt.diffuse_guides && opt.boundary_guides &&
+            opt.rays_from_surface) {
+            diffuse_guide(p, n, tri, c.plate, c.rays);
+            if (c.plate.n > 0) {
+                RGB g{};
+                diffuse_guided(c.plate, p, n, tri, c.ws, c.depth, rng, g, c.rays);
+                flush(c, g, true);
+                c.plate_n = n;
+                c.plate_armed = true;
+            }
+        }
+        leave_outside(c, p, n, tri);
+    }
+
+    // vertex() on the dielectric boundary of medium mi: a smooth one's Fresnel choice, or a rough
+    // one's NEE, exit guide and BSDF sample (rough_boundary); then into the medium or out of it.
+    // False: the path ends.
+    bool boundary_vertex(CameraPath& c, const Vec3& p, const Vec3& n, TriangleRef tri, int mi,
+                         bool guided_arrival, bool plate_arrival) const {
+        const std::uint32_t shape = tri.shape;
+        double* beta = c.ws.weights.beta;
+        Vec3& d = c.ws.w;  // fresnel_reflects and rough_boundary turn it
+        const MediumData& md = media[static_cast<size_t>(mi)];
+        const bool outside = dot(-d, n) > 0;
+        bool transmitted = false, reflected = false;
+        ExitGuide here;  // this vertex's exit guide (rough boundaries)
+        bool here_guided = false;
+        if (md.alpha == 0) {
+            // The smooth boundary of every engine's walk (walk_mesh_medium's too).
+            const double eta = md.eta;  // inside over outside (outside index 1)
+            const double eta_side = outside ? eta : 1 / eta;
+            if (fresnel_reflects(d, outside ? -n : n, eta_side, c.rng)) {
+                reflected = true;
             } else {
-                o = p + n * eps;
+                for (int k = 0; k < 3; ++k) beta[k] /= eta_side * eta_side;  // radiance
+                transmitted = true;
             }
-        };
+            // An index-matched boundary is no vertex: NEE before it still stands.
+            if (!passable(mi)) c.prev_nee = false;
+        } else if (!rough_boundary(c, p, n, tri, md, outside, guided_arrival, plate_arrival, here,
+                                   here_guided, reflected, transmitted)) {
+            return false;
+        }
+        if (c.depth == 0 && reflected) c.specular_path = true;
+        if (transmitted) {
+            if (c.medium < 0) {
+                c.medium = mi;
+                c.medium_shape = static_cast<int>(shape);
+                if (opt.hero == RenderHero::kThroughputAlbedo) {
+                    // From the stream, not a Sobol dimension: the walk's first numbers keep the
+                    // pairs they had.
+                    const double u = c.rng.stream_uniform();
+                    c.ws.weights.choose_hero_by_throughput(md.region.albedo,
+                                                           c.entered ? u : (c.hero + u) / 3);
+                }
+                c.entered = true;
+            } else {
+                c.medium = -1;
+                c.medium_shape = -1;
+            }
+        }
+        if (c.medium >= 0) {
+            // Into a medium (entering, or reflected inside): from the surface point itself,
+            // skipping hits closer than eps. An origin moved off the surface would start every
+            // walk eps deep, a bias of sigma_t eps (measured: 3.7 % of the single scattering of
+            // an index-matched half-space with sigma_t 1/mm at eps = 4e-5 of a 1 m scene).
+            c.ws.p = p;
+            c.ws.on_surface = true;
+            // The walk goes on from this vertex of a rough boundary: its exit guide (above)
+            // takes part in the MIS of the exit it reaches straight from here.
+            if (here_guided) {
+                c.guide = here;
+                c.guide_armed = true;
+            }
+        } else {
+            leave_outside(c, p, dot(d, n) > 0 ? n : -n, tri);
+        }
+        return true;
+    }
 
-        // A surface vertex at p (shape `shape`, its normal n), reached along d from either side
-        // of a medium's boundary or from outside a diffuse surface: the surface model, NEE,
-        // the next direction and the throughput roulette. False: the path ends.
-        auto vertex = [&](const Vec3& p, Vec3 n, TriangleRef tri) -> bool {
-            const std::uint32_t shape = tri.shape;
-            const bool guided_arrival = guide_armed;
-            guide_armed = false;
-            const bool plate_arrival = plate_armed, left_guided_arrival = left_guided;
-            plate_armed = left_guided = false;
-            exit_share = {};
-            if (opt.max_depth > 0 && depth >= opt.max_depth) return false;
-            const int mi = shape_medium[shape];
-            const Vec3 wo = -d;
-            if (mi < 0) {  // diffuse, two-sided
-                if (medium >= 0) return false;
-                const SceneMaterial& m =
-                    scene.materials[static_cast<size_t>(scene.shapes[shape].material)];
-                if (dot(n, wo) < 0) n = -n;
-                const SurfaceAt at{n, tri};
-                RGB c{};
-                nee(
-                    p, &at, rng, beta,
-                    [&](const Vec3& wi) {
-                        const double cs = std::max(0.0, dot(wi, n)) / kPi;
-                        return RGB{m.albedo[0] * cs, m.albedo[1] * cs, m.albedo[2] * cs};
-                    },
-                    [&](const Vec3& wi) { return std::max(0.0, dot(wi, n)) / kPi; }, c, rays);
-                flush(c);
-                const double u1 = rng.uniform(), u2 = rng.uniform();
-                const Vec3 wl = sample_cosine_hemisphere(u1, u2);
-                d = Frame(n).world(wl);
-                prev_pdf = wl.z / kPi;
-                prev_nee = true;
-                nee_pos = p;
-                nee_normal = n;
-                nee_on_surface = true;
-                for (int k = 0; k < 3; ++k) beta[k] *= m.albedo[static_cast<size_t>(k)];
-                // Straight from a guided medium's way out: the diffuse guide (volpath-render-10).
-                if (left_guided_arrival && opt.diffuse_guides && opt.boundary_guides &&
-                    opt.rays_from_surface) {
-                    diffuse_guide(p, n, tri, plate, rays);
-                    if (plate.n > 0) {
-                        RGB g{};
-                        diffuse_guided(plate, p, n, tri, ws, depth, rng, g, rays);
-                        flush(g, true);
-                        plate_n = n;
-                        plate_armed = true;
-                    }
-                }
-                leave_outside(p, n, tri);
-            } else {  // a medium's dielectric boundary
-                const MediumData& md = media[static_cast<size_t>(mi)];
-                const bool outside = dot(wo, n) > 0;
-                const Frame fr(n);
-                const Vec3 wo_l = fr.local(wo);
-                const double eta = md.eta;  // inside over outside (outside index 1)
-                bool transmitted = false, reflected = false;
-                ExitGuide here;  // this vertex's exit guide (rough boundaries)
-                bool here_guided = false;
-                if (md.alpha == 0) {
-                    // The smooth boundary of every engine's walk (walk_mesh_medium's too).
-                    const double eta_side = outside ? eta : 1 / eta;
-                    if (fresnel_reflects(d, outside ? -n : n, eta_side, rng)) {
-                        reflected = true;
-                    } else {
-                        for (int k = 0; k < 3; ++k) beta[k] /= eta_side * eta_side;  // radiance
-                        transmitted = true;
-                    }
-                    // An index-matched boundary is no vertex: NEE before it still stands.
-                    if (!passable(mi)) prev_nee = false;
-                } else {
-                    // Light sampled at the first boundary from outside is its reflection: the
-                    // "specular" layer's (without this it went into "radiance" only).
-                    const bool first_reflection = depth == 0 && outside && !entered;
-                    if (first_reflection) specular_path = true;
-                    const SurfaceAt at{n, tri};
-                    // Straight from a guided vertex to this exit: the guide's part.
-                    GuideShare share;
-                    if (guided_arrival && !outside) {
-                        if (!guide.aimed) exit_guide(md, medium_shape, guide, rays);
-                        share = share_of(guide, md, lights, d, length(p - guide.z));
-                    }
-                    RGB c{};
-                    nee(
-                        p, &at, rng, beta,
-                        [&](const Vec3& wi) {
-                            const double f = rough_dielectric_f(wo_l, fr.local(wi), eta, md.alpha,
-                                                                TransportMode::kRadiance) *
-                                             std::abs(dot(wi, n));
-                            return RGB{f, f, f};
-                        },
-                        [&](const Vec3& wi) {
-                            return rough_dielectric_pdf(wo_l, fr.local(wi), eta, md.alpha);
-                        },
-                        c, rays, -1, share);
-                    flush(c);
-                    // The exit guide of this vertex (volpath-render-9), as at a scattering
-                    // vertex: the light that crosses the medium from here to the way out
-                    // without a collision, an estimator of its own whatever the walk's sample
-                    // below does (enter or go on inside, or not). Not where the exit it aims at
-                    // would lie beyond max_depth.
-                    here_guided = md.guided && opt.boundary_guides &&
-                                  !(opt.max_depth > 0 && depth + 1 >= opt.max_depth);
-                    if (here_guided) {
-                        // The hero mixture of the walk from here: the one inside, or the
-                        // probabilities the entry will choose the hero with.
-                        here = ExitGuide::on_boundary(
-                            p, d, n, tri,
-                            outside ? entry_probabilities(ws, md) : inside_probabilities(ws));
-                        // An entry straight from a diffuse vertex with a guide: that guide's
-                        // lobes are one more way to this guide's paths.
-                        if (plate_arrival && outside) {
-                            const double pc = std::max(0.0, dot(d, plate_n)) / kPi;
-                            if (pc > 0) here.prob += plate.density(d) / pc;
-                        }
-                        RGB g{};
-                        run_exit_guide(here, md, static_cast<int>(shape), beta, rng, g, rays);
-                        flush(g, true);
-                    }
-                    if (first_reflection) specular_path = false;  // decided by the sample below
-                    const double uc = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
-                    const auto smp = sample_rough_dielectric(wo_l, eta, md.alpha, uc, u1, u2,
-                                                             TransportMode::kRadiance);
-                    if (!smp) return false;
-                    const double wgt = smp->f * std::abs(smp->wi.z) / smp->pdf;
-                    for (int k = 0; k < 3; ++k) beta[k] *= wgt;
-                    d = fr.world(smp->wi);
-                    prev_pdf = smp->pdf;
-                    prev_nee = true;
-                    nee_pos = p;
-                    nee_normal = n;
-                    nee_on_surface = true;
-                    reflected = smp->reflection;
-                    transmitted = !smp->reflection;
-                    if (transmitted && !outside) {
-                        exit_share = share;
-                        left_guided = md.guided;
-                    }
-                }
-                if (depth == 0 && reflected) specular_path = true;
-                if (transmitted) {
-                    if (medium < 0) {
-                        medium = mi;
-                        medium_shape = static_cast<int>(shape);
-                        if (opt.hero == RenderHero::kThroughputAlbedo) {
-                            // From the stream, not a Sobol dimension: the walk's first
-                            // numbers keep the pairs they had.
-                            const double u = rng.stream_uniform();
-                            ws.weights.choose_hero_by_throughput(md.region.albedo,
-                                                                 entered ? u : (hero + u) / 3);
-                        }
-                        entered = true;
-                    } else {
-                        medium = -1;
-                        medium_shape = -1;
-                    }
-                }
-                if (medium >= 0) {
-                    // Into a medium (entering, or reflected inside): from the surface point
-                    // itself, skipping hits closer than eps. An origin moved off the surface
-                    // would start every walk eps deep, a bias of sigma_t eps (measured: 3.7 %
-                    // of the single scattering of an index-matched half-space with sigma_t 1/mm
-                    // at eps = 4e-5 of a 1 m scene).
-                    o = p;
-                    on_surface = true;
-                    // The walk goes on from this vertex of a rough boundary: its exit guide
-                    // (above) takes part in the MIS of the exit it reaches straight from here.
-                    if (here_guided) {
-                        guide = here;
-                        guide_armed = true;
-                    }
-                } else {
-                    leave_outside(p, dot(d, n) > 0 ? n : -n, tri);
-                }
+    // boundary_vertex() on a rough (GGX) boundary: NEE through it, this vertex's exit guide
+    // (here, here_guided), the BSDF sample. False: the path ends.
+    bool rough_boundary(CameraPath& c, const Vec3& p, const Vec3& n, TriangleRef tri,
+                        const MediumData& md, bool outside, bool guided_arrival, bool plate_arrival,
+                        ExitGuide& here, bool& here_guided, bool& reflected,
+                        bool& transmitted) const {
+        RngStream& rng = c.rng;
+        double* beta = c.ws.weights.beta;
+        Vec3& d = c.ws.w;
+        const std::uint32_t shape = tri.shape;
+        const Vec3 wo = -d;
+        const Frame fr(n);
+        const Vec3 wo_l = fr.local(wo);
+        const double eta = md.eta;  // inside over outside (outside index 1)
+        // Light sampled at the first boundary from outside is its reflection: the "specular"
+        // layer's (without this it went into "radiance" only).
+        const bool first_reflection = c.depth == 0 && outside && !c.entered;
+        if (first_reflection) c.specular_path = true;
+        const SurfaceAt at{n, tri};
+        // Straight from a guided vertex to this exit: the guide's part.
+        GuideShare share;
+        if (guided_arrival && !outside) {
+            if (!c.guide.aimed) exit_guide(md, c.medium_shape, c.guide, c.rays);
+            share = share_of(c.guide, md, lights, d, length(p - c.guide.z));
+        }
+        RGB e{};
+        nee(
+            p, &at, rng, beta,
+            [&](const Vec3& wi) {
+                const double f = rough_dielectric_f(wo_l, fr.local(wi), eta, md.alpha,
+                                                    TransportMode::kRadiance) *
+                                 std::abs(dot(wi, n));
+                return RGB{f, f, f};
+            },
+            [&](const Vec3& wi) { return rough_dielectric_pdf(wo_l, fr.local(wi), eta, md.alpha); },
+            e, c.rays, -1, share);
+        flush(c, e);
+        // The exit guide of this vertex (volpath-render-9), as at a scattering vertex: the light
+        // that crosses the medium from here to the way out without a collision, an estimator of
+        // its own whatever the walk's sample below does (enter or go on inside, or not). Not
+        // where the exit it aims at would lie beyond max_depth.
+        here_guided = md.guided && opt.boundary_guides &&
+                      !(opt.max_depth > 0 && c.depth + 1 >= opt.max_depth);
+        if (here_guided) {
+            // The hero mixture of the walk from here: the one inside, or the probabilities the
+            // entry will choose the hero with.
+            here = ExitGuide::on_boundary(
+                p, d, n, tri, outside ? entry_probabilities(c.ws, md) : inside_probabilities(c.ws));
+            // An entry straight from a diffuse vertex with a guide: that guide's lobes are one
+            // more way to this guide's paths.
+            if (plate_arrival && outside) {
+                const double pc = std::max(0.0, dot(d, c.plate_n)) / kPi;
+                if (pc > 0) here.prob += c.plate.density(d) / pc;
             }
-            // Russian roulette on the throughput.
-            if (depth + 1 >= opt.roulette_depth) {
-                const double m = std::max({beta[0], beta[1], beta[2]});
-                if (!(m > 0) || !std::isfinite(m)) return false;
-                if (m < 1) {
-                    const double survive = std::max(0.05, m);
-                    if (!(rng.uniform() < survive)) return false;
-                    for (int k = 0; k < 3; ++k) beta[k] /= survive;
-                }
-            }
-            ++depth;
-            return true;
-        };
+            RGB g{};
+            run_exit_guide(here, md, static_cast<int>(shape), beta, rng, g, c.rays);
+            flush(c, g, true);
+        }
+        if (first_reflection) c.specular_path = false;  // decided by the sample below
+        const double uc = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+        const auto smp =
+            sample_rough_dielectric(wo_l, eta, md.alpha, uc, u1, u2, TransportMode::kRadiance);
+        if (!smp) return false;
+        const double wgt = smp->f * std::abs(smp->wi.z) / smp->pdf;
+        for (int k = 0; k < 3; ++k) beta[k] *= wgt;
+        d = fr.world(smp->wi);
+        c.prev_pdf = smp->pdf;
+        c.prev_nee = true;
+        c.nee_pos = p;
+        c.nee_normal = n;
+        c.nee_on_surface = true;
+        reflected = smp->reflection;
+        transmitted = !smp->reflection;
+        if (transmitted && !outside) {
+            c.exit_share = share;
+            c.left_guided = md.guided;
+        }
+        return true;
+    }
 
-        // Inside a medium: what the walk does at its boundary (the vertex above), at its
-        // scattering vertices (NEE inside index-matched media, MIS with phase sampling) and
-        // after sampling the phase function.
-        struct Hooks : WalkHooks {
-            decltype(vertex)& at_surface;
-            const Renderer& R;
-            int& medium;
-            int& medium_shape;
-            ExitGuide& guide;
-            bool& guide_armed;
-            const int& depth;
-            double& prev_pdf;
-            bool& prev_nee;
-            Vec3& nee_pos;
-            bool& nee_on_surface;
-            std::uint64_t& rays;
-            decltype(flush)& add;
-            // The density with which phase sampling picks a direction, as the hero MIS sees
-            // it: the mixture of the channels' phase functions weighted by their probabilities
-            // to be the hero times their path densities so far (prob x q), which does not
-            // depend on the hero; the MIS weights of NEE against phase sampling use it, so that
-            // they sum to one whichever channel is the hero (with per-channel g too).
-            double phase_mix(const WalkState<3>& s, double mu_l) const {
-                const MediumData& md = R.media[static_cast<size_t>(medium)];
-                if (md.same_g) return hg_pdf(md.g[0], mu_l);
-                const double* qq = s.weights.q;
-                const auto& pr = s.weights.prob;
-                double v = 0, sum = 0;
-                for (int c = 0; c < 3; ++c) {
-                    const double wc = pr[static_cast<size_t>(c)] * qq[c];
-                    sum += wc;
-                    v += wc * hg_pdf(md.g[static_cast<size_t>(c)], mu_l);
-                }
-                return v / sum;
+    // Inside a medium: what the walk does at its boundary (vertex()), at its scattering vertices
+    // (NEE inside index-matched media, MIS with phase sampling; the exit guide behind rough
+    // boundaries) and after sampling the phase function.
+    struct PathHooks : WalkHooks {
+        const Renderer& R;
+        CameraPath& c;
+        PathHooks(const Renderer& r, CameraPath& path) : R(r), c(path) {}
+        // The density with which phase sampling picks a direction, as the hero MIS sees it: the
+        // mixture of the channels' phase functions weighted by their probabilities to be the
+        // hero times their path densities so far (prob x q), which does not depend on the hero;
+        // the MIS weights of NEE against phase sampling use it, so that they sum to one
+        // whichever channel is the hero (with per-channel g too).
+        double phase_mix(const WalkState<3>& s, double mu_l) const {
+            const MediumData& md = R.media[static_cast<size_t>(c.medium)];
+            if (md.same_g) return hg_pdf(md.g[0], mu_l);
+            const double* qq = s.weights.q;
+            const auto& pr = s.weights.prob;
+            double v = 0, sum = 0;
+            for (int k = 0; k < 3; ++k) {
+                const double wc = pr[static_cast<size_t>(k)] * qq[k];
+                sum += wc;
+                v += wc * hg_pdf(md.g[static_cast<size_t>(k)], mu_l);
             }
-            BoundaryAction boundary(WalkState<3>& s, const WalkBoundary& b, RngStream&) {
-                if (!at_surface(s.p, b.n, TriangleRef{b.shape, b.triangle}))
-                    return BoundaryAction::kEnd;
-                return medium >= 0 ? BoundaryAction::kReflect : BoundaryAction::kExit;
+            return v / sum;
+        }
+        BoundaryAction boundary(WalkState<3>& s, const WalkBoundary& b, RngStream&) {
+            if (!R.vertex(c, s.p, b.n, TriangleRef{b.shape, b.triangle}))
+                return BoundaryAction::kEnd;
+            return c.medium >= 0 ? BoundaryAction::kReflect : BoundaryAction::kExit;
+        }
+        // Analog absorption by the hero's albedo. Where NEE is done at a vertex (index-matched
+        // media) the decision waits until after it, and the NEE carries the survival
+        // probability instead: its expectation over the decision, so that light is collected at
+        // every collision, not only at the few that survive in an absorbing medium. Behind a
+        // rough boundary the exit guide's estimator is done there the same way.
+        bool vertex_nee(const WalkState<3>&) const {
+            return R.passable(c.medium) || R.media[static_cast<size_t>(c.medium)].guided;
+        }
+        void at_vertex(WalkState<3>& s, double survive, RngStream& rng) {
+            const MediumData& md = R.media[static_cast<size_t>(c.medium)];
+            const double* beta = s.weights.beta;
+            const double bs[3] = {beta[0] * survive, beta[1] * survive, beta[2] * survive};
+            const Vec3 din = s.w;
+            RGB e{};
+            if (md.guided) {
+                // The exit it aims at is a surface vertex: none beyond max_depth (where the path
+                // ends at its next vertex, before any use of the guide).
+                if (R.opt.max_depth > 0 && c.depth >= R.opt.max_depth) return;
+                ExitGuide& guide = c.guide;
+                guide.aimed = false;
+                guide.prob = kExitGuideProb;
+                guide.surface = false;
+                guide.tri = TriangleRef{};
+                guide.z = s.p;
+                guide.din = s.w;
+                guide.pq = R.inside_probabilities(s);
+                R.run_exit_guide(guide, md, c.medium_shape, bs, rng, e, c.rays);
+                flush(c, e);
+                return;
             }
-            // Analog absorption by the hero's albedo. Where NEE is done at a vertex
-            // (index-matched media) the decision waits until after it, and the NEE carries the
-            // survival probability instead: its expectation over the decision, so that light is
-            // collected at every collision, not only at the few that survive in an absorbing
-            // medium.
-            // Behind a rough boundary the exit guide's estimator is done there the same way.
-            bool vertex_nee(const WalkState<3>&) const {
-                return R.passable(medium) || R.media[static_cast<size_t>(medium)].guided;
-            }
-            void at_vertex(WalkState<3>& s, double survive, RngStream& rng) {
-                const MediumData& md = R.media[static_cast<size_t>(medium)];
-                const double* beta = s.weights.beta;
-                const double bs[3] = {beta[0] * survive, beta[1] * survive, beta[2] * survive};
-                const Vec3 din = s.w;
-                RGB c{};
-                if (md.guided) {
-                    // The exit it aims at is a surface vertex: none beyond max_depth (where the
-                    // path ends at its next vertex, before any use of the guide).
-                    if (R.opt.max_depth > 0 && depth >= R.opt.max_depth) return;
-                    guide.aimed = false;
-                    guide.prob = kExitGuideProb;
-                    guide.surface = false;
-                    guide.tri = TriangleRef{};
-                    guide.z = s.p;
-                    guide.din = s.w;
-                    guide.pq = R.inside_probabilities(s);
-                    R.run_exit_guide(guide, md, medium_shape, bs, rng, c, rays);
-                    add(c);
-                    return;
-                }
-                R.nee(
-                    s.p, nullptr, rng, bs,
-                    [&](const Vec3& wi) {
-                        const double mu_l = dot(din, wi);
-                        return RGB{hg_pdf(md.g[0], mu_l), hg_pdf(md.g[1], mu_l),
-                                   hg_pdf(md.g[2], mu_l)};
-                    },
-                    [&](const Vec3& wi) { return phase_mix(s, dot(din, wi)); }, c, rays, medium);
-                add(c);
-            }
-            void scattered(const WalkState<3>& s, double mu) {
-                guide_armed = R.media[static_cast<size_t>(medium)].guided;
-                prev_pdf = phase_mix(s, mu);
-                prev_nee = R.passable(medium);
-                nee_pos = s.p;
-                nee_on_surface = false;
-            }
-        };
-        Hooks hooks{{},    vertex,   *this,    medium,  medium_shape,   guide, guide_armed,
-                    depth, prev_pdf, prev_nee, nee_pos, nee_on_surface, rays,  flush};
+            R.nee(
+                s.p, nullptr, rng, bs,
+                [&](const Vec3& wi) {
+                    const double mu_l = dot(din, wi);
+                    return RGB{hg_pdf(md.g[0], mu_l), hg_pdf(md.g[1], mu_l), hg_pdf(md.g[2], mu_l)};
+                },
+                [&](const Vec3& wi) { return phase_mix(s, dot(din, wi)); }, e, c.rays, c.medium);
+            flush(c, e);
+        }
+        void scattered(const WalkState<3>& s, double mu) {
+            c.guide_armed = R.media[static_cast<size_t>(c.medium)].guided;
+            c.prev_pdf = phase_mix(s, mu);
+            c.prev_nee = R.passable(c.medium);
+            c.nee_pos = s.p;
+            c.nee_on_surface = false;
+        }
+    };
+
+    // One camera path through pixel (x, y); tally += its contributions. Outside media the
+    // loop below; inside a medium the one walk of volpath/walk.h, whose boundary hook is the
+    // same surface vertex as a hit from outside.
+    std::uint64_t trace(int x, int y, int hero, RngStream& rng, double* T) const {
+        CameraPath c(hero, rng, T);
+        const double jx = rng.uniform(), jy = rng.uniform();
+        const double ndc_x = (2 * (x + jx) / width - 1) * tan_half * aspect;
+        const double ndc_y = (1 - 2 * (y + jy) / height) * tan_half;
+        WalkState<3>& ws = c.ws;
+        ws.p = cam_pos;
+        ws.w = normalize(cam_f + cam_r * ndc_x + cam_u * ndc_y);
+        ws.weights.hero = hero;
+        ws.weights.start(1.0);
+        Vec3& o = ws.p;
+        Vec3& d = ws.w;
+        const double* beta = ws.weights.beta;
+        PathHooks hooks(*this, c);
         WalkRules rules;
         rules.flight = FlightRule::kResample;
         rules.long_events = opt.long_path_events;
 
-        while (depth < 100000) {
-            if (medium >= 0) {
+        while (c.depth < 100000) {
+            if (c.medium >= 0) {
                 MeshGeometry geo;
                 geo.scene = es.get();
-                geo.shape = static_cast<std::uint32_t>(medium_shape);
-                geo.inside = media[static_cast<size_t>(medium)].region;
+                geo.shape = static_cast<std::uint32_t>(c.medium_shape);
+                geo.inside = media[static_cast<size_t>(c.medium)].region;
                 if (!shape_balls.empty())
-                    geo.balls = shape_balls[static_cast<size_t>(medium_shape)].get();
-                rules.absorption = media[static_cast<size_t>(medium)].absorption;
+                    geo.balls = shape_balls[static_cast<size_t>(c.medium_shape)].get();
+                rules.absorption = media[static_cast<size_t>(c.medium)].absorption;
                 const std::uint64_t before = ws.queries;
                 const WalkEnd end = walk(geo, ws, rules, rng, hooks);
-                rays += ws.queries - before;
-                if (end != WalkEnd::kExited) return rays;
+                c.rays += ws.queries - before;
+                if (end != WalkEnd::kExited) return c.rays;
                 continue;
             }
-            ++rays;
-            const RayHit hit = es->intersect(o, d, on_surface ? eps : 0.0, kInf, leave);
-            leave = TriangleRef{};
-            if (depth == 0 && hit.hit()) {
+            ++c.rays;
+            const RayHit hit = es->intersect(o, d, ws.on_surface ? eps : 0.0, kInf, c.leave);
+            c.leave = TriangleRef{};
+            if (c.depth == 0 && hit.hit()) {
                 T[RenderLayout::kDepth] += hit.t;
-                for (int c = 0; c < 3; ++c) T[RenderLayout::kNormal + c] += hit.normal[c];
+                for (int k = 0; k < 3; ++k) T[RenderLayout::kNormal + k] += hit.normal[k];
             }
             // Sphere lights are not in the BVH: the nearest of them, if before the geometry.
             double tl = kInf;
             const Light* hit_light = nearest_light_surface(lights, o, d, tl);
             if (hit_light && tl < hit.t) {
-                const double pl = hit_light->pdf(nee_pos, d);
+                const double pl = hit_light->pdf(c.nee_pos, d);
                 const double w =
-                    prev_nee ? exit_share.weight(hit_light, prev_pdf, sel * pl, pl) : 1.0;
-                RGB c{};
+                    c.prev_nee ? c.exit_share.weight(hit_light, c.prev_pdf, sel * pl, pl) : 1.0;
+                RGB e{};
                 for (int k = 0; k < 3; ++k)
-                    c[static_cast<size_t>(k)] = beta[k] * hit_light->L[static_cast<size_t>(k)] * w;
-                flush(c);
-                return rays;
+                    e[static_cast<size_t>(k)] = beta[k] * hit_light->L[static_cast<size_t>(k)] * w;
+                flush(c, e);
+                return c.rays;
             }
             if (!hit.hit()) {
-                RGB c{};
-                add_escape(nee_pos, env_normal(nee_on_surface ? &nee_normal : nullptr), d, prev_nee,
-                           prev_pdf, beta, c, exit_share);
-                flush(c);
-                return rays;
+                RGB e{};
+                add_escape(c.nee_pos, env_normal(c.nee_on_surface ? &c.nee_normal : nullptr), d,
+                           c.prev_nee, c.prev_pdf, beta, e, c.exit_share);
+                flush(c, e);
+                return c.rays;
             }
             const Vec3 p = o + d * hit.t;
             if (shape_medium[hit.shape] >= 0 && !(dot(d, hit.normal) < 0)) {
@@ -1047,14 +1082,14 @@ struct Renderer {
                 // on. Farther: a leak; the path ends.
                 if (hit.t < 4 * eps) {
                     o = p;
-                    on_surface = true;
+                    ws.on_surface = true;
                     continue;
                 }
-                return rays;
+                return c.rays;
             }
-            if (!vertex(p, hit.normal, TriangleRef{hit.shape, hit.triangle})) return rays;
+            if (!vertex(c, p, hit.normal, TriangleRef{hit.shape, hit.triangle})) return c.rays;
         }
-        return rays;
+        return c.rays;
     }
 };
 
