@@ -367,6 +367,88 @@ double SphereRun::beta_edge(int j) const {
     return kPi * j / layout.beta_bins;
 }
 
+namespace {
+
+// The run's tallies as results: exitance per zone of beta (over the zone's area), the totals,
+// the acceptance cone's intensities, each with its standard error.
+void fold_results(SphereRun& out) {
+    const SphereScene& sc = out.scene;
+    const Medium& m = sc.medium;
+    const SphereCamera& cam = out.camera;
+    const SphereLayout& L = out.layout;
+    const double R = sc.radius_cm;
+    out.specular_expected = sphere_specular_reflectance(m.eta / m.eta_above);
+    const double to_intensity = kPi * R * R / cam.solid_angle;
+    for (int c = 0; c < 3; ++c) {
+        out.exitance[c].resize(static_cast<size_t>(L.beta_bins));
+        out.exitance_se[c].resize(static_cast<size_t>(L.beta_bins));
+        for (int j = 0; j < L.beta_bins; ++j) {
+            // Zone area over pi R^2: 2 (cos b0 - cos b1) = 4 sin((b0 + b1) / 2) sin((b1 - b0) / 2).
+            const double b0 = out.beta_edge(j), b1 = out.beta_edge(j + 1);
+            const double zone = 4.0 * std::sin(0.5 * (b0 + b1)) * std::sin(0.5 * (b1 - b0));
+            const size_t i = L.beta() + static_cast<size_t>(j);
+            out.exitance[c][static_cast<size_t>(j)] = out.mean(c, i) / zone;
+            out.exitance_se[c][static_cast<size_t>(j)] = out.se(c, i) / zone;
+            const size_t is = L.beta_single() + static_cast<size_t>(j);
+            out.exitance_single[c].push_back(out.mean(c, is) / zone);
+            out.exitance_single_se[c].push_back(out.se(c, is) / zone);
+        }
+        out.diffuse_single[c] = out.mean(c, L.diffuse_single());
+        out.diffuse_single_se[c] = out.se(c, L.diffuse_single());
+        out.diffuse[c] = out.mean(c, L.diffuse());
+        out.diffuse_se[c] = out.se(c, L.diffuse());
+        out.specular[c] = out.mean(c, L.specular());
+        out.specular_se[c] = out.se(c, L.specular());
+        out.lost[c] = out.mean(c, L.lost());
+        out.lost_se[c] = out.se(c, L.lost());
+        out.intensity_subsurface[c] = out.mean(c, L.cone_subsurface()) * to_intensity;
+        out.intensity_subsurface_se[c] = out.se(c, L.cone_subsurface()) * to_intensity;
+        out.intensity_specular[c] = out.mean(c, L.cone_specular()) * to_intensity;
+        out.intensity_specular_se[c] = out.se(c, L.cone_specular()) * to_intensity;
+    }
+}
+
+// The run's image layers (SphereLayer), per unit irradiance, with their standard errors and the
+// engine's metadata.
+LayeredImage sphere_image(const SphereRun& out, const SphereOptions& o) {
+    const SphereScene& sc = out.scene;
+    const SphereCamera& cam = out.camera;
+    const SphereLayout& L = out.layout;
+    const double R = sc.radius_cm;
+    LayeredImage img(sc.width, sc.height);
+    const double a_pix = cam.pixel_cm * cam.pixel_cm;
+    // Per photon weight -> layer value: flux pi R^2 E0 per photon; exitance / pi.
+    const double to_exitance = R * R / a_pix;
+    const double to_radiance = kPi * R * R / (a_pix * cam.solid_angle);
+    for (int k = 0; k < kSphereLayers; ++k) {
+        const auto layer = static_cast<SphereLayer>(k);
+        const double f = layer == SphereLayer::kExitance ? to_exitance : to_radiance;
+        ImageLayer& mean = img.add_layer(to_string(layer), 3);
+        ImageLayer& err = img.add_layer(std::string(to_string(layer)) + ".stderr", 3);
+        const size_t off = L.layer(layer);
+        for (int y = 0; y < sc.height; ++y)
+            for (int x = 0; x < sc.width; ++x) {
+                const size_t px =
+                    static_cast<size_t>(y) * static_cast<size_t>(sc.width) + static_cast<size_t>(x);
+                for (int c = 0; c < 3; ++c) {
+                    mean.at(x, y, c) = static_cast<float>(out.mean(c, off + px) * f);
+                    err.at(x, y, c) = static_cast<float>(out.se(c, off + px) * f);
+                }
+            }
+    }
+    img.metadata()["ssslab.engine"] = kEngineVersion;
+    img.metadata()["ssslab.seed"] = std::to_string(o.seed);
+    img.metadata()["ssslab.photons"] = std::to_string(out.runs[0].samples);
+    img.metadata()["ssslab.mode"] = to_string(o.mode);
+    img.metadata()["ssslab.units"] =
+        "per unit irradiance E0 [1/sr]; exitance layer: M / pi; radiance layers: acceptance "
+        "cone of half-angle " +
+        std::to_string(sc.acceptance_deg) + " deg";
+    return img;
+}
+
+}  // namespace
+
 SphereRun simulate_sphere(const SphereScene& scene, const SphereOptions& o) {
     check_sphere(scene, o.image, o.mode);
     if (o.long_path_events < 0 || !(o.long_path_survival > 0 && o.long_path_survival <= 1))
@@ -478,70 +560,8 @@ SphereRun simulate_sphere(const SphereScene& scene, const SphereOptions& o) {
         }
     }
 
-    const SphereLayout& L = out.layout;
-    const double R = sc.radius_cm;
-    out.specular_expected = sphere_specular_reflectance(m.eta / m.eta_above);
-    const double to_intensity = kPi * R * R / cam.solid_angle;
-    for (int c = 0; c < 3; ++c) {
-        out.exitance[c].resize(static_cast<size_t>(L.beta_bins));
-        out.exitance_se[c].resize(static_cast<size_t>(L.beta_bins));
-        for (int j = 0; j < L.beta_bins; ++j) {
-            // Zone area over pi R^2: 2 (cos b0 - cos b1) = 4 sin((b0 + b1) / 2) sin((b1 - b0) / 2).
-            const double b0 = out.beta_edge(j), b1 = out.beta_edge(j + 1);
-            const double zone = 4.0 * std::sin(0.5 * (b0 + b1)) * std::sin(0.5 * (b1 - b0));
-            const size_t i = L.beta() + static_cast<size_t>(j);
-            out.exitance[c][static_cast<size_t>(j)] = out.mean(c, i) / zone;
-            out.exitance_se[c][static_cast<size_t>(j)] = out.se(c, i) / zone;
-            const size_t is = L.beta_single() + static_cast<size_t>(j);
-            out.exitance_single[c].push_back(out.mean(c, is) / zone);
-            out.exitance_single_se[c].push_back(out.se(c, is) / zone);
-        }
-        out.diffuse_single[c] = out.mean(c, L.diffuse_single());
-        out.diffuse_single_se[c] = out.se(c, L.diffuse_single());
-        out.diffuse[c] = out.mean(c, L.diffuse());
-        out.diffuse_se[c] = out.se(c, L.diffuse());
-        out.specular[c] = out.mean(c, L.specular());
-        out.specular_se[c] = out.se(c, L.specular());
-        out.lost[c] = out.mean(c, L.lost());
-        out.lost_se[c] = out.se(c, L.lost());
-        out.intensity_subsurface[c] = out.mean(c, L.cone_subsurface()) * to_intensity;
-        out.intensity_subsurface_se[c] = out.se(c, L.cone_subsurface()) * to_intensity;
-        out.intensity_specular[c] = out.mean(c, L.cone_specular()) * to_intensity;
-        out.intensity_specular_se[c] = out.se(c, L.cone_specular()) * to_intensity;
-    }
-
-    if (o.image) {
-        LayeredImage img(sc.width, sc.height);
-        const double a_pix = cam.pixel_cm * cam.pixel_cm;
-        // Per photon weight -> layer value: flux pi R^2 E0 per photon; exitance / pi.
-        const double to_exitance = R * R / a_pix;
-        const double to_radiance = kPi * R * R / (a_pix * cam.solid_angle);
-        for (int k = 0; k < kSphereLayers; ++k) {
-            const auto layer = static_cast<SphereLayer>(k);
-            const double f = layer == SphereLayer::kExitance ? to_exitance : to_radiance;
-            ImageLayer& mean = img.add_layer(to_string(layer), 3);
-            ImageLayer& err = img.add_layer(std::string(to_string(layer)) + ".stderr", 3);
-            const size_t off = L.layer(layer);
-            for (int y = 0; y < sc.height; ++y)
-                for (int x = 0; x < sc.width; ++x) {
-                    const size_t px = static_cast<size_t>(y) * static_cast<size_t>(sc.width) +
-                                      static_cast<size_t>(x);
-                    for (int c = 0; c < 3; ++c) {
-                        mean.at(x, y, c) = static_cast<float>(out.mean(c, off + px) * f);
-                        err.at(x, y, c) = static_cast<float>(out.se(c, off + px) * f);
-                    }
-                }
-        }
-        img.metadata()["ssslab.engine"] = kEngineVersion;
-        img.metadata()["ssslab.seed"] = std::to_string(o.seed);
-        img.metadata()["ssslab.photons"] = std::to_string(out.runs[0].samples);
-        img.metadata()["ssslab.mode"] = to_string(o.mode);
-        img.metadata()["ssslab.units"] =
-            "per unit irradiance E0 [1/sr]; exitance layer: M / pi; radiance layers: acceptance "
-            "cone of half-angle " +
-            std::to_string(sc.acceptance_deg) + " deg";
-        out.image = std::move(img);
-    }
+    fold_results(out);
+    if (o.image) out.image = sphere_image(out, o);
     return out;
 }
 
