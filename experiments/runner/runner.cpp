@@ -584,6 +584,155 @@ void swap_in(const fs::path& stage, const fs::path& out_dir) {
     fs::remove_all(old, ec);
 }
 
+// The engines' tables (crossval, pencil models, efficiency; engines.h) of the run: file name ->
+// content, from the cache or computed and stored; their metrics appended to r.metrics.
+std::map<std::string, std::string> engine_tables_cached(ExperimentRun& r,
+                                                        const ArtifactCache& cache) {
+    std::map<std::string, std::string> engine_files;
+    // The engines' tables (crossval, pencil models, efficiency) are an artifact keyed by their
+    // outputs' settings and the nodes they read: evaluating the models costs seconds.
+    if (r.exp.crossval.enabled || r.exp.pencil.enabled || r.exp.efficiency.enabled) {
+        ContentKey key("engine-tables");
+        key.add("version", "engine-tables-2")  // 2: rel_l2_rR with its standard error
+            .add("crossval", r.exp.crossval.enabled)
+            .add("max_rel_se", r.exp.crossval.max_rel_se)
+            .add("volpath_mode", r.exp.volpath.mode);
+        r.exp.pencil.models.add_to_key(key);
+        for (const auto& m : r.exp.efficiency.materials) key.add("efficiency", m);
+        for (const auto& n : r.nodes) key.add(n.material + "." + n.role, n.key);
+        const std::string k = key.hex();
+        if (const auto dir = cache.find("engine-tables", k)) {
+            for (const auto& f : fs::recursive_directory_iterator(*dir)) {
+                if (!f.is_regular_file()) continue;
+                const std::string rel = fs::relative(f.path(), *dir).string();
+                if (rel == "metrics.csv")
+                    read_metrics_csv(read_file(f.path()), r.metrics);
+                else if (rel != "manifest.toml")
+                    engine_files[rel] = read_file(f.path());
+            }
+            ++r.reused;
+        } else {
+            std::vector<Metric> ms;
+            engine_files = engine_tables(r, ms);
+            auto stored = engine_files;
+            stored["metrics.csv"] = metrics_csv(ms);
+            stored["manifest.toml"] = "[artifact]\nkind = \"engine-tables\"\nkey = \"" + k + "\"\n";
+            cache.store("engine-tables", k, stored);
+            r.metrics.insert(r.metrics.end(), ms.begin(), ms.end());
+            ++r.computed;
+        }
+    }
+    return engine_files;
+}
+
+// Every [[outputs.kernels]] study: from the cache or computed and stored, its files written
+// under <stage>/kernels/<name>/, its metrics appended, its section given to the report.
+void run_kernel_studies(ExperimentRun& r, const RunOptions& o, const ArtifactCache& cache,
+                        const fs::path& stage, ReportContent& report) {
+    for (const auto& study : r.exp.kernel_studies) {
+        // A study is an artifact keyed by its spec and the ground-truth runs it reads.
+        ContentKey key("kernel-study");
+        key.add("version", kernel_study_version()).add("spec", study.canonical());
+        for (const auto& m : study.materials)
+            for (int c = 0; c < 3; ++c)
+                key.add(m + "." + kChannelNames[c], find_node(r, m, c, "main")->key);
+        StudyOutput so;
+        so.spec = &study;
+        so.key = key.hex();
+        if (const auto dir = cache.find("kernel-study", so.key)) {
+            for (const auto& f : fs::recursive_directory_iterator(*dir)) {
+                if (!f.is_regular_file()) continue;
+                const std::string rel = fs::relative(f.path(), *dir).string();
+                if (rel != "manifest.toml") so.files[rel] = read_file(f.path());
+            }
+            auto doc = ConfigDocument::parse_file((*dir / "manifest.toml").string());
+            so.summary = doc->root().require_table("study").string("summary");
+            ++r.reused;
+        } else {
+            std::map<std::string, RadialProfile> profiles;
+            for (const auto& m : study.materials) profiles[m] = material_profile(r, m);
+            so.files = run_kernel_study(study, profiles, so.summary);
+            auto doc = ConfigDocument::empty("manifest.toml");
+            ConfigTable st = doc->root().table_or_empty("study");
+            st.record("name", study.name);
+            st.record("key", so.key);
+            st.record("summary", so.summary);
+            st.record("canonical_description", key.text());
+            doc->add_resolved_section("provenance", provenance());
+            auto all = so.files;
+            all["manifest.toml"] = doc->resolved_toml();
+            cache.store("kernel-study", so.key, all);
+            so.computed_now = true;
+            ++r.computed;
+        }
+        if (!o.quiet)
+            std::printf("  %s kernel study %s: %s\n", so.computed_now ? "computed" : "reused  ",
+                        study.name.c_str(), so.summary.c_str());
+        for (const auto& [name, content] : so.files)
+            write_file_atomic(stage / "kernels" / study.name / name, content);
+        append_study_metrics(so.files, study.name, r.metrics);
+        report.studies.push_back(std::move(so));
+    }
+}
+
+// The studies of scene files and of their own inputs (render, realtime, stiff) and the plugin
+// studies (study.h), in turn; false when one was interrupted (nothing of it is kept).
+bool run_scene_studies(ExperimentRun& r, const RunOptions& o, const ArtifactCache& cache,
+                       const fs::path& stage, ReportContent& report) {
+    if (r.exp.render.enabled) {
+        const RenderStudyContext ctx = study_context(r, o);
+        fs::create_directories(stage / "render");
+        RenderStudyResult rr = run_render_study(r.exp.render, ctx, cache, stage, r.metrics);
+        if (rr.interrupted) {
+            return false;
+        }
+        r.computed += rr.computed;
+        r.reused += rr.reused;
+        report.render_html = std::move(rr.html);
+    }
+    if (r.exp.realtime.enabled) {
+        const RenderStudyContext ctx = study_context(r, o);
+        RealtimeStudyResult rr =
+            run_realtime_study(r.exp.realtime, ctx, cache, o.results_root, stage, r.metrics);
+        if (rr.interrupted) {
+            return false;
+        }
+        r.computed += rr.computed;
+        r.reused += rr.reused;
+        report.realtime_html = std::move(rr.html);
+    }
+    if (r.exp.stiff.enabled) {
+        const RenderStudyContext ctx = study_context(r, o);
+        StiffStudyResult sr = run_stiff_study(r.exp.stiff, ctx, stage, r.metrics);
+        if (sr.interrupted) {
+            return false;
+        }
+        if (!o.quiet)
+            std::printf("  stiff sweep: %d checks, %d failed, %d refused\n", sr.checks, sr.failed,
+                        sr.refused);
+        report.stiff_html = std::move(sr.html);
+    }
+    // The plugin studies (study.h): what each returns is written and rendered here.
+    for (const auto& s : r.exp.studies) {
+        StudyInputs in;
+        in.ctx = study_context(r, o);
+        in.cache = &cache;
+        StudyResult sr = s.study->run(in);
+        if (sr.interrupted) {
+            return false;
+        }
+        r.computed += sr.computed;
+        r.reused += sr.reused;
+        for (const auto& [name, content] : sr.files)
+            write_file_atomic(stage / s.name / name, content);
+        r.metrics.insert(r.metrics.end(), sr.metrics.begin(), sr.metrics.end());
+        if (!o.quiet && !sr.summary.empty())
+            std::printf("  %s: %s\n", s.name.c_str(), sr.summary.c_str());
+        report.sections.push_back(std::move(sr.section));
+    }
+    return true;
+}
+
 }  // namespace
 
 bool execute(ExperimentRun& r, const RunOptions& o) {
@@ -629,143 +778,13 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
             write_file_atomic(stage / "convergence" / (m + "_snapshots.csv"), s);
         }
     write_file_atomic(stage / "artifacts.csv", artifacts_csv(r));
-    // The engines' tables (crossval, pencil models, efficiency) are an artifact keyed by their
-    // outputs' settings and the nodes they read: evaluating the models costs seconds.
-    std::map<std::string, std::string> engine_files;
-    if (r.exp.crossval.enabled || r.exp.pencil.enabled || r.exp.efficiency.enabled) {
-        ContentKey key("engine-tables");
-        key.add("version", "engine-tables-2")  // 2: rel_l2_rR with its standard error
-            .add("crossval", r.exp.crossval.enabled)
-            .add("max_rel_se", r.exp.crossval.max_rel_se)
-            .add("volpath_mode", r.exp.volpath.mode);
-        r.exp.pencil.models.add_to_key(key);
-        for (const auto& m : r.exp.efficiency.materials) key.add("efficiency", m);
-        for (const auto& n : r.nodes) key.add(n.material + "." + n.role, n.key);
-        const std::string k = key.hex();
-        if (const auto dir = cache.find("engine-tables", k)) {
-            for (const auto& f : fs::recursive_directory_iterator(*dir)) {
-                if (!f.is_regular_file()) continue;
-                const std::string rel = fs::relative(f.path(), *dir).string();
-                if (rel == "metrics.csv")
-                    read_metrics_csv(read_file(f.path()), r.metrics);
-                else if (rel != "manifest.toml")
-                    engine_files[rel] = read_file(f.path());
-            }
-            ++r.reused;
-        } else {
-            std::vector<Metric> ms;
-            engine_files = engine_tables(r, ms);
-            auto stored = engine_files;
-            stored["metrics.csv"] = metrics_csv(ms);
-            stored["manifest.toml"] = "[artifact]\nkind = \"engine-tables\"\nkey = \"" + k + "\"\n";
-            cache.store("engine-tables", k, stored);
-            r.metrics.insert(r.metrics.end(), ms.begin(), ms.end());
-            ++r.computed;
-        }
-    }
+    std::map<std::string, std::string> engine_files = engine_tables_cached(r, cache);
     for (const auto& [name, content] : engine_files) write_file_atomic(stage / name, content);
-    for (const auto& study : r.exp.kernel_studies) {
-        // A study is an artifact keyed by its spec and the ground-truth runs it reads.
-        ContentKey key("kernel-study");
-        key.add("version", kernel_study_version()).add("spec", study.canonical());
-        for (const auto& m : study.materials)
-            for (int c = 0; c < 3; ++c)
-                key.add(m + "." + kChannelNames[c], find_node(r, m, c, "main")->key);
-        StudyOutput so;
-        so.spec = &study;
-        so.key = key.hex();
-        if (const auto dir = cache.find("kernel-study", so.key)) {
-            for (const auto& f : fs::recursive_directory_iterator(*dir)) {
-                if (!f.is_regular_file()) continue;
-                const std::string rel = fs::relative(f.path(), *dir).string();
-                if (rel != "manifest.toml") so.files[rel] = read_file(f.path());
-            }
-            auto doc = ConfigDocument::parse_file((*dir / "manifest.toml").string());
-            so.summary = doc->root().require_table("study").string("summary");
-            ++r.reused;
-        } else {
-            std::map<std::string, RadialProfile> profiles;
-            for (const auto& m : study.materials) profiles[m] = material_profile(r, m);
-            so.files = run_kernel_study(study, profiles, so.summary);
-            auto doc = ConfigDocument::empty("manifest.toml");
-            ConfigTable st = doc->root().table_or_empty("study");
-            st.record("name", study.name);
-            st.record("key", so.key);
-            st.record("summary", so.summary);
-            st.record("canonical_description", key.text());
-            doc->add_resolved_section("provenance", provenance());
-            auto all = so.files;
-            all["manifest.toml"] = doc->resolved_toml();
-            cache.store("kernel-study", so.key, all);
-            so.computed_now = true;
-            ++r.computed;
-        }
-        if (!o.quiet)
-            std::printf("  %s kernel study %s: %s\n", so.computed_now ? "computed" : "reused  ",
-                        study.name.c_str(), so.summary.c_str());
-        for (const auto& [name, content] : so.files)
-            write_file_atomic(stage / "kernels" / study.name / name, content);
-        append_study_metrics(so.files, study.name, r.metrics);
-        report.studies.push_back(std::move(so));
-    }
-    if (r.exp.render.enabled) {
-        const RenderStudyContext ctx = study_context(r, o);
-        fs::create_directories(stage / "render");
-        RenderStudyResult rr = run_render_study(r.exp.render, ctx, cache, stage, r.metrics);
-        if (rr.interrupted) {
-            fs::remove_all(stage, ec);
-            r.interrupted = true;
-            return false;
-        }
-        r.computed += rr.computed;
-        r.reused += rr.reused;
-        report.render_html = std::move(rr.html);
-    }
-    if (r.exp.realtime.enabled) {
-        const RenderStudyContext ctx = study_context(r, o);
-        RealtimeStudyResult rr =
-            run_realtime_study(r.exp.realtime, ctx, cache, o.results_root, stage, r.metrics);
-        if (rr.interrupted) {
-            fs::remove_all(stage, ec);
-            r.interrupted = true;
-            return false;
-        }
-        r.computed += rr.computed;
-        r.reused += rr.reused;
-        report.realtime_html = std::move(rr.html);
-    }
-    if (r.exp.stiff.enabled) {
-        const RenderStudyContext ctx = study_context(r, o);
-        StiffStudyResult sr = run_stiff_study(r.exp.stiff, ctx, stage, r.metrics);
-        if (sr.interrupted) {
-            fs::remove_all(stage, ec);
-            r.interrupted = true;
-            return false;
-        }
-        if (!o.quiet)
-            std::printf("  stiff sweep: %d checks, %d failed, %d refused\n", sr.checks, sr.failed,
-                        sr.refused);
-        report.stiff_html = std::move(sr.html);
-    }
-    // The plugin studies (study.h): what each returns is written and rendered here.
-    for (const auto& s : r.exp.studies) {
-        StudyInputs in;
-        in.ctx = study_context(r, o);
-        in.cache = &cache;
-        StudyResult sr = s.study->run(in);
-        if (sr.interrupted) {
-            fs::remove_all(stage, ec);
-            r.interrupted = true;
-            return false;
-        }
-        r.computed += sr.computed;
-        r.reused += sr.reused;
-        for (const auto& [name, content] : sr.files)
-            write_file_atomic(stage / s.name / name, content);
-        r.metrics.insert(r.metrics.end(), sr.metrics.begin(), sr.metrics.end());
-        if (!o.quiet && !sr.summary.empty())
-            std::printf("  %s: %s\n", s.name.c_str(), sr.summary.c_str());
-        report.sections.push_back(std::move(sr.section));
+    run_kernel_studies(r, o, cache, stage, report);
+    if (!run_scene_studies(r, o, cache, stage, report)) {
+        fs::remove_all(stage, ec);
+        r.interrupted = true;
+        return false;
     }
     write_file_atomic(stage / "metrics.csv", metrics_csv(r.metrics));
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
