@@ -13,27 +13,8 @@ namespace ssslab::runner {
 
 namespace {
 
-Experiment parse(std::shared_ptr<ConfigDocument> doc) {
-    Experiment e;
-    e.doc = doc;
-    e.source = doc->name();
-    ConfigTable root = doc->root();
-
-    ConfigTable ex = root.require_table("experiment");
-    e.name = ex.string("name");
-    if (e.name.empty() ||
-        e.name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-_.") != std::string::npos ||
-        e.name[0] == '.')
-        ex.fail("name",
-                "expected a name of lower-case letters, digits, '-', '_' and '.' (it names the "
-                "results directory), got \"" +
-                    e.name + "\"");
-    e.title = ex.string("title", e.name);
-    e.description = ex.string("description", "");
-    e.seed = static_cast<std::uint64_t>(ex.integer("seed", 1, Range::nonnegative()));
-
-    ConfigTable mats = root.table_or_empty("materials");
-    std::set<std::string> labels;
+// [materials]: presets by name and [[materials.custom]] tables, their labels unique.
+void read_materials(ConfigTable& mats, Experiment& e, std::set<std::string>& labels) {
     if (mats.has("presets")) {
         auto presets = mats.string_list("presets");
         for (size_t i = 0; i < presets.size(); ++i) {
@@ -54,7 +35,11 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
             c.fail("name", "material \"" + label + "\" is defined twice");
         e.materials.push_back({label, m});
     }
+}
 
+// [mcml] (the ground truth's budget, batches and grid) and [volpath] (the second engine, when
+// an output compares with it).
+void read_engines(ConfigTable& root, Experiment& e) {
     ConfigTable mc = root.table_or_empty("mcml");
     e.mcml.budget = mcml::read_budget(mc);
     if (!e.mcml.budget.any()) {
@@ -77,6 +62,32 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
         e.volpath.batch_paths = vp->integer("batch_paths", 0, Range::nonnegative());
         e.volpath.mode = vp->choice("mode", "analog", {"analog", "weighted"});
     }
+}
+
+Experiment parse(std::shared_ptr<ConfigDocument> doc) {
+    Experiment e;
+    e.doc = doc;
+    e.source = doc->name();
+    ConfigTable root = doc->root();
+
+    ConfigTable ex = root.require_table("experiment");
+    e.name = ex.string("name");
+    if (e.name.empty() ||
+        e.name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-_.") != std::string::npos ||
+        e.name[0] == '.')
+        ex.fail("name",
+                "expected a name of lower-case letters, digits, '-', '_' and '.' (it names the "
+                "results directory), got \"" +
+                    e.name + "\"");
+    e.title = ex.string("title", e.name);
+    e.description = ex.string("description", "");
+    e.seed = static_cast<std::uint64_t>(ex.integer("seed", 1, Range::nonnegative()));
+
+    ConfigTable mats = root.table_or_empty("materials");
+    std::set<std::string> labels;
+    read_materials(mats, e, labels);
+
+    read_engines(root, e);
 
     ConfigTable outs = root.require_table("outputs");
     auto need_volpath = [&](ConfigTable& t, const char* what) {

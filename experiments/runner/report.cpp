@@ -523,6 +523,76 @@ std::string contents(const std::string& body) {
 
 }  // namespace
 
+// The artifacts' provenance table: one row per ground-truth run of the experiment.
+void provenance_section(std::ostringstream& os, const ExperimentRun& r) {
+    // Provenance: columns with one value in every row (engine, budget, stop reason, revision,
+    // usually) are said once above the table, so that the table fits the page.
+    struct Column {
+        const char* head;
+        bool left, code;
+        std::string (*get)(const ChannelNode&);
+    };
+    const std::vector<Column> cols = {
+        {"engine", true, false,
+         [](const ChannelNode& n) {
+             return n.provenance.engine + " " + n.provenance.engine_version;
+         }},
+        {"budget", true, false, [](const ChannelNode& n) { return n.provenance.budget; }},
+        {"stopped by", true, false, [](const ChannelNode& n) { return n.provenance.stop_reason; }},
+        {"revision", true, true, [](const ChannelNode& n) { return n.provenance.revision; }},
+    };
+    std::vector<bool> varies(cols.size(), false);
+    for (size_t k = 0; k < cols.size(); ++k)
+        for (const auto& n : r.nodes)
+            if (cols[k].get(n) != cols[k].get(r.nodes.front())) varies[k] = true;
+    os << "<h2 id=\"provenance\">Artifacts and provenance</h2>\n<p>Every number above comes from "
+          "one of these MCML runs, cached under <code>results/cache/mcml-channel/&lt;key&gt;/"
+          "</code> with the key the hash of everything that determines it (medium, grid, "
+          "budget, seed, engine version). Table: <a href=\"artifacts.csv\">artifacts.csv</a>.";
+    if (!r.nodes.empty()) {
+        std::string same;
+        for (size_t k = 0; k < cols.size(); ++k)
+            if (!varies[k]) {
+                const std::string v = esc(cols[k].get(r.nodes.front()));
+                same += std::string(same.empty() ? "" : ", ") + cols[k].head + " " +
+                        (cols[k].code ? "<code>" + v + "</code>" : v);
+            }
+        if (!same.empty()) os << " The same for every run: " << same << ".";
+    }
+    os << "</p>\n<div class=\"wide\"><table class=\"prov\">\n<tr><th class=\"l\">key</th>"
+          "<th class=\"l\">material</th><th>ch</th><th class=\"l\">role</th>";
+    for (size_t k = 0; k < cols.size(); ++k)
+        if (varies[k] && k < 2) os << "<th class=\"l\">" << cols[k].head << "</th>";
+    os << "<th>photons</th><th>batches</th><th>seed</th><th>time [s]</th>";
+    for (size_t k = 2; k < cols.size(); ++k)
+        if (varies[k]) os << "<th class=\"l\">" << cols[k].head << "</th>";
+    os << "<th class=\"l\">date (UTC)</th><th class=\"l\">this run</th></tr>\n";
+    for (const auto& n : r.nodes) {
+        const Provenance& p = n.provenance;
+        auto cell = [&](size_t k) {
+            if (!varies[k]) return;
+            const std::string v = esc(cols[k].get(n));
+            os << "<td class=\"l w\">" << (cols[k].code ? "<code>" + v + "</code>" : v) << "</td>";
+        };
+        std::string date = p.date_utc;  // 2026-12-01T18:35:32Z -> 2026-12-01 18:35:32
+        if (date.size() == 20 && date[10] == 'T' && date[19] == 'Z')
+            date = date.substr(0, 10) + " " + date.substr(11, 8);
+        os << "<tr id=\"a-" << n.key.substr(0, 16) << "\"><td class=\"l\"><code>"
+           << n.key.substr(0, 16) << "</code></td><td class=\"l w\">" << esc(n.material)
+           << "</td><td>" << kChannelNames[n.channel] << "</td><td class=\"l\">" << n.role
+           << "</td>";
+        cell(0);
+        cell(1);
+        os << "<td>" << p.photons << "</td><td>" << p.batches << "</td><td>" << p.seed
+           << "</td><td>" << format_g(p.seconds, 4) << "</td>";
+        cell(2);
+        cell(3);
+        os << "<td class=\"l w\">" << esc(date) << "</td><td class=\"l\">"
+           << (p.computed_now ? "computed" : "reused") << "</td></tr>\n";
+    }
+    os << "</table></div>\n";
+}
+
 std::string render_report(const ExperimentRun& r, const ReportContent& c) {
     const Experiment& e = r.exp;
     std::ostringstream os;
@@ -635,72 +705,7 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
           "metrics.csv</a>.</p>\n";
     metrics_tables(os, r.metrics);
 
-    // Provenance: columns with one value in every row (engine, budget, stop reason, revision,
-    // usually) are said once above the table, so that the table fits the page.
-    struct Column {
-        const char* head;
-        bool left, code;
-        std::string (*get)(const ChannelNode&);
-    };
-    const std::vector<Column> cols = {
-        {"engine", true, false,
-         [](const ChannelNode& n) {
-             return n.provenance.engine + " " + n.provenance.engine_version;
-         }},
-        {"budget", true, false, [](const ChannelNode& n) { return n.provenance.budget; }},
-        {"stopped by", true, false, [](const ChannelNode& n) { return n.provenance.stop_reason; }},
-        {"revision", true, true, [](const ChannelNode& n) { return n.provenance.revision; }},
-    };
-    std::vector<bool> varies(cols.size(), false);
-    for (size_t k = 0; k < cols.size(); ++k)
-        for (const auto& n : r.nodes)
-            if (cols[k].get(n) != cols[k].get(r.nodes.front())) varies[k] = true;
-    os << "<h2 id=\"provenance\">Artifacts and provenance</h2>\n<p>Every number above comes from "
-          "one of these MCML runs, cached under <code>results/cache/mcml-channel/&lt;key&gt;/"
-          "</code> with the key the hash of everything that determines it (medium, grid, "
-          "budget, seed, engine version). Table: <a href=\"artifacts.csv\">artifacts.csv</a>.";
-    if (!r.nodes.empty()) {
-        std::string same;
-        for (size_t k = 0; k < cols.size(); ++k)
-            if (!varies[k]) {
-                const std::string v = esc(cols[k].get(r.nodes.front()));
-                same += std::string(same.empty() ? "" : ", ") + cols[k].head + " " +
-                        (cols[k].code ? "<code>" + v + "</code>" : v);
-            }
-        if (!same.empty()) os << " The same for every run: " << same << ".";
-    }
-    os << "</p>\n<div class=\"wide\"><table class=\"prov\">\n<tr><th class=\"l\">key</th>"
-          "<th class=\"l\">material</th><th>ch</th><th class=\"l\">role</th>";
-    for (size_t k = 0; k < cols.size(); ++k)
-        if (varies[k] && k < 2) os << "<th class=\"l\">" << cols[k].head << "</th>";
-    os << "<th>photons</th><th>batches</th><th>seed</th><th>time [s]</th>";
-    for (size_t k = 2; k < cols.size(); ++k)
-        if (varies[k]) os << "<th class=\"l\">" << cols[k].head << "</th>";
-    os << "<th class=\"l\">date (UTC)</th><th class=\"l\">this run</th></tr>\n";
-    for (const auto& n : r.nodes) {
-        const Provenance& p = n.provenance;
-        auto cell = [&](size_t k) {
-            if (!varies[k]) return;
-            const std::string v = esc(cols[k].get(n));
-            os << "<td class=\"l w\">" << (cols[k].code ? "<code>" + v + "</code>" : v) << "</td>";
-        };
-        std::string date = p.date_utc;  // 2026-12-01T18:35:32Z -> 2026-12-01 18:35:32
-        if (date.size() == 20 && date[10] == 'T' && date[19] == 'Z')
-            date = date.substr(0, 10) + " " + date.substr(11, 8);
-        os << "<tr id=\"a-" << n.key.substr(0, 16) << "\"><td class=\"l\"><code>"
-           << n.key.substr(0, 16) << "</code></td><td class=\"l w\">" << esc(n.material)
-           << "</td><td>" << kChannelNames[n.channel] << "</td><td class=\"l\">" << n.role
-           << "</td>";
-        cell(0);
-        cell(1);
-        os << "<td>" << p.photons << "</td><td>" << p.batches << "</td><td>" << p.seed
-           << "</td><td>" << format_g(p.seconds, 4) << "</td>";
-        cell(2);
-        cell(3);
-        os << "<td class=\"l w\">" << esc(date) << "</td><td class=\"l\">"
-           << (p.computed_now ? "computed" : "reused") << "</td></tr>\n";
-    }
-    os << "</table></div>\n";
+    provenance_section(os, r);
     os << "<h2 id=\"configuration\">Resolved configuration</h2>\n<p>Every default filled in "
           "(<a href=\"experiment.toml\">experiment.toml</a>).</p>\n<pre>"
        << esc(e.doc->resolved_toml()) << "</pre>\n";
