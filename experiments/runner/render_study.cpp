@@ -239,6 +239,54 @@ RenderStudySpec read_render_study(ConfigTable& t, const std::string& config_dir)
     return s;
 }
 
+namespace {
+
+// The image of a render without its snapshot layers, written as <stage>/render/<name>.exr with
+// a PNG preview; returned.
+LayeredImage write_render_image(const LayeredImage& image, const std::string& name,
+                                const fs::path& stage) {
+    LayeredImage img(image.width(), image.height());
+    for (const ImageLayer& l : image.layers())
+        if (l.name().rfind("snapshot_", 0) != 0)
+            img.add_layer(l.name(), l.channel_names(),
+                          std::vector<float>(l.pixels().begin(), l.pixels().end()));
+    img.metadata() = image.metadata();
+    img.metadata().erase("ssslab.snapshots");
+    write_exr(img, (stage / "render" / (name + ".exr")).string());
+    write_png_preview(img, "radiance", (stage / "render" / (name + ".png")).string());
+    return img;
+}
+
+// Per channel the image means of radiance (into mean, se) and subsurface with their standard
+// errors, as metrics <scene>.<channel>.radiance_mean and .subsurface_mean.
+void radiance_means(const LayeredImage& img, const std::string& scene, std::array<double, 3>& mean,
+                    std::array<double, 3>& se, std::vector<Metric>& metrics) {
+    const int w = img.width(), h = img.height();
+    const double npix = static_cast<double>(w) * h;
+    const ImageLayer& L = img.layer("radiance");
+    const ImageLayer& E = img.layer("radiance.stderr");
+    for (int c = 0; c < 3; ++c) {
+        double s = 0, v = 0, ss = 0, sv = 0;
+        const ImageLayer& S = img.layer("subsurface");
+        const ImageLayer& SE = img.layer("subsurface.stderr");
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                s += L.at(x, y, c);
+                v += static_cast<double>(E.at(x, y, c)) * E.at(x, y, c);
+                ss += S.at(x, y, c);
+                sv += static_cast<double>(SE.at(x, y, c)) * SE.at(x, y, c);
+            }
+        mean[static_cast<size_t>(c)] = s / npix;
+        se[static_cast<size_t>(c)] = std::sqrt(v) / npix;
+        const std::string base = scene + "." + std::string(1, "RGB"[c]);
+        metrics.push_back({base + ".radiance_mean", "1", s / npix, std::sqrt(v) / npix, true, 0});
+        metrics.push_back(
+            {base + ".subsurface_mean", "1", ss / npix, std::sqrt(sv) / npix, true, 0});
+    }
+}
+
+}  // namespace
+
 RenderStudyResult run_render_study(const RenderStudySpec& spec, const RenderStudyContext& ctx,
                                    const ArtifactCache& cache, const fs::path& stage,
                                    std::vector<Metric>& metrics) {
@@ -301,39 +349,10 @@ RenderStudyResult run_render_study(const RenderStudySpec& spec, const RenderStud
         }
         const Rendered& R = done[0];
         // Outputs: the main image without its snapshot layers, a preview, the tables.
-        LayeredImage img(R.image.width(), R.image.height());
-        for (const ImageLayer& l : R.image.layers())
-            if (l.name().rfind("snapshot_", 0) != 0)
-                img.add_layer(l.name(), l.channel_names(),
-                              std::vector<float>(l.pixels().begin(), l.pixels().end()));
-        img.metadata() = R.image.metadata();
-        img.metadata().erase("ssslab.snapshots");
-        write_exr(img, (stage / "render" / (scene.name + ".exr")).string());
-        write_png_preview(img, "radiance", (stage / "render" / (scene.name + ".png")).string());
-
-        const ImageLayer& L = img.layer("radiance");
-        const ImageLayer& E = img.layer("radiance.stderr");
+        const LayeredImage img = write_render_image(R.image, scene.name, stage);
         const double npix = static_cast<double>(w) * h;
         std::array<double, 3> mean{}, se{};
-        for (int c = 0; c < 3; ++c) {
-            double s = 0, v = 0, ss = 0, sv = 0;
-            const ImageLayer& S = img.layer("subsurface");
-            const ImageLayer& SE = img.layer("subsurface.stderr");
-            for (int y = 0; y < h; ++y)
-                for (int x = 0; x < w; ++x) {
-                    s += L.at(x, y, c);
-                    v += static_cast<double>(E.at(x, y, c)) * E.at(x, y, c);
-                    ss += S.at(x, y, c);
-                    sv += static_cast<double>(SE.at(x, y, c)) * SE.at(x, y, c);
-                }
-            mean[static_cast<size_t>(c)] = s / npix;
-            se[static_cast<size_t>(c)] = std::sqrt(v) / npix;
-            const std::string base = scene.name + "." + std::string(1, "RGB"[c]);
-            metrics.push_back(
-                {base + ".radiance_mean", "1", s / npix, std::sqrt(v) / npix, true, 0});
-            metrics.push_back(
-                {base + ".subsurface_mean", "1", ss / npix, std::sqrt(sv) / npix, true, 0});
-        }
+        radiance_means(img, scene.name, mean, se, metrics);
         double image_rel_se = 0, median_rel_se = 0;
         own_error(img, image_rel_se, median_rel_se);
         const double mrays = R.seconds > 0 ? static_cast<double>(R.rays) / R.seconds * 1e-6 : 0;
