@@ -229,17 +229,14 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame,
     return render_frame(scene, frame, light_frame(scene, frame, o, slabs), materials, o);
 }
 
-FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const LitFrame& lit,
-                         const std::map<int, FrameMaterial>& materials, const FrameOptions& o) {
-    FrameResult res;
-    res.times.push_back({"raster", frame.ms});
-    res.lighting = lit.stats;
-    res.times.push_back({"shadow maps", lit.stats.shadow_ms});
-    res.times.push_back({"lighting", std::max(0.0, lit.ms - lit.stats.shadow_ms)});
-    const GBuffer& g = lit.gbuffer;
+namespace {
 
-    // Passes 2-3: one kernel per medium in view, indexed densely.
-    std::vector<int> dense(scene.materials.size(), -1);
+// The kernels of the media in view, in order, and per scene material its index among them (-1:
+// not in view); std::invalid_argument for a medium in view without a kernel.
+std::vector<const FrameMaterial*> kernels_in_view(const Scene& scene, const RasterizedFrame& frame,
+                                                  const std::map<int, FrameMaterial>& materials,
+                                                  std::vector<int>& dense) {
+    dense.assign(scene.materials.size(), -1);
     std::vector<const FrameMaterial*> used;
     for (const int m : frame.media_in_view) {
         const auto it = materials.find(m);
@@ -250,6 +247,23 @@ FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const
         dense[static_cast<size_t>(m)] = static_cast<int>(used.size());
         used.push_back(&it->second);
     }
+    return used;
+}
+
+}  // namespace
+
+FrameResult render_frame(const Scene& scene, const RasterizedFrame& frame, const LitFrame& lit,
+                         const std::map<int, FrameMaterial>& materials, const FrameOptions& o) {
+    FrameResult res;
+    res.times.push_back({"raster", frame.ms});
+    res.lighting = lit.stats;
+    res.times.push_back({"shadow maps", lit.stats.shadow_ms});
+    res.times.push_back({"lighting", std::max(0.0, lit.ms - lit.stats.shadow_ms)});
+    const GBuffer& g = lit.gbuffer;
+
+    // Passes 2-3: one kernel per medium in view, indexed densely.
+    std::vector<int> dense;
+    const std::vector<const FrameMaterial*> used = kernels_in_view(scene, frame, materials, dense);
     const size_t n = g.samples();
     // The pass's inputs and output: scratch of the calling thread, kept between frames (fresh
     // 1080p arrays would fault in 64 MB of pages a frame). The result does not depend on it.
