@@ -68,6 +68,17 @@ SceneMaterial read_material(ConfigTable& t, const std::string& base_dir) {
             t.fail("roughness",
                    "a GGX alpha below 1e-3 is numerically a smooth boundary: use 0 (smooth) or "
                    "at least 1e-3");
+        // The medium as the engines simulate it, whatever it was given as (a preset's
+        // coefficients): into the resolved scene that outputs write beside them.
+        ConfigTable sim = t.table_or_empty("simulated");
+        auto rgb = [](const std::array<double, 3>& v) {
+            return std::vector<double>(v.begin(), v.end());
+        };
+        sim.record("sigma_a_per_cm", rgb(m.medium.sigma_a_per_cm));
+        sim.record("sigma_s_per_cm", rgb(m.medium.sigma_s_per_cm));
+        sim.record("g", rgb(m.medium.g));
+        sim.record("eta", m.boundary().eta);
+        sim.record("ggx_alpha", m.boundary().alpha);
     } else {
         m.kind = SceneMaterial::Kind::kDiffuse;
         m.albedo = t.rgb("albedo", Range::right_open(0, 1));

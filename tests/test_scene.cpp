@@ -7,6 +7,7 @@
 #include "testing.h"
 
 #include <gtest/gtest.h>
+#include <toml++/toml.h>
 
 #include <cmath>
 #include <filesystem>
@@ -250,6 +251,28 @@ TEST(Scene, ReadsCameraLightsMaterialsAndShapes) {
     EXPECT_TRUE(s.has_media());
     EXPECT_FALSE(s.delta_light_through_smooth_boundary());  // rough skin, smooth milk, no delta
     EXPECT_NE(describe(s).find("torus"), std::string::npos);
+}
+
+TEST(Scene, TheResolvedSceneHoldsTheMediaAsSimulated) {
+    // A preset by name and explicit coefficients alike: the resolved scene (what outputs write
+    // beside them) holds the coefficients per cm, g, eta and the boundary's GGX alpha that the
+    // engines use. Skin1 of Freude14 Table 6.2: sigma_a 0.032, 0.17, 0.48 and sigma_s 0.74,
+    // 0.88, 1.01 per mm, g 0, eta 1.3; roughness 0.1 here.
+    const Scene s = parse_scene(kScene, "t.toml", ".");
+    const toml::table t = toml::parse(s.resolved_toml);
+    const auto skin = t["materials"][0]["simulated"];
+    const double sa[3] = {0.32, 1.7, 4.8}, ss[3] = {7.4, 8.8, 10.1};
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_DOUBLE_EQ(skin["sigma_a_per_cm"][c].value_or(-1.0), sa[c]);
+        EXPECT_DOUBLE_EQ(skin["sigma_s_per_cm"][c].value_or(-1.0), ss[c]);
+        EXPECT_EQ(skin["g"][c].value_or(-1.0), 0.0);
+    }
+    EXPECT_EQ(skin["eta"].value_or(0.0), 1.3);
+    EXPECT_EQ(skin["ggx_alpha"].value_or(-1.0), 0.1);
+    const auto milk = t["materials"][1]["simulated"];
+    EXPECT_DOUBLE_EQ(milk["sigma_s_per_cm"][0].value_or(-1.0), 25.5);
+    EXPECT_EQ(milk["ggx_alpha"].value_or(-1.0), 0.0);
+    EXPECT_FALSE(t["materials"][2]["simulated"]) << "a diffuse material has no medium";
 }
 
 TEST(Scene, DeltaLightThroughASmoothBoundaryIsFlagged) {
