@@ -30,7 +30,10 @@ TEST(StudyPlugins, TheRegistryHoldsTheStudiesOfTheirFolders) {
     const auto& reg = runner::study_registry();
     EXPECT_EQ(reg.count("spot_light"), 1u);
     for (const auto& e : fs::directory_iterator(testing::source_path("experiments/runner/studies")))
-        if (e.is_directory()) EXPECT_EQ(reg.count(e.path().filename().string()), 1u) << e.path();
+        if (e.is_directory()) {
+            EXPECT_EQ(reg.count(e.path().filename().string()), 1u) << e.path();
+        }
+    EXPECT_EQ(reg.count("stiff"), 1u);
 }
 
 TEST(StudyPlugins, ASpotLightStudyRunsThroughTheRunnerAndItsReport) {

@@ -29,7 +29,8 @@
 //                            screen-space reference and the path tracer, Freude14 Table 6.4
 //                            (experiments/runner/realtime_study.h); needs no [materials]
 //   [outputs.stiff]          the stiff sweep: every engine and model on the extremes of its
-//                            inputs (experiments/runner/stiff_study.h); needs no [materials]
+//                            inputs (a plugin: experiments/runner/studies/stiff/); needs no
+//                            [materials]
 //   [outputs.<name>]         a plugin study of experiments/runner/studies/<name>/
 //                            (experiments/runner/study.h); needs no [materials]
 // Every error names file:line:column and the key.
@@ -43,7 +44,6 @@
 #include "experiments/runner/profile_models.h"
 #include "experiments/runner/realtime_study.h"
 #include "experiments/runner/render_study.h"
-#include "experiments/runner/stiff_study.h"
 #include "mcml/engine.h"
 #include "mcml/profile.h"
 
@@ -119,7 +119,6 @@ struct Experiment {
     std::vector<KernelStudySpec> kernel_studies;  ///< [[outputs.kernels]]
     RenderStudySpec render;                       ///< [outputs.render]
     RealtimeStudySpec realtime;                   ///< [outputs.realtime]
-    StiffStudySpec stiff;                         ///< [outputs.stiff]
     /// The plugin studies (experiments/runner/study.h) this config has an [outputs.<name>] of,
     /// in the registry's order.
     struct PluginStudy {

@@ -605,7 +605,8 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
                          format_g(!e.materials.empty() ? e.mcml.quick_factor
                                   : e.realtime.enabled ? e.realtime.quick_factor
                                   : e.render.enabled   ? e.render.quick_factor
-                                                       : e.stiff.quick_factor,
+                                  : !e.studies.empty() ? e.studies.front().study->quick_factor()
+                                                       : 1.0,
                                   6) +
                          ")"
                    : "full budgets")
@@ -692,7 +693,6 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
     }
     os << c.render_html;
     os << c.realtime_html;
-    os << c.stiff_html;
     for (const StudySection& s : c.sections) study_section_html(os, s);
 
     os << "<h2 id=\"metrics\">Metrics</h2>\n<p>What <code>ssslab check</code> compares with the "

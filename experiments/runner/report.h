@@ -31,7 +31,6 @@ struct ReportContent {
     const std::map<std::string, std::string>* engine_files = nullptr;  ///< engines.h tables
     std::string render_html;    ///< [outputs.render] (render_study.h)
     std::string realtime_html;  ///< [outputs.realtime] (realtime_study.h)
-    std::string stiff_html;     ///< [outputs.stiff] (stiff_study.h)
     /// The plugin studies' sections (study.h), in the experiment's order.
     std::vector<StudySection> sections;
 };

@@ -404,7 +404,6 @@ void print_plan(const ExperimentRun& r, std::ostream& os, bool verbose) {
         os << " realtime (" << r.exp.realtime.scenes.size() << " scenes, "
            << r.exp.realtime.models.size() << " models; profiles and renders reused or computed "
            << "when run)";
-    if (r.exp.stiff.enabled) os << " stiff (the sweep, computed when run)";
     for (const auto& s : r.exp.studies) os << " " << s.study->describe();
     os << " report\n";
 }
@@ -700,17 +699,6 @@ bool run_scene_studies(ExperimentRun& r, const RunOptions& o, const ArtifactCach
         r.computed += rr.computed;
         r.reused += rr.reused;
         report.realtime_html = std::move(rr.html);
-    }
-    if (r.exp.stiff.enabled) {
-        const RenderStudyContext ctx = study_context(r, o);
-        StiffStudyResult sr = run_stiff_study(r.exp.stiff, ctx, stage, r.metrics);
-        if (sr.interrupted) {
-            return false;
-        }
-        if (!o.quiet)
-            std::printf("  stiff sweep: %d checks, %d failed, %d refused\n", sr.checks, sr.failed,
-                        sr.refused);
-        report.stiff_html = std::move(sr.html);
     }
     // The plugin studies (study.h): what each returns is written and rendered here.
     for (const auto& s : r.exp.studies) {

@@ -60,6 +60,8 @@ class Study {
     /// What --dry-run lists for it ("spot_light (2 scenes, computed when run)").
     virtual std::string describe() const = 0;
     virtual StudyResult run(const StudyInputs& in) const = 0;
+    /// What --quick multiplies its budgets by (the report's header says it).
+    virtual double quick_factor() const { return 1.0; }
 };
 
 /// A study from its config table (InputError naming the key for bad values); `config_dir` is the

@@ -1,4 +1,4 @@
-#include "experiments/runner/stiff_study.h"
+#include "experiments/runner/studies/stiff/stiff_study.h"
 
 #include "approx/convolve.h"
 #include "approx/diffusion.h"
@@ -651,8 +651,7 @@ StiffStudySpec read_stiff_study(ConfigTable& t) {
     return s;
 }
 
-StiffStudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyContext& ctx,
-                                 const fs::path& stage, std::vector<Metric>& metrics) {
+StudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyContext& ctx) {
     Sweep s{spec, ctx, 0, 0, {}, false};
     s.photons = spec.photons;
     s.spp = spec.spp;
@@ -662,7 +661,9 @@ StiffStudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyCo
         s.spp = std::max<std::int64_t>(
             96, static_cast<std::int64_t>(std::llround(spec.spp * spec.quick_factor)));
     }
-    StiffStudyResult res;
+    StudyResult res;
+    int checks = 0, failed = 0, refused = 0;
+    std::vector<Metric>& metrics = res.metrics;
     const std::vector<Case> cases = media_cases();
     McmlOut base;  // the base case's MCML result, for the scale axis
     for (const Case& c : cases) {
@@ -710,17 +711,17 @@ StiffStudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyCo
     for (const Row& r : s.rows) {
         Summary& x = sums[{family(r.engine), r.axis}];
         ++x.checks;
-        ++res.checks;
+        ++checks;
         if (r.refused) {
             ++x.refused;
-            ++res.refused;
+            ++refused;
             continue;
         }
         failed_by_family[family(r.engine)] += r.pass ? 0 : 1;
         if (r.pass)
             ++x.passed;
         else
-            ++res.failed;
+            ++failed;
         x.nonfinite += r.nonfinite;
         if (r.test == Test::kEqual) x.worst_z = std::max(x.worst_z, std::fabs(r.z));
         x.longest = std::max(x.longest, r.seconds);
@@ -732,8 +733,8 @@ StiffStudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyCo
             << "," << x.nonfinite << "," << format_g(x.worst_z, 3) << "," << format_g(x.longest, 3)
             << "\n";
     const std::string sweep = sweep_csv(s.rows);
-    write_file_atomic(stage / "stiff" / "sweep.csv", sweep);
-    write_file_atomic(stage / "stiff" / "summary.csv", sum.str());
+    res.files["sweep.csv"] = sweep;
+    res.files["summary.csv"] = sum.str();
     for (const auto& [fam, n] : failed_by_family) {
         Metric m;
         m.name = "stiff." + fam + ".failed";
@@ -744,21 +745,24 @@ StiffStudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyCo
         metrics.push_back(m);
     }
 
-    std::ostringstream h;
-    h << "<h2 id=\"stiff\">The stiff sweep</h2>\n<p>Every engine and model on the extremes of its "
-         "inputs (albedo 1e-6 to 1 - 1e-9, g to &plusmn;0.999999, index ratios 0.5 to 2.5, every "
-         "length times 1e-7 to 1e5, kernels from 1e-4 pixel to 1e4 images): "
-      << res.checks << " checks, " << res.failed << " failed, " << res.refused
-      << " refused with a message; " << s.photons << " photons per Monte Carlo run, " << s.spp
-      << " samples per pixel per furnace render. A check passes when nothing it produced is NaN "
-         "or Inf, the run ended by its budget (not by the time cap of "
-      << format_g(spec.seconds_cap, 6)
-      << " s), and its energy agrees with physics (z-tests at "
-         "family-wise alpha "
-      << format_g(spec.alpha, 6)
-      << ", Sidak). See the header of experiments/runner/stiff_study.h for "
-         "what each check compares with.</p>\n";
-    csv_table(h, sum.str(), "Per engine and axis (stiff/summary.csv)");
+    StudySection& sec = res.section;
+    sec.id = "stiff";
+    sec.title = "The stiff sweep";
+    sec.paragraphs.push_back(
+        "Every engine and model on the extremes of its inputs (albedo 1e-6 to 1 - 1e-9, g to "
+        "\u00b10.999999, index ratios 0.5 to 2.5, every length times 1e-7 to 1e5, kernels from "
+        "1e-4 pixel to 1e4 images): " +
+        std::to_string(checks) + " checks, " + std::to_string(failed) + " failed, " +
+        std::to_string(refused) + " refused with a message; " + std::to_string(s.photons) +
+        " photons per Monte Carlo run, " + std::to_string(s.spp) +
+        " samples per pixel per furnace render. A check passes when nothing it produced is NaN "
+        "or Inf, the run ended by its budget (not by the time cap of " +
+        format_g(spec.seconds_cap, 6) +
+        " s), and its energy agrees with physics (z-tests at family-wise alpha " +
+        format_g(spec.alpha, 6) +
+        ", Sidak). See the header of experiments/runner/studies/stiff/stiff_study.h for what "
+        "each check compares with.");
+    sec.tables.push_back({"Per engine and axis (stiff/summary.csv)", sum.str()});
     std::string failing = "engine,axis,value,quantity,estimate,se,expected,z,nonfinite,note\n";
     for (const Row& r : s.rows)
         if (!r.refused && !r.pass)
@@ -766,16 +770,38 @@ StiffStudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyCo
                        csv_field(r.quantity) + "," + format_g(r.estimate, 6) + "," +
                        format_g(r.se, 3) + "," + format_g(r.expected, 6) + "," + format_g(r.z, 3) +
                        "," + std::to_string(r.nonfinite) + "," + csv_field(r.note) + "\n";
-    if (res.failed) csv_table(h, failing, "Failed checks");
+    if (failed) sec.tables.push_back({"Failed checks", failing});
     std::string refusals = "engine,axis,value,message\n";
     for (const Row& r : s.rows)
         if (r.refused)
             refusals +=
                 r.engine + "," + r.axis + "," + csv_field(r.value) + "," + csv_field(r.note) + "\n";
-    if (res.refused) csv_table(h, refusals, "Refused inputs");
-    h << "<p>Every check: stiff/sweep.csv.</p>\n";
-    res.html = h.str();
+    if (refused) sec.tables.push_back({"Refused inputs", refusals});
+    sec.paragraphs.push_back("Every check: stiff/sweep.csv.");
+    res.summary = std::to_string(checks) + " checks, " + std::to_string(failed) + " failed, " +
+                  std::to_string(refused) + " refused";
     return res;
 }
 
+namespace {
+
+class StiffStudy final : public Study {
+  public:
+    explicit StiffStudy(StiffStudySpec s) : spec_(s) {}
+    std::string describe() const override { return "stiff (the sweep, computed when run)"; }
+    double quick_factor() const override { return spec_.quick_factor; }
+    StudyResult run(const StudyInputs& in) const override { return run_stiff_study(spec_, in.ctx); }
+
+  private:
+    StiffStudySpec spec_;
+};
+
+std::shared_ptr<const Study> make_stiff_study(ConfigTable& t, const std::string&) {
+    return std::make_shared<StiffStudy>(read_stiff_study(t));
+}
+
+}  // namespace
+
 }  // namespace ssslab::runner
+
+SSSLAB_REGISTER_STUDY(stiff, ssslab::runner::make_stiff_study)

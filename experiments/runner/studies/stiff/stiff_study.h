@@ -52,6 +52,7 @@
 
 #include "core/config.h"
 #include "experiments/runner/render_study.h"
+#include "experiments/runner/study.h"
 
 #include <cstdint>
 #include <filesystem>
@@ -59,8 +60,6 @@
 #include <vector>
 
 namespace ssslab::runner {
-
-struct Metric;
 
 struct StiffStudySpec {
     bool enabled = false;
@@ -74,14 +73,9 @@ struct StiffStudySpec {
 /// Parse [outputs.stiff].
 StiffStudySpec read_stiff_study(ConfigTable& t);
 
-struct StiffStudyResult {
-    bool interrupted = false;
-    int checks = 0, failed = 0, refused = 0;
-    std::string html;  ///< the report section
-};
-
-/// Run the sweep and write <stage>/stiff/; metrics are appended to `metrics`.
-StiffStudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyContext& ctx,
-                                 const std::filesystem::path& stage, std::vector<Metric>& metrics);
+// A study plugin (experiments/runner/study.h): [outputs.stiff] registers read_stiff_study, whose
+// study runs run_stiff_study: files stiff/sweep.csv and stiff/summary.csv, metrics
+// stiff.<family>.failed, and the report's section.
+StudyResult run_stiff_study(const StiffStudySpec& spec, const RenderStudyContext& ctx);
 
 }  // namespace ssslab::runner
