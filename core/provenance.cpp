@@ -35,7 +35,7 @@ std::vector<std::pair<std::string, std::string>> provenance(const std::string& c
         {"tomlplusplus", std::to_string(TOML_LIB_MAJOR) + "." + std::to_string(TOML_LIB_MINOR) +
                              "." + std::to_string(TOML_LIB_PATCH)},
         {"CLI11", CLI11_VERSION},
-        {"Random123", "Philox4x64-10"},
+        {"Random123", "Philox4x32-10"},
         {"host_threads", std::to_string(std::thread::hardware_concurrency())},
         {"mpi_ranks", std::to_string(dist::size())},  // core/distributed.h
         {"date_utc", utc_now()},

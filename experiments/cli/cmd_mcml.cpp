@@ -77,7 +77,7 @@ std::string run_record(const McmlArgs& a, const mcml::RunSpec& run, size_t index
     } else {
         e.record("seed", static_cast<std::int64_t>(a.common.seed.value_or(1)));
         e.record("stream", static_cast<std::int64_t>(index));
-        e.record("rng", std::string("Philox4x64-10"));
+        e.record("rng", std::string("Philox4x32-10"));
     }
     e.record("threads", static_cast<std::int64_t>(res.threads));
     e.record("batch_photons", res.batch_photons);
