@@ -25,11 +25,13 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -287,504 +289,620 @@ RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_
     return s;
 }
 
-RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const RenderStudyContext& ctx,
-                                       const ArtifactCache& cache, const fs::path& results_root,
-                                       const fs::path& stage, std::vector<Metric>& metrics) {
-    RealtimeStudyResult res;
-    const fs::path dir = stage / "realtime";
-    fs::create_directories(dir);
-    tbb::task_arena arena(ctx.threads > 0 ? ctx.threads : tbb::task_arena::automatic);
-    std::ostringstream table, sweep, decomposition, html, munoz, jb, approximations;
-    table << "scene,model,label,taps,channel,pixels,rms_vs_reference,rms_vs_reference_se,"
-             "norm_table,norm_scene,rel_rms_vs_reference,rms_vs_volpath,rms_vs_volpath_se,"
-             "raw_rms_vs_volpath,volpath_noise_rms,sss_ms,frame_ms,kernel_build_s\n";
-    sweep << "scene,model,label,taps,jitter,rotate,rms_vs_reference_rgb,rms_vs_reference_rgb_se,"
-             "rms_vs_volpath_rgb,rms_vs_volpath_rgb_se,sss_ms,frame_ms\n";
-    munoz << "scene,variant,layers,threshold,downsample,split,rms_vs_reference,"
-             "rms_vs_reference_se,rms_vs_volpath,rms_vs_volpath_se,seconds,convolutions,"
-             "skipped_threshold,skipped_invisible,kernel,visible\n";
-    jb << "scene,threshold,points,rms_vs_volpath,rms_vs_volpath_se,seconds,variant,density,bound,"
-          "profile,rms_vs_reference,rms_vs_reference_se,query_seconds,cloud_seconds,"
-          "light_seconds,nodes_visited,clusters,point_terms\n";
-    approximations << "scene,method,rms_vs_volpath,rms_vs_volpath_se,seconds,family,"
-                      "rms_vs_reference,rms_vs_reference_se,bias_vs_volpath,bias_vs_volpath_se,"
-                      "bias_vs_reference\n";
-    decomposition << "scene,channel,pixels,reference_signal_rms,separability_model,separability,"
-                     "screen_space,screen_space_se,specular,specular_se,surfaces,surfaces_se,total,"
-                     "total_se\n";
-    struct SceneScores {
-        std::string scene;
-        size_t pixels = 0;
-        std::array<double, 3> signal{};
-        std::vector<Score> scores;  // the table's models at spec.taps
-    };
-    std::vector<SceneScores> all;
-    std::ostringstream viewers;
+namespace {
+
+/// A scene's scores of the table's models at spec.taps, and the scale of its signal.
+struct SceneScores {
+    std::string scene;
+    size_t pixels = 0;
+    std::array<double, 3> signal{};
+    std::vector<Score> scores;  // the table's models at spec.taps
+};
+
+// The RGB error is the root of the channels' mean squared error; its standard error by the
+// delta method as noise_corrected_rms's, from the mean of the channels' standard errors of
+// D^2 (their errors are correlated, the same paths carry all three: the mean bounds the
+// sum's).
+struct Rgb {
+    double rms, rms_se;
+};
+Rgb rgb(const std::array<NoiseCorrectedRms, 3>& e) {
+    const double ms = (e[0].ms + e[1].ms + e[2].ms) / 3.0;
+    const double ms_se = (e[0].ms_se + e[1].ms_se + e[2].ms_se) / 3.0;
+    const double rms = std::sqrt(std::max(0.0, ms));
+    return Rgb{rms, rms > 0 ? std::min(ms_se / (2.0 * rms), std::sqrt(ms_se)) : std::sqrt(ms_se)};
+}
+
+using FrameKernels = std::map<int, realtime::FrameMaterial>;
+
+/// One scene of the study: its frame (pass 1 shared by every model), its ground truth (the
+/// media's profiles and slabs, the path tracer's image), the kernels built so far, the
+/// screen-space reference and the scored pixels.
+struct SceneRun {
+    Scene scene;
+    int w = 0, h = 0;
+    realtime::FrameOptions fo;
+    realtime::RasterizedFrame frame;
+    RealtimeInputs in;
+    std::optional<CachedRender> vp;
+    double vp_dof = 0;
+    std::vector<realtime::SlabTransmittance> slabs;
+    // Kernels per (model, taps), built once.
+    std::map<std::pair<std::string, int>, FrameKernels> kernels;
+    std::map<std::pair<std::string, int>, double> build_s;
+    realtime::LitFrame lit;
+    realtime::FrameResult ref;
+    std::vector<size_t> mask, surfaces;
+    std::map<std::string, realtime::FrameResult> frames;  // the table's models, for images
+};
+
+/// The study's CSV tables as they grow scene by scene, and the flip viewers' HTML.
+struct RealtimeTables {
+    std::ostringstream table, sweep, decomposition, munoz, jb, approximations, viewers;
+    RealtimeTables() {
+        table << "scene,model,label,taps,channel,pixels,rms_vs_reference,rms_vs_reference_se,"
+                 "norm_table,norm_scene,rel_rms_vs_reference,rms_vs_volpath,rms_vs_volpath_se,"
+                 "raw_rms_vs_volpath,volpath_noise_rms,sss_ms,frame_ms,kernel_build_s\n";
+        sweep
+            << "scene,model,label,taps,jitter,rotate,rms_vs_reference_rgb,rms_vs_reference_rgb_se,"
+               "rms_vs_volpath_rgb,rms_vs_volpath_rgb_se,sss_ms,frame_ms\n";
+        munoz << "scene,variant,layers,threshold,downsample,split,rms_vs_reference,"
+                 "rms_vs_reference_se,rms_vs_volpath,rms_vs_volpath_se,seconds,convolutions,"
+                 "skipped_threshold,skipped_invisible,kernel,visible\n";
+        jb << "scene,threshold,points,rms_vs_volpath,rms_vs_volpath_se,seconds,variant,density,"
+              "bound,profile,rms_vs_reference,rms_vs_reference_se,query_seconds,cloud_seconds,"
+              "light_seconds,nodes_visited,clusters,point_terms\n";
+        approximations << "scene,method,rms_vs_volpath,rms_vs_volpath_se,seconds,family,"
+                          "rms_vs_reference,rms_vs_reference_se,bias_vs_volpath,bias_vs_volpath_se,"
+                          "bias_vs_reference\n";
+        decomposition
+            << "scene,channel,pixels,reference_signal_rms,separability_model,separability,"
+               "screen_space,screen_space_se,specular,specular_se,surfaces,surfaces_se,"
+               "total,total_se\n";
+    }
+};
+
+/// One run of the study: scene by scene, then the tables, the plots and the report section.
+class RealtimeRun {
+  public:
+    RealtimeRun(const RealtimeStudySpec& spec, const RenderStudyContext& ctx,
+                const ArtifactCache& cache, const fs::path& results_root, const fs::path& stage,
+                std::vector<Metric>& metrics)
+        : spec_(spec),
+          ctx_(ctx),
+          cache_(cache),
+          results_root_(results_root),
+          stage_(stage),
+          dir_(stage / "realtime"),
+          metrics_(metrics),
+          arena_(ctx.threads > 0 ? ctx.threads : tbb::task_arena::automatic) {}
+
+    RealtimeStudyResult run();
+
+  private:
+    bool prepare_scene(const std::string& path, SceneRun& s);
+    const FrameKernels& kernels_of(SceneRun& s, const std::string& model, int taps, bool exact);
+    realtime::FrameResult render(const SceneRun& s, const FrameKernels& k, realtime::SssMethod m,
+                                 double jitter, bool rotate = false);
+    void find_scored_pixels(SceneRun& s) const;
+    void score_frame(const SceneRun& s, const realtime::FrameResult& f, Score& sc) const;
+    void approximation_row(const SceneRun& s, const std::string& method, const std::string& family,
+                           const Score& sc, double seconds);
+    void sweep_row(const SceneRun& s, const Score& sc);
+    void score_models(SceneRun& s, SceneScores& ss);
+    void run_sweep(SceneRun& s);
+    void run_munoz(SceneRun& s);
+    void run_jensen_buhler(SceneRun& s);
+    void decompose(const SceneRun& s, const SceneScores& ss);
+    void write_images(const SceneRun& s, const SceneScores& ss);
+    std::string write_tables(const std::vector<SceneScores>& all);
+    std::vector<PlotRequest> plot_requests(const std::vector<SceneScores>& all) const;
+    std::string section_html(const std::vector<SceneScores>& all, const std::string& ours_vs_thesis,
+                             const PlotResult& plots) const;
+
+    const RealtimeStudySpec& spec_;
+    const RenderStudyContext& ctx_;
+    const ArtifactCache& cache_;
+    const fs::path results_root_, stage_, dir_;
+    std::vector<Metric>& metrics_;
+    tbb::task_arena arena_;
+    RealtimeTables t_;
+    RealtimeStudyResult res_;
     // The GL twin's SSS pass, where the config names it: one context for the study, on this
     // thread (render_frame calls the pass on the thread that runs the arena's work).
 #if SSSLAB_HAVE_GL
-    std::unique_ptr<realtime::gl::GlContext> gl_context;
-    std::unique_ptr<realtime::gl::GlSssPass> gl_pass;
-    if (spec.backend == "gl") {
-        gl_context =
-            realtime::gl::GlContext::create(realtime::gl::parse_gl_platform(spec.platform));
-        gl_pass = std::make_unique<realtime::gl::GlSssPass>(*gl_context);
+    std::unique_ptr<realtime::gl::GlContext> gl_context_;
+    std::unique_ptr<realtime::gl::GlSssPass> gl_pass_;
+#endif
+};
+
+RealtimeStudyResult RealtimeRun::run() {
+    fs::create_directories(dir_);
+#if SSSLAB_HAVE_GL
+    if (spec_.backend == "gl") {
+        gl_context_ =
+            realtime::gl::GlContext::create(realtime::gl::parse_gl_platform(spec_.platform));
+        gl_pass_ = std::make_unique<realtime::gl::GlSssPass>(*gl_context_);
     }
 #endif
-    const realtime::SssEdgeMode mode = spec.edge;
-
-    for (const std::string& path : spec.scenes) {
-        const Scene scene = read_scene(path);
-        int w = spec.width > 0 ? spec.width : scene.camera.width;
-        int h = spec.height > 0 ? spec.height : scene.camera.height;
-        std::int64_t spp = spec.spp, photons = spec.photons;
-        if (ctx.quick) {
-            const double f = std::min(1.0, static_cast<double>(spec.quick_size) / std::max(w, h));
-            w = std::max(1, static_cast<int>(std::lround(w * f)));
-            h = std::max(1, static_cast<int>(std::lround(h * f)));
-            spp = std::max<std::int64_t>(
-                12, std::llround(static_cast<double>(spp) * spec.quick_factor));
-            photons = std::max<std::int64_t>(
-                1000, std::llround(static_cast<double>(photons) * spec.quick_factor));
+    std::vector<SceneScores> all;
+    for (const std::string& path : spec_.scenes) {
+        SceneRun s;
+        if (!prepare_scene(path, s)) {
+            res_.interrupted = true;
+            return res_;
         }
-        realtime::FrameOptions fo;
-        fo.width = w;
-        fo.height = h;
-        fo.lighting.light_samples = spec.light_samples;
-        fo.lighting.environment_samples = spec.environment_samples;
-        fo.lighting.shadow_map_size = spec.shadow_map_size;
-        fo.lighting.environment_map_size = spec.environment_map_size;
-        fo.sss.mode = mode;
-        fo.sss.follow_strength = realtime::default_follow_strength(scene);
-        fo.sss.reject_depth = realtime::default_reject_depth(scene);
-        fo.reference.samples = spec.reference_samples;
-        fo.reference.seed = ctx.seed;
-        realtime::RasterizedFrame frame;
-        arena.execute([&] { frame = realtime::rasterize_frame(scene, fo); });
-
-        // Ground truth: the media's profiles (and slabs for translucency), the path tracer.
-        RealtimeInputOptions io;
-        io.seed = ctx.seed;
-        io.profile_budget.samples = photons;
-        io.slab_budget.samples = std::max<std::int64_t>(1000, photons / 10);
-        io.slab_thickness_mm = slab_thicknesses(0.05, 25.6, 10);
-        io.run.threads = ctx.threads;
-        io.run.results_root = results_root;
-        io.run.quiet = ctx.quiet;
-        io.run.cancel = ctx.cancel;
-        io.run.checkpoint_seconds = ctx.checkpoint_seconds;
-        const RealtimeInputs in = realtime_inputs(scene, frame.media_in_view, io);
-        if (in.interrupted) {
-            res.interrupted = true;
-            return res;
-        }
-        res.computed += in.computed;
-        res.reused += in.reused;
-        SampleBudget vb;
-        vb.samples = spp;
-        const std::optional<CachedRender> vp =
-            cached_render(scene, "realtime", w, h, vb, ctx, cache);
-        if (!vp) {
-            res.interrupted = true;
-            return res;
-        }
-        (vp->computed_now ? res.computed : res.reused) += 1;
-        const double vp_dof = static_cast<double>(vp->spp / 3) - 1;  // batch statistics
-        std::vector<realtime::SlabTransmittance> slabs(scene.materials.size());
-        for (const auto& [m, t] : in.slabs) {
-            slabs[static_cast<size_t>(m)].thickness_mm = t.thickness_mm;
-            slabs[static_cast<size_t>(m)].transmittance = t.transmittance;
-        }
-
-        // Kernels per (model, taps), built once.
-        std::map<std::pair<std::string, int>, std::map<int, realtime::FrameMaterial>> kernels;
-        std::map<std::pair<std::string, int>, double> build_s;
-        auto kernels_of = [&](const std::string& model, int taps,
-                              bool exact) -> const std::map<int, realtime::FrameMaterial>& {
-            auto& k = kernels[{model, taps}];
-            if (!k.empty() || in.profiles.empty()) return k;
-            const auto t0 = std::chrono::steady_clock::now();
-            const approx::ModelSpec ms = approx::parse_model(model);
-            for (const auto& [m, p] : in.profiles)
-                k[m] = realtime::make_frame_material(p, ms, taps, exact);
-            build_s[{model, taps}] =
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-            return k;
-        };
-        // Pass 1 once: every model's frame shares the G-buffer.
-        realtime::LitFrame lit;
-        arena.execute([&] { lit = realtime::light_frame(scene, frame, fo, slabs); });
-        auto run = [&](const std::map<int, realtime::FrameMaterial>& k, realtime::SssMethod m,
-                       double jitter, bool rotate = false) {
-            realtime::FrameOptions o = fo;
-            o.method = m;
-            o.sss.jitter = jitter;
-            o.sss.rotate = rotate;
-            o.sss.seed = static_cast<std::uint32_t>(ctx.seed);
-#if SSSLAB_HAVE_GL
-            if (gl_pass)
-                o.separable_pass = [&](const realtime::SssGBuffer& g,
-                                       const std::vector<realtime::SssMaterialKernel>& taps,
-                                       const realtime::SssParams& p,
-                                       std::vector<float>& out) { gl_pass->run(g, taps, p, out); };
-#endif
-            realtime::FrameResult r;
-            arena.execute([&] { r = realtime::render_frame(scene, frame, lit, k, o); });
-            return r;
-        };
-        const realtime::FrameResult ref =
-            run(kernels_of(spec.models[0], spec.taps, true), realtime::SssMethod::kReference, 0);
-
-        // The scored pixels: every sample a medium.
-        std::vector<size_t> mask, surfaces;
-        const int s = frame.raster.supersample;
-        for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x) {
-                const size_t i = frame.raster.pixel_index(x, y);
-                bool all_medium = true, covered = frame.raster.coverage[i] >= 1.0;
-                for (int j = 0; j < s; ++j)
-                    for (int q = 0; q < s; ++q) {
-                        const std::int32_t sh =
-                            frame.raster.shape[frame.raster.sample_index(x * s + q, y * s + j)];
-                        all_medium =
-                            all_medium && sh >= 0 &&
-                            scene.materials[static_cast<size_t>(
-                                                scene.shapes[static_cast<size_t>(sh)].material)]
-                                    .kind == SceneMaterial::Kind::kMedium;
-                    }
-                if (all_medium)
-                    mask.push_back(i);
-                else if (covered)
-                    surfaces.push_back(i);
-            }
+        find_scored_pixels(s);
         SceneScores ss;
-        ss.scene = scene.name;
-        ss.pixels = mask.size();
-        for (int c = 0; c < 3; ++c) {
-            std::vector<double> v, var;
-            masked(ref.image, "subsurface", mask, c, v, var);
-            double q = 0;
-            for (double x : v) q += x * x;
-            ss.signal[static_cast<size_t>(c)] = v.empty() ? 0 : std::sqrt(q / v.size());
-        }
-        auto score_frame = [&](const realtime::FrameResult& f, Score& sc) {
-            for (int c = 0; c < 3; ++c) {
-                sc.vs_reference[static_cast<size_t>(c)] =
-                    score(f.image, "subsurface", ref.image, "subsurface", mask, c, 0);
-                sc.vs_volpath[static_cast<size_t>(c)] =
-                    score(f.image, "subsurface", vp->image, "subsurface", mask, c, vp_dof);
-            }
-            sc.bias_vs_reference =
-                relative_bias(f.image, "subsurface", ref.image, "subsurface", mask);
-            sc.bias_vs_volpath =
-                relative_bias(f.image, "subsurface", vp->image, "subsurface", mask);
-            for (const auto& p : f.times)
-                if (p.pass == "sss") sc.sss_ms = p.ms;
-            sc.frame_ms = f.total_ms();
-        };
-        std::map<std::string, realtime::FrameResult> frames;  // the table's models, for images
-        for (const std::string& model : spec.models) {
-            Score sc;
-            sc.model = model;
-            sc.label = approx::parse_model(model).label();
-            sc.taps = spec.taps;
-            const auto& k = kernels_of(model, spec.taps, model == spec.models[0]);
-            realtime::FrameResult f = run(k, realtime::SssMethod::kSeparable, 0);
-            score_frame(f, sc);
-            sc.build_s = build_s[{model, spec.taps}];
-            ss.scores.push_back(sc);
-            frames.emplace(sc.label, std::move(f));
-        }
-        // The RGB error is the root of the channels' mean squared error; its standard error by the
-        // delta method as noise_corrected_rms's, from the mean of the channels' standard errors of
-        // D^2 (their errors are correlated, the same paths carry all three: the mean bounds the
-        // sum's).
-        struct Rgb {
-            double rms, rms_se;
-        };
-        auto rgb = [](const std::array<NoiseCorrectedRms, 3>& e) {
-            const double ms = (e[0].ms + e[1].ms + e[2].ms) / 3.0;
-            const double ms_se = (e[0].ms_se + e[1].ms_se + e[2].ms_se) / 3.0;
-            const double rms = std::sqrt(std::max(0.0, ms));
-            return Rgb{
-                rms, rms > 0 ? std::min(ms_se / (2.0 * rms), std::sqrt(ms_se)) : std::sqrt(ms_se)};
-        };
-        // The table of every approximation (approximations.csv): the RGB errors and the
-        // seconds of the pass that replaces the SSS pass (kernels built before the frame).
-        auto approximation_row = [&](const std::string& method, const std::string& family,
-                                     const Score& sc, double seconds) {
-            const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
-            approximations << scene.name << "," << csv_field(method) << ","
-                           << format_g(vp_rgb.rms, 6) << "," << format_g(vp_rgb.rms_se, 6) << ","
-                           << format_g(seconds, 6) << "," << family << ","
-                           << format_g(ref_rgb.rms, 6) << "," << format_g(ref_rgb.rms_se, 6) << ","
-                           << format_g(sc.bias_vs_volpath.value, 6) << ","
-                           << format_g(sc.bias_vs_volpath.se, 6) << ","
-                           << format_g(sc.bias_vs_reference.value, 6) << "\n";
-        };
-        {
-            Score sc;
-            score_frame(ref, sc);
-            approximation_row("reference:2d", "screen-space reference", sc, sc.sss_ms / 1000);
-        }
-        for (const Score& sc : ss.scores)
-            approximation_row(sc.model, "separable", sc, sc.sss_ms / 1000);
-
-        // Error against frame time: the sweep models over tap counts, with and without jitter;
-        // and every table model at its taps (ranks, d'Eon counts).
-        auto sweep_row = [&](const Score& sc) {
-            const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
-            sweep << scene.name << "," << csv_field(sc.model) << "," << sc.label << "," << sc.taps
-                  << "," << format_g(sc.jitter, 6) << "," << (sc.rotate ? 1 : 0) << ","
-                  << format_g(ref_rgb.rms, 6) << "," << format_g(ref_rgb.rms_se, 6) << ","
-                  << format_g(vp_rgb.rms, 6) << "," << format_g(vp_rgb.rms_se, 6) << ","
-                  << format_g(sc.sss_ms, 6) << "," << format_g(sc.frame_ms, 6) << "\n";
-        };
-        for (const Score& sc : ss.scores) sweep_row(sc);
-        // Variants of the sweep: (jitter, rotate).
-        std::vector<std::pair<double, bool>> variants = {{0.0, false}};
-        if (spec.jitter > 0) variants.push_back({spec.jitter, false});
-        if (spec.rotate) variants.push_back({0.0, true});
-        for (const std::string& model : spec.sweep_models)
-            for (int taps : spec.taps_sweep)
-                for (const auto& [jit, rot] : variants) {
-                    if (taps == spec.taps && jit == 0.0 && !rot &&
-                        std::find(spec.models.begin(), spec.models.end(), model) !=
-                            spec.models.end())
-                        continue;  // already a table row
-                    Score sc;
-                    sc.model = model;
-                    sc.label = approx::parse_model(model).label();
-                    sc.taps = taps;
-                    sc.jitter = jit;
-                    sc.rotate = rot;
-                    score_frame(run(kernels_of(model, taps, false), realtime::SssMethod::kSeparable,
-                                    jit, rot),
-                                sc);
-                    sweep_row(sc);
-                }
-
-        // Munoz11's layered convolution in place of the SSS pass: the media's far sides lit
-        // once, then every variant scored like a model.
-        if (!spec.munoz.empty()) {
-            realtime::LitFrame back;
-            arena.execute([&] { back = light_back_frame(scene, fo, slabs); });
-            const auto& k = kernels_of(spec.models[0], spec.taps, true);
-            for (const std::string& text : spec.munoz) {
-                const approx::MunozOptions mo = approx::parse_munoz(text);
-                MunozFrame mf;
-                arena.execute([&] {
-                    mf = render_munoz_frame(scene, frame, lit, back, k, in.profiles, mo, fo);
-                });
-                Score sc;
-                score_frame(mf.frame, sc);
-                const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
-                std::string variant = approx::munoz_label(mo);  // spaces for commas
-                std::replace(variant.begin(), variant.end(), ',', ' ');
-                munoz << scene.name << "," << variant << "," << mo.layers << ","
-                      << format_g(mo.threshold, 6) << "," << mo.downsample << ","
-                      << approx::split_name(mo.split) << "," << format_g(ref_rgb.rms, 6) << ","
-                      << format_g(ref_rgb.rms_se, 6) << "," << format_g(vp_rgb.rms, 6) << ","
-                      << format_g(vp_rgb.rms_se, 6) << "," << format_g(mf.stats.seconds, 6) << ","
-                      << mf.stats.convolutions << "," << mf.stats.skipped_threshold << ","
-                      << mf.stats.skipped_invisible << ","
-                      << (mo.kernel == approx::MunozKernel::point ? "point" : "average") << ","
-                      << (mo.skip_invisible ? "skip" : "all") << "\n";
-                // Under regression like the models: scene.munoz_l<layers>_t<t>_d<downsample>
-                // [_linear][_all][_avg].rms_vs_volpath, the RGB error.
-                const std::string id = "munoz_l" + std::to_string(mo.layers) + "_t" +
-                                       format_g(mo.threshold, 6) + "_d" +
-                                       std::to_string(mo.downsample) +
-                                       (mo.split == approx::MunozSplit::equal
-                                            ? std::string()
-                                            : std::string("_") + approx::split_name(mo.split)) +
-                                       (mo.skip_invisible ? "" : "_all") +
-                                       (mo.kernel == approx::MunozKernel::point ? "" : "_avg");
-                metrics.push_back({scene.name + "." + metric_label(id) + ".rms_vs_volpath", "1",
-                                   vp_rgb.rms, vp_rgb.rms_se, true, 0});
-                approximation_row("munoz:" + approx::munoz_label(mo), "Munoz11", sc,
-                                  mf.stats.seconds);
-                if (!ctx.quiet)
-                    std::printf(
-                        "  realtime %s: munoz %s: RGB error %.4g +- %.2g against the path "
-                        "tracer, %.3g s\n",
-                        scene.name.c_str(), approx::munoz_label(mo).c_str(), vp_rgb.rms,
-                        vp_rgb.rms_se, mf.stats.seconds);
-            }
-        }
-
-        // Jensen-Buhler's hierarchical integration in place of the SSS pass: one lit point
-        // cloud per (density, candidates), shared by the variants that differ only in their
-        // threshold, bound or profile; each variant's seconds are its cloud's and its queries'.
-        if (!spec.jensen_buhler.empty()) {
-            const auto& k = kernels_of(spec.models[0], spec.taps, true);
-            std::map<std::pair<double, int>, JensenBuhlerCloud> clouds;
-            for (const std::string& text : spec.jensen_buhler) {
-                const approx::JensenBuhlerOptions jo = approx::parse_jensen_buhler(text);
-                const std::pair<double, int> key{jo.points_per_mm2, jo.candidates_per_point};
-                if (!clouds.count(key))
-                    arena.execute([&] {
-                        clouds.emplace(
-                            key, build_jensen_buhler_cloud(scene, frame.media_in_view, jo, fo,
-                                                           static_cast<std::uint64_t>(ctx.seed)));
-                    });
-                const JensenBuhlerCloud& cloud = clouds.at(key);
-                JensenBuhlerFrame jf;
-                arena.execute([&] {
-                    jf = render_jensen_buhler_frame(scene, frame, lit, k, in.profiles, cloud, jo,
-                                                    fo);
-                });
-                Score sc;
-                score_frame(jf.frame, sc);
-                const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
-                const double seconds = cloud.seconds() + jf.query_seconds;
-                std::string variant = approx::jensen_buhler_label(jo);
-                std::replace(variant.begin(), variant.end(), ',', ' ');
-                jb << scene.name << "," << format_g(jo.max_solid_angle, 6) << "," << cloud.points
-                   << "," << format_g(vp_rgb.rms, 6) << "," << format_g(vp_rgb.rms_se, 6) << ","
-                   << format_g(seconds, 6) << "," << variant << ","
-                   << format_g(jo.points_per_mm2, 6) << "," << (jo.conservative ? "box" : "centre")
-                   << "," << jo.profile << "," << format_g(ref_rgb.rms, 6) << ","
-                   << format_g(ref_rgb.rms_se, 6) << "," << format_g(jf.query_seconds, 6) << ","
-                   << format_g(cloud.seconds(), 6) << "," << format_g(cloud.light_seconds, 6) << ","
-                   << jf.stats.nodes_visited << "," << jf.stats.clusters << "," << jf.stats.points
-                   << "\n";
-                // Under regression: scene.jb_d<density>_t<threshold>[_box][_<profile>]
-                // [_c<candidates>].rms_vs_volpath, the RGB error.
-                const std::string id =
-                    "jb_d" + format_g(jo.points_per_mm2, 6) + "_t" +
-                    format_g(jo.max_solid_angle, 6) + (jo.conservative ? "_box" : "") +
-                    (jo.profile == "mc" ? "" : "_" + jo.profile) +
-                    (jo.candidates_per_point == 5 ? ""
-                                                  : "_c" + std::to_string(jo.candidates_per_point));
-                metrics.push_back({scene.name + "." + metric_label(id) + ".rms_vs_volpath", "1",
-                                   vp_rgb.rms, vp_rgb.rms_se, true, 0});
-                approximation_row("jensen_buhler:" + approx::jensen_buhler_label(jo),
-                                  "Jensen-Buhler", sc, seconds);
-                if (!ctx.quiet)
-                    std::printf(
-                        "  realtime %s: jensen_buhler %s: %zu points, RGB error %.4g +- %.2g "
-                        "against the path tracer, %.3g s (queries %.3g s)\n",
-                        scene.name.c_str(), approx::jensen_buhler_label(jo).c_str(), cloud.points,
-                        vp_rgb.rms, vp_rgb.rms_se, seconds, jf.query_seconds);
-            }
-        }
-
-        // The error decomposition: separability (the first model against the screen-space
-        // reference), the screen-space assumption (reference against the path tracer), the
-        // lighting (specular on the media, radiance of the diffuse surfaces) and the total
-        // (the first model's radiance against the path tracer's).
-        const realtime::FrameResult& first = frames.at(ss.scores[0].label);
-        for (int c = 0; c < 3; ++c) {
-            const NoiseCorrectedRms scr =
-                score(ref.image, "subsurface", vp->image, "subsurface", mask, c, vp_dof);
-            const NoiseCorrectedRms spec_err =
-                score(first.image, "specular", vp->image, "specular", mask, c, vp_dof);
-            const NoiseCorrectedRms surf =
-                score(first.image, "radiance", vp->image, "radiance", surfaces, c, vp_dof);
-            const NoiseCorrectedRms total =
-                score(first.image, "radiance", vp->image, "radiance", mask, c, vp_dof);
-            decomposition << scene.name << "," << kChannelNames[c] << "," << mask.size() << ","
-                          << format_g(ss.signal[static_cast<size_t>(c)], 6) << ","
-                          << csv_field(ss.scores[0].model) << ","
-                          << format_g(ss.scores[0].vs_reference[static_cast<size_t>(c)].rms, 6)
-                          << "," << format_g(scr.rms, 6) << "," << format_g(scr.rms_se, 6) << ","
-                          << format_g(spec_err.rms, 6) << "," << format_g(spec_err.rms_se, 6) << ","
-                          << format_g(surf.rms, 6) << "," << format_g(surf.rms_se, 6) << ","
-                          << format_g(total.rms, 6) << "," << format_g(total.rms_se, 6) << "\n";
-            const std::string base = scene.name + ".reference." + kChannelNames[c];
-            metrics.push_back({base + ".rms_vs_volpath", "1", scr.rms, scr.rms_se, true, 0});
-        }
-
-        // Images: the same exposure for every image of a scene (the reference's 99th
-        // percentile at 0.8), differences to the reference 10 times brighter.
-        if (spec.images && !mask.empty()) {
-            const fs::path sd = dir / scene.name;
-            fs::create_directories(sd);
-            std::vector<double> v, var, all_v;
-            for (int c = 0; c < 3; ++c) {
-                masked(ref.image, "subsurface", mask, c, v, var);
-                all_v.insert(all_v.end(), v.begin(), v.end());
-            }
-            const double p99 = percentile(all_v, 0.99);
-            const double gain = p99 > 0 ? 0.8 / p99 : 1.0;
-            // The cut-out: a third of the image around the scored pixels' centroid, 3x.
-            double cx = 0, cy = 0;
-            for (size_t i : mask) {
-                cx += static_cast<double>(i % static_cast<size_t>(w));
-                cy += static_cast<double>(i / static_cast<size_t>(w));
-            }
-            cx /= mask.size();
-            cy /= mask.size();
-            const int cw = std::max(4, w / 3), chh = std::max(4, h / 3);
-            const int x0 = std::clamp(static_cast<int>(cx) - cw / 2, 0, w - cw);
-            const int y0 = std::clamp(static_cast<int>(cy) - chh / 2, 0, h - chh);
-            struct Entry {
-                std::string name, caption;
-                const ImageLayer* layer;
-                std::string diff;  // its difference image, if any
-            };
-            std::vector<Entry> entries;
-            std::vector<LayeredImage> diffs;
-            diffs.reserve(frames.size() + 2);
-            auto add_entry = [&](const std::string& name, const std::string& caption,
-                                 const ImageLayer& l) {
-                write_file_atomic(sd / (name + ".png"), png_of(l, gain));
-                write_file_atomic(sd / ("cut_" + name + ".png"),
-                                  png_of(l, gain, x0, y0, cw, chh, 3));
-                diffs.emplace_back(w, h);
-                const ImageLayer& d =
-                    abs_difference(diffs.back(), l, ref.image.layer("subsurface"));
-                write_file_atomic(sd / ("diff_" + name + ".png"), png_of(d, 10 * gain));
-                write_file_atomic(sd / ("cutdiff_" + name + ".png"),
-                                  png_of(d, 10 * gain, x0, y0, cw, chh, 3));
-                entries.push_back({name, caption, &l, "diff_" + name + ".png"});
-            };
-            add_entry("volpath", "path tracer (" + std::to_string(vp->spp) + " spp)",
-                      vp->image.layer("subsurface"));
-            add_entry("reference", "screen-space 2D reference", ref.image.layer("subsurface"));
-            for (const Score& sc : ss.scores)
-                add_entry(sc.label, sc.model, frames.at(sc.label).image.layer("subsurface"));
-            write_file_atomic(sd / "radiance_reference.png",
-                              png_of(ref.image.layer("radiance"), gain));
-            const std::string id = "flip-" + scene.name;
-            viewers << "<h3 id=\"realtime-" << esc(scene.name) << "\">" << esc(scene.name)
-                    << ": flip between images</h3>\n<div class=\"flip\" id=\"" << esc(id)
-                    << "\">\n<p class=\"flipbar\">";
-            for (size_t i = 0; i < entries.size(); ++i)
-                viewers << "<button type=\"button\" data-src=\"realtime/" << esc(scene.name) << "/"
-                        << esc(entries[i].name) << ".png\" data-diff=\"realtime/" << esc(scene.name)
-                        << "/" << esc(entries[i].diff) << "\"" << (i == 1 ? " class=\"on\"" : "")
-                        << ">" << esc(entries[i].caption) << "</button> ";
-            viewers << "<br><label>exposure <input type=\"range\" class=\"exposure\" min=\"-4\" "
-                       "max=\"4\" step=\"0.5\" value=\"0\"> <span class=\"ev\">0</span> "
-                       "stops</label> <label><input type=\"checkbox\" class=\"diffmode\"> "
-                       "difference to the screen-space reference (10x)</label> (keys: left / "
-                       "right flip, d difference)</p>\n<img class=\"view\" src=\"realtime/"
-                    << esc(scene.name) << "/reference.png\" alt=\"" << esc(scene.name)
-                    << " subsurface\" style=\"width:" << std::max(256, std::min(512, w))
-                    << "px;image-rendering:pixelated\">\n<p class=\"caption\">Subsurface layer "
-                       "(the same exposure for all); showing <span class=\"which\">screen-space "
-                       "2D reference</span>.</p>\n<div class=\"cuts\">";
-            for (const Entry& e : entries)
-                viewers << "<figure><img src=\"realtime/" << esc(scene.name) << "/cut_"
-                        << esc(e.name) << ".png\" alt=\"cut-out " << esc(e.caption)
-                        << "\"><br><img src=\"realtime/" << esc(scene.name) << "/cutdiff_"
-                        << esc(e.name) << ".png\" alt=\"difference " << esc(e.caption) << "\"><br>"
-                        << esc(e.caption) << "</figure>";
-            viewers << "</div>\n</div>\n";
-        }
-        if (!ctx.quiet)
+        score_models(s, ss);
+        run_sweep(s);
+        if (!spec_.munoz.empty()) run_munoz(s);
+        if (!spec_.jensen_buhler.empty()) run_jensen_buhler(s);
+        decompose(s, ss);
+        if (spec_.images && !s.mask.empty()) write_images(s, ss);
+        if (!ctx_.quiet)
             std::printf(
                 "  realtime %s: %d x %d, %zu medium pixels, %zu models, path tracer %s "
                 "(%llu spp)\n",
-                scene.name.c_str(), w, h, mask.size(), ss.scores.size(),
-                vp->computed_now ? "rendered" : "reused", static_cast<unsigned long long>(vp->spp));
+                s.scene.name.c_str(), s.w, s.h, s.mask.size(), ss.scores.size(),
+                s.vp->computed_now ? "rendered" : "reused",
+                static_cast<unsigned long long>(s.vp->spp));
         all.push_back(std::move(ss));
     }
+    const std::string ours_vs_thesis = write_tables(all);
+    const PlotResult plots = draw_plots(plot_requests(all), stage_, cache_, ctx_.quiet);
+    res_.html = section_html(all, ours_vs_thesis, plots);
+    return res_;
+}
 
-    // Table 6.4: normalised by the table's largest per-channel error (vs the screen-space
-    // reference), and per scene.
+/// The scene's frame options, raster and pass 1, its ground truth (profiles, slabs, the path
+/// tracer's render) and the screen-space reference; false when the run was interrupted.
+bool RealtimeRun::prepare_scene(const std::string& path, SceneRun& s) {
+    s.scene = read_scene(path);
+    const Scene& scene = s.scene;
+    int w = spec_.width > 0 ? spec_.width : scene.camera.width;
+    int h = spec_.height > 0 ? spec_.height : scene.camera.height;
+    std::int64_t spp = spec_.spp, photons = spec_.photons;
+    if (ctx_.quick) {
+        const double f = std::min(1.0, static_cast<double>(spec_.quick_size) / std::max(w, h));
+        w = std::max(1, static_cast<int>(std::lround(w * f)));
+        h = std::max(1, static_cast<int>(std::lround(h * f)));
+        spp =
+            std::max<std::int64_t>(12, std::llround(static_cast<double>(spp) * spec_.quick_factor));
+        photons = std::max<std::int64_t>(
+            1000, std::llround(static_cast<double>(photons) * spec_.quick_factor));
+    }
+    s.w = w;
+    s.h = h;
+    realtime::FrameOptions& fo = s.fo;
+    fo.width = w;
+    fo.height = h;
+    fo.lighting.light_samples = spec_.light_samples;
+    fo.lighting.environment_samples = spec_.environment_samples;
+    fo.lighting.shadow_map_size = spec_.shadow_map_size;
+    fo.lighting.environment_map_size = spec_.environment_map_size;
+    fo.sss.mode = spec_.edge;
+    fo.sss.follow_strength = realtime::default_follow_strength(scene);
+    fo.sss.reject_depth = realtime::default_reject_depth(scene);
+    fo.reference.samples = spec_.reference_samples;
+    fo.reference.seed = ctx_.seed;
+    arena_.execute([&] { s.frame = realtime::rasterize_frame(scene, fo); });
+
+    // Ground truth: the media's profiles (and slabs for translucency), the path tracer.
+    RealtimeInputOptions io;
+    io.seed = ctx_.seed;
+    io.profile_budget.samples = photons;
+    io.slab_budget.samples = std::max<std::int64_t>(1000, photons / 10);
+    io.slab_thickness_mm = slab_thicknesses(0.05, 25.6, 10);
+    io.run.threads = ctx_.threads;
+    io.run.results_root = results_root_;
+    io.run.quiet = ctx_.quiet;
+    io.run.cancel = ctx_.cancel;
+    io.run.checkpoint_seconds = ctx_.checkpoint_seconds;
+    s.in = realtime_inputs(scene, s.frame.media_in_view, io);
+    if (s.in.interrupted) return false;
+    res_.computed += s.in.computed;
+    res_.reused += s.in.reused;
+    SampleBudget vb;
+    vb.samples = spp;
+    s.vp = cached_render(scene, "realtime", w, h, vb, ctx_, cache_);
+    if (!s.vp) return false;
+    (s.vp->computed_now ? res_.computed : res_.reused) += 1;
+    s.vp_dof = static_cast<double>(s.vp->spp / 3) - 1;  // batch statistics
+    s.slabs.resize(scene.materials.size());
+    for (const auto& [m, t] : s.in.slabs) {
+        s.slabs[static_cast<size_t>(m)].thickness_mm = t.thickness_mm;
+        s.slabs[static_cast<size_t>(m)].transmittance = t.transmittance;
+    }
+    // Pass 1 once: every model's frame shares the G-buffer.
+    arena_.execute([&] { s.lit = realtime::light_frame(scene, s.frame, fo, s.slabs); });
+    s.ref = render(s, kernels_of(s, spec_.models[0], spec_.taps, true),
+                   realtime::SssMethod::kReference, 0);
+    return true;
+}
+
+/// The kernels of `model` at `taps` for every medium of the scene, built on first use.
+const FrameKernels& RealtimeRun::kernels_of(SceneRun& s, const std::string& model, int taps,
+                                            bool exact) {
+    auto& k = s.kernels[{model, taps}];
+    if (!k.empty() || s.in.profiles.empty()) return k;
+    const auto t0 = std::chrono::steady_clock::now();
+    const approx::ModelSpec ms = approx::parse_model(model);
+    for (const auto& [m, p] : s.in.profiles)
+        k[m] = realtime::make_frame_material(p, ms, taps, exact);
+    s.build_s[{model, taps}] =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return k;
+}
+
+/// The scene's frame with kernels `k` by method `m` (on the GL twin's pass where configured).
+realtime::FrameResult RealtimeRun::render(const SceneRun& s, const FrameKernels& k,
+                                          realtime::SssMethod m, double jitter, bool rotate) {
+    realtime::FrameOptions o = s.fo;
+    o.method = m;
+    o.sss.jitter = jitter;
+    o.sss.rotate = rotate;
+    o.sss.seed = static_cast<std::uint32_t>(ctx_.seed);
+#if SSSLAB_HAVE_GL
+    if (gl_pass_)
+        o.separable_pass = [&](const realtime::SssGBuffer& g,
+                               const std::vector<realtime::SssMaterialKernel>& taps,
+                               const realtime::SssParams& p,
+                               std::vector<float>& out) { gl_pass_->run(g, taps, p, out); };
+#endif
+    realtime::FrameResult r;
+    arena_.execute([&] { r = realtime::render_frame(s.scene, s.frame, s.lit, k, o); });
+    return r;
+}
+
+/// The scored pixels: every sample a medium; and the covered pixels of the diffuse surfaces.
+void RealtimeRun::find_scored_pixels(SceneRun& s) const {
+    const realtime::RasterizedFrame& frame = s.frame;
+    const Scene& scene = s.scene;
+    const int sup = frame.raster.supersample;
+    for (int y = 0; y < s.h; ++y)
+        for (int x = 0; x < s.w; ++x) {
+            const size_t i = frame.raster.pixel_index(x, y);
+            bool all_medium = true, covered = frame.raster.coverage[i] >= 1.0;
+            for (int j = 0; j < sup; ++j)
+                for (int q = 0; q < sup; ++q) {
+                    const std::int32_t sh =
+                        frame.raster.shape[frame.raster.sample_index(x * sup + q, y * sup + j)];
+                    all_medium =
+                        all_medium && sh >= 0 &&
+                        scene.materials[static_cast<size_t>(
+                                            scene.shapes[static_cast<size_t>(sh)].material)]
+                                .kind == SceneMaterial::Kind::kMedium;
+                }
+            if (all_medium)
+                s.mask.push_back(i);
+            else if (covered)
+                s.surfaces.push_back(i);
+        }
+}
+
+/// A frame's subsurface layer against the screen-space reference and the path tracer.
+void RealtimeRun::score_frame(const SceneRun& s, const realtime::FrameResult& f, Score& sc) const {
+    for (int c = 0; c < 3; ++c) {
+        sc.vs_reference[static_cast<size_t>(c)] =
+            score(f.image, "subsurface", s.ref.image, "subsurface", s.mask, c, 0);
+        sc.vs_volpath[static_cast<size_t>(c)] =
+            score(f.image, "subsurface", s.vp->image, "subsurface", s.mask, c, s.vp_dof);
+    }
+    sc.bias_vs_reference = relative_bias(f.image, "subsurface", s.ref.image, "subsurface", s.mask);
+    sc.bias_vs_volpath = relative_bias(f.image, "subsurface", s.vp->image, "subsurface", s.mask);
+    for (const auto& p : f.times)
+        if (p.pass == "sss") sc.sss_ms = p.ms;
+    sc.frame_ms = f.total_ms();
+}
+
+/// The table of every approximation (approximations.csv): the RGB errors and the seconds of
+/// the pass that replaces the SSS pass (kernels built before the frame).
+void RealtimeRun::approximation_row(const SceneRun& s, const std::string& method,
+                                    const std::string& family, const Score& sc, double seconds) {
+    const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
+    t_.approximations << s.scene.name << "," << csv_field(method) << "," << format_g(vp_rgb.rms, 6)
+                      << "," << format_g(vp_rgb.rms_se, 6) << "," << format_g(seconds, 6) << ","
+                      << family << "," << format_g(ref_rgb.rms, 6) << ","
+                      << format_g(ref_rgb.rms_se, 6) << "," << format_g(sc.bias_vs_volpath.value, 6)
+                      << "," << format_g(sc.bias_vs_volpath.se, 6) << ","
+                      << format_g(sc.bias_vs_reference.value, 6) << "\n";
+}
+
+/// A row of error against frame time (error_vs_time.csv).
+void RealtimeRun::sweep_row(const SceneRun& s, const Score& sc) {
+    const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
+    t_.sweep << s.scene.name << "," << csv_field(sc.model) << "," << sc.label << "," << sc.taps
+             << "," << format_g(sc.jitter, 6) << "," << (sc.rotate ? 1 : 0) << ","
+             << format_g(ref_rgb.rms, 6) << "," << format_g(ref_rgb.rms_se, 6) << ","
+             << format_g(vp_rgb.rms, 6) << "," << format_g(vp_rgb.rms_se, 6) << ","
+             << format_g(sc.sss_ms, 6) << "," << format_g(sc.frame_ms, 6) << "\n";
+}
+
+/// The table's models at spec.taps: scored, kept for the images, and their rows in
+/// approximations.csv and error_vs_time.csv beside the reference's.
+void RealtimeRun::score_models(SceneRun& s, SceneScores& ss) {
+    ss.scene = s.scene.name;
+    ss.pixels = s.mask.size();
+    for (int c = 0; c < 3; ++c) {
+        std::vector<double> v, var;
+        masked(s.ref.image, "subsurface", s.mask, c, v, var);
+        double q = 0;
+        for (double x : v) q += x * x;
+        ss.signal[static_cast<size_t>(c)] = v.empty() ? 0 : std::sqrt(q / v.size());
+    }
+    for (const std::string& model : spec_.models) {
+        Score sc;
+        sc.model = model;
+        sc.label = approx::parse_model(model).label();
+        sc.taps = spec_.taps;
+        const auto& k = kernels_of(s, model, spec_.taps, model == spec_.models[0]);
+        realtime::FrameResult f = render(s, k, realtime::SssMethod::kSeparable, 0);
+        score_frame(s, f, sc);
+        sc.build_s = s.build_s[{model, spec_.taps}];
+        ss.scores.push_back(sc);
+        s.frames.emplace(sc.label, std::move(f));
+    }
+    {
+        Score sc;
+        score_frame(s, s.ref, sc);
+        approximation_row(s, "reference:2d", "screen-space reference", sc, sc.sss_ms / 1000);
+    }
+    for (const Score& sc : ss.scores)
+        approximation_row(s, sc.model, "separable", sc, sc.sss_ms / 1000);
+    // Error against frame time: every table model at its taps (ranks, d'Eon counts), then the
+    // sweep (run_sweep).
+    for (const Score& sc : ss.scores) sweep_row(s, sc);
+}
+
+/// Error against frame time: the sweep models over tap counts, with and without jitter (and
+/// with rotated pass axes where configured).
+void RealtimeRun::run_sweep(SceneRun& s) {
+    // Variants of the sweep: (jitter, rotate).
+    std::vector<std::pair<double, bool>> variants = {{0.0, false}};
+    if (spec_.jitter > 0) variants.push_back({spec_.jitter, false});
+    if (spec_.rotate) variants.push_back({0.0, true});
+    for (const std::string& model : spec_.sweep_models)
+        for (int taps : spec_.taps_sweep)
+            for (const auto& [jit, rot] : variants) {
+                if (taps == spec_.taps && jit == 0.0 && !rot &&
+                    std::find(spec_.models.begin(), spec_.models.end(), model) !=
+                        spec_.models.end())
+                    continue;  // already a table row
+                Score sc;
+                sc.model = model;
+                sc.label = approx::parse_model(model).label();
+                sc.taps = taps;
+                sc.jitter = jit;
+                sc.rotate = rot;
+                score_frame(s,
+                            render(s, kernels_of(s, model, taps, false),
+                                   realtime::SssMethod::kSeparable, jit, rot),
+                            sc);
+                sweep_row(s, sc);
+            }
+}
+
+/// Munoz11's layered convolution in place of the SSS pass: the media's far sides lit once,
+/// then every variant scored like a model.
+void RealtimeRun::run_munoz(SceneRun& s) {
+    const Scene& scene = s.scene;
+    realtime::LitFrame back;
+    arena_.execute([&] { back = light_back_frame(scene, s.fo, s.slabs); });
+    const auto& k = kernels_of(s, spec_.models[0], spec_.taps, true);
+    for (const std::string& text : spec_.munoz) {
+        const approx::MunozOptions mo = approx::parse_munoz(text);
+        MunozFrame mf;
+        arena_.execute([&] {
+            mf = render_munoz_frame(scene, s.frame, s.lit, back, k, s.in.profiles, mo, s.fo);
+        });
+        Score sc;
+        score_frame(s, mf.frame, sc);
+        const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
+        std::string variant = approx::munoz_label(mo);  // spaces for commas
+        std::replace(variant.begin(), variant.end(), ',', ' ');
+        t_.munoz << scene.name << "," << variant << "," << mo.layers << ","
+                 << format_g(mo.threshold, 6) << "," << mo.downsample << ","
+                 << approx::split_name(mo.split) << "," << format_g(ref_rgb.rms, 6) << ","
+                 << format_g(ref_rgb.rms_se, 6) << "," << format_g(vp_rgb.rms, 6) << ","
+                 << format_g(vp_rgb.rms_se, 6) << "," << format_g(mf.stats.seconds, 6) << ","
+                 << mf.stats.convolutions << "," << mf.stats.skipped_threshold << ","
+                 << mf.stats.skipped_invisible << ","
+                 << (mo.kernel == approx::MunozKernel::point ? "point" : "average") << ","
+                 << (mo.skip_invisible ? "skip" : "all") << "\n";
+        // Under regression like the models: scene.munoz_l<layers>_t<t>_d<downsample>
+        // [_linear][_all][_avg].rms_vs_volpath, the RGB error.
+        const std::string id = "munoz_l" + std::to_string(mo.layers) + "_t" +
+                               format_g(mo.threshold, 6) + "_d" + std::to_string(mo.downsample) +
+                               (mo.split == approx::MunozSplit::equal
+                                    ? std::string()
+                                    : std::string("_") + approx::split_name(mo.split)) +
+                               (mo.skip_invisible ? "" : "_all") +
+                               (mo.kernel == approx::MunozKernel::point ? "" : "_avg");
+        metrics_.push_back({scene.name + "." + metric_label(id) + ".rms_vs_volpath", "1",
+                            vp_rgb.rms, vp_rgb.rms_se, true, 0});
+        approximation_row(s, "munoz:" + approx::munoz_label(mo), "Munoz11", sc, mf.stats.seconds);
+        if (!ctx_.quiet)
+            std::printf(
+                "  realtime %s: munoz %s: RGB error %.4g +- %.2g against the path "
+                "tracer, %.3g s\n",
+                scene.name.c_str(), approx::munoz_label(mo).c_str(), vp_rgb.rms, vp_rgb.rms_se,
+                mf.stats.seconds);
+    }
+}
+
+/// Jensen-Buhler's hierarchical integration in place of the SSS pass: one lit point cloud per
+/// (density, candidates), shared by the variants that differ only in their threshold, bound or
+/// profile; each variant's seconds are its cloud's and its queries'.
+void RealtimeRun::run_jensen_buhler(SceneRun& s) {
+    const Scene& scene = s.scene;
+    const auto& k = kernels_of(s, spec_.models[0], spec_.taps, true);
+    std::map<std::pair<double, int>, JensenBuhlerCloud> clouds;
+    for (const std::string& text : spec_.jensen_buhler) {
+        const approx::JensenBuhlerOptions jo = approx::parse_jensen_buhler(text);
+        const std::pair<double, int> key{jo.points_per_mm2, jo.candidates_per_point};
+        if (!clouds.count(key))
+            arena_.execute([&] {
+                clouds.emplace(key,
+                               build_jensen_buhler_cloud(scene, s.frame.media_in_view, jo, s.fo,
+                                                         static_cast<std::uint64_t>(ctx_.seed)));
+            });
+        const JensenBuhlerCloud& cloud = clouds.at(key);
+        JensenBuhlerFrame jf;
+        arena_.execute([&] {
+            jf = render_jensen_buhler_frame(scene, s.frame, s.lit, k, s.in.profiles, cloud, jo,
+                                            s.fo);
+        });
+        Score sc;
+        score_frame(s, jf.frame, sc);
+        const Rgb ref_rgb = rgb(sc.vs_reference), vp_rgb = rgb(sc.vs_volpath);
+        const double seconds = cloud.seconds() + jf.query_seconds;
+        std::string variant = approx::jensen_buhler_label(jo);
+        std::replace(variant.begin(), variant.end(), ',', ' ');
+        t_.jb << scene.name << "," << format_g(jo.max_solid_angle, 6) << "," << cloud.points << ","
+              << format_g(vp_rgb.rms, 6) << "," << format_g(vp_rgb.rms_se, 6) << ","
+              << format_g(seconds, 6) << "," << variant << "," << format_g(jo.points_per_mm2, 6)
+              << "," << (jo.conservative ? "box" : "centre") << "," << jo.profile << ","
+              << format_g(ref_rgb.rms, 6) << "," << format_g(ref_rgb.rms_se, 6) << ","
+              << format_g(jf.query_seconds, 6) << "," << format_g(cloud.seconds(), 6) << ","
+              << format_g(cloud.light_seconds, 6) << "," << jf.stats.nodes_visited << ","
+              << jf.stats.clusters << "," << jf.stats.points << "\n";
+        // Under regression: scene.jb_d<density>_t<threshold>[_box][_<profile>]
+        // [_c<candidates>].rms_vs_volpath, the RGB error.
+        const std::string id =
+            "jb_d" + format_g(jo.points_per_mm2, 6) + "_t" + format_g(jo.max_solid_angle, 6) +
+            (jo.conservative ? "_box" : "") + (jo.profile == "mc" ? "" : "_" + jo.profile) +
+            (jo.candidates_per_point == 5 ? "" : "_c" + std::to_string(jo.candidates_per_point));
+        metrics_.push_back({scene.name + "." + metric_label(id) + ".rms_vs_volpath", "1",
+                            vp_rgb.rms, vp_rgb.rms_se, true, 0});
+        approximation_row(s, "jensen_buhler:" + approx::jensen_buhler_label(jo), "Jensen-Buhler",
+                          sc, seconds);
+        if (!ctx_.quiet)
+            std::printf(
+                "  realtime %s: jensen_buhler %s: %zu points, RGB error %.4g +- %.2g "
+                "against the path tracer, %.3g s (queries %.3g s)\n",
+                scene.name.c_str(), approx::jensen_buhler_label(jo).c_str(), cloud.points,
+                vp_rgb.rms, vp_rgb.rms_se, seconds, jf.query_seconds);
+    }
+}
+
+/// The error decomposition: separability (the first model against the screen-space
+/// reference), the screen-space assumption (reference against the path tracer), the lighting
+/// (specular on the media, radiance of the diffuse surfaces) and the total (the first model's
+/// radiance against the path tracer's).
+void RealtimeRun::decompose(const SceneRun& s, const SceneScores& ss) {
+    const realtime::FrameResult& first = s.frames.at(ss.scores[0].label);
+    const LayeredImage& vpi = s.vp->image;
+    for (int c = 0; c < 3; ++c) {
+        const NoiseCorrectedRms scr =
+            score(s.ref.image, "subsurface", vpi, "subsurface", s.mask, c, s.vp_dof);
+        const NoiseCorrectedRms spec_err =
+            score(first.image, "specular", vpi, "specular", s.mask, c, s.vp_dof);
+        const NoiseCorrectedRms surf =
+            score(first.image, "radiance", vpi, "radiance", s.surfaces, c, s.vp_dof);
+        const NoiseCorrectedRms total =
+            score(first.image, "radiance", vpi, "radiance", s.mask, c, s.vp_dof);
+        t_.decomposition << s.scene.name << "," << kChannelNames[c] << "," << s.mask.size() << ","
+                         << format_g(ss.signal[static_cast<size_t>(c)], 6) << ","
+                         << csv_field(ss.scores[0].model) << ","
+                         << format_g(ss.scores[0].vs_reference[static_cast<size_t>(c)].rms, 6)
+                         << "," << format_g(scr.rms, 6) << "," << format_g(scr.rms_se, 6) << ","
+                         << format_g(spec_err.rms, 6) << "," << format_g(spec_err.rms_se, 6) << ","
+                         << format_g(surf.rms, 6) << "," << format_g(surf.rms_se, 6) << ","
+                         << format_g(total.rms, 6) << "," << format_g(total.rms_se, 6) << "\n";
+        const std::string base = s.scene.name + ".reference." + kChannelNames[c];
+        metrics_.push_back({base + ".rms_vs_volpath", "1", scr.rms, scr.rms_se, true, 0});
+    }
+}
+
+/// A flip viewer's image: its file stem, caption and difference image.
+struct ViewerEntry {
+    std::string name, caption;
+    std::string diff;  // its difference image, if any
+};
+
+/// The flip viewer of a scene's images (the script in flip_viewer_script drives it).
+std::string flip_viewer_html(const std::string& scene, int w,
+                             const std::vector<ViewerEntry>& entries) {
+    std::ostringstream viewers;
+    const std::string id = "flip-" + scene;
+    viewers << "<h3 id=\"realtime-" << esc(scene) << "\">" << esc(scene)
+            << ": flip between images</h3>\n<div class=\"flip\" id=\"" << esc(id)
+            << "\">\n<p class=\"flipbar\">";
+    for (size_t i = 0; i < entries.size(); ++i)
+        viewers << "<button type=\"button\" data-src=\"realtime/" << esc(scene) << "/"
+                << esc(entries[i].name) << ".png\" data-diff=\"realtime/" << esc(scene) << "/"
+                << esc(entries[i].diff) << "\"" << (i == 1 ? " class=\"on\"" : "") << ">"
+                << esc(entries[i].caption) << "</button> ";
+    viewers << "<br><label>exposure <input type=\"range\" class=\"exposure\" min=\"-4\" "
+               "max=\"4\" step=\"0.5\" value=\"0\"> <span class=\"ev\">0</span> "
+               "stops</label> <label><input type=\"checkbox\" class=\"diffmode\"> "
+               "difference to the screen-space reference (10x)</label> (keys: left / "
+               "right flip, d difference)</p>\n<img class=\"view\" src=\"realtime/"
+            << esc(scene) << "/reference.png\" alt=\"" << esc(scene)
+            << " subsurface\" style=\"width:" << std::max(256, std::min(512, w))
+            << "px;image-rendering:pixelated\">\n<p class=\"caption\">Subsurface layer "
+               "(the same exposure for all); showing <span class=\"which\">screen-space "
+               "2D reference</span>.</p>\n<div class=\"cuts\">";
+    for (const ViewerEntry& e : entries)
+        viewers << "<figure><img src=\"realtime/" << esc(scene) << "/cut_" << esc(e.name)
+                << ".png\" alt=\"cut-out " << esc(e.caption) << "\"><br><img src=\"realtime/"
+                << esc(scene) << "/cutdiff_" << esc(e.name) << ".png\" alt=\"difference "
+                << esc(e.caption) << "\"><br>" << esc(e.caption) << "</figure>";
+    viewers << "</div>\n</div>\n";
+    return viewers.str();
+}
+
+/// Images: the same exposure for every image of a scene (the reference's 99th percentile at
+/// 0.8), differences to the reference 10 times brighter; cut-outs, and the flip viewer.
+void RealtimeRun::write_images(const SceneRun& s, const SceneScores& ss) {
+    const int w = s.w, h = s.h;
+    const std::vector<size_t>& mask = s.mask;
+    const realtime::FrameResult& ref = s.ref;
+    const fs::path sd = dir_ / s.scene.name;
+    fs::create_directories(sd);
+    std::vector<double> v, var, all_v;
+    for (int c = 0; c < 3; ++c) {
+        masked(ref.image, "subsurface", mask, c, v, var);
+        all_v.insert(all_v.end(), v.begin(), v.end());
+    }
+    const double p99 = percentile(all_v, 0.99);
+    const double gain = p99 > 0 ? 0.8 / p99 : 1.0;
+    // The cut-out: a third of the image around the scored pixels' centroid, 3x.
+    double cx = 0, cy = 0;
+    for (size_t i : mask) {
+        cx += static_cast<double>(i % static_cast<size_t>(w));
+        cy += static_cast<double>(i / static_cast<size_t>(w));
+    }
+    cx /= mask.size();
+    cy /= mask.size();
+    const int cw = std::max(4, w / 3), chh = std::max(4, h / 3);
+    const int x0 = std::clamp(static_cast<int>(cx) - cw / 2, 0, w - cw);
+    const int y0 = std::clamp(static_cast<int>(cy) - chh / 2, 0, h - chh);
+    std::vector<ViewerEntry> entries;
+    auto add_entry = [&](const std::string& name, const std::string& caption, const ImageLayer& l) {
+        write_file_atomic(sd / (name + ".png"), png_of(l, gain));
+        write_file_atomic(sd / ("cut_" + name + ".png"), png_of(l, gain, x0, y0, cw, chh, 3));
+        LayeredImage diff(w, h);
+        const ImageLayer& d = abs_difference(diff, l, ref.image.layer("subsurface"));
+        write_file_atomic(sd / ("diff_" + name + ".png"), png_of(d, 10 * gain));
+        write_file_atomic(sd / ("cutdiff_" + name + ".png"),
+                          png_of(d, 10 * gain, x0, y0, cw, chh, 3));
+        entries.push_back({name, caption, "diff_" + name + ".png"});
+    };
+    add_entry("volpath", "path tracer (" + std::to_string(s.vp->spp) + " spp)",
+              s.vp->image.layer("subsurface"));
+    add_entry("reference", "screen-space 2D reference", ref.image.layer("subsurface"));
+    for (const Score& sc : ss.scores)
+        add_entry(sc.label, sc.model, s.frames.at(sc.label).image.layer("subsurface"));
+    write_file_atomic(sd / "radiance_reference.png", png_of(ref.image.layer("radiance"), gain));
+    t_.viewers << flip_viewer_html(s.scene.name, w, entries);
+}
+
+/// Table 6.4: normalised by the table's largest per-channel error (vs the screen-space
+/// reference), and per scene; its metrics; the CSV files of realtime/. Returns the rows of
+/// the report's table of ours beside the thesis's.
+std::string RealtimeRun::write_tables(const std::vector<SceneScores>& all) {
     double table_max = 0;
     for (const SceneScores& ss : all)
         for (const Score& sc : ss.scores)
@@ -797,26 +915,24 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         for (const Score& sc : ss.scores) {
             double sum_norm = 0;
             for (int c = 0; c < 3; ++c) {
-                {
-                    const NoiseCorrectedRms& r = sc.vs_reference[static_cast<size_t>(c)];
-                    const NoiseCorrectedRms& v = sc.vs_volpath[static_cast<size_t>(c)];
-                    const double sig = ss.signal[static_cast<size_t>(c)];
-                    table << ss.scene << "," << csv_field(sc.model) << "," << sc.label << ","
-                          << sc.taps << "," << kChannelNames[c] << "," << ss.pixels << ","
-                          << format_g(r.rms, 6) << "," << format_g(r.rms_se, 6) << ","
-                          << format_g(table_max > 0 ? r.rms / table_max : 0, 6) << ","
-                          << format_g(scene_max > 0 ? r.rms / scene_max : 0, 6) << ","
-                          << format_g(sig > 0 ? r.rms / sig : 0, 6) << "," << format_g(v.rms, 6)
-                          << "," << format_g(v.rms_se, 6) << "," << format_g(v.raw_rms, 6) << ","
-                          << format_g(v.noise_rms, 6) << "," << format_g(sc.sss_ms, 6) << ","
-                          << format_g(sc.frame_ms, 6) << "," << format_g(sc.build_s, 6) << "\n";
-                    sum_norm += table_max > 0 ? r.rms / table_max : 0;
-                    const std::string base =
-                        ss.scene + "." + metric_label(sc.label) + "." + kChannelNames[c];
-                    metrics.push_back({base + ".rms_vs_reference", "1", r.rms, r.rms_se,
-                                       r.rms_se > 0, r.rms_se > 0 ? 0 : 1e-4});
-                    metrics.push_back({base + ".rms_vs_volpath", "1", v.rms, v.rms_se, true, 0});
-                }
+                const NoiseCorrectedRms& r = sc.vs_reference[static_cast<size_t>(c)];
+                const NoiseCorrectedRms& v = sc.vs_volpath[static_cast<size_t>(c)];
+                const double sig = ss.signal[static_cast<size_t>(c)];
+                t_.table << ss.scene << "," << csv_field(sc.model) << "," << sc.label << ","
+                         << sc.taps << "," << kChannelNames[c] << "," << ss.pixels << ","
+                         << format_g(r.rms, 6) << "," << format_g(r.rms_se, 6) << ","
+                         << format_g(table_max > 0 ? r.rms / table_max : 0, 6) << ","
+                         << format_g(scene_max > 0 ? r.rms / scene_max : 0, 6) << ","
+                         << format_g(sig > 0 ? r.rms / sig : 0, 6) << "," << format_g(v.rms, 6)
+                         << "," << format_g(v.rms_se, 6) << "," << format_g(v.raw_rms, 6) << ","
+                         << format_g(v.noise_rms, 6) << "," << format_g(sc.sss_ms, 6) << ","
+                         << format_g(sc.frame_ms, 6) << "," << format_g(sc.build_s, 6) << "\n";
+                sum_norm += table_max > 0 ? r.rms / table_max : 0;
+                const std::string base =
+                    ss.scene + "." + metric_label(sc.label) + "." + kChannelNames[c];
+                metrics_.push_back({base + ".rms_vs_reference", "1", r.rms, r.rms_se, r.rms_se > 0,
+                                    r.rms_se > 0 ? 0 : 1e-4});
+                metrics_.push_back({base + ".rms_vs_volpath", "1", v.rms, v.rms_se, true, 0});
             }
             for (const ThesisRow& t : thesis_table_6_4())
                 if (t.ours == ss.scene && t.model == sc.model) {
@@ -840,114 +956,166 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
     for (const ThesisRow& t : thesis_table_6_4())
         thesis << t.scene << "," << t.ours << ",\"" << t.model << "\"," << t.r << "," << t.g << ","
                << t.b << "," << t.sum << "\n";
-    write_file_atomic(dir / "table_6_4.csv", table.str());
-    write_file_atomic(dir / "error_vs_time.csv", sweep.str());
-    write_file_atomic(dir / "decomposition.csv", decomposition.str());
-    write_file_atomic(dir / "thesis_table_6_4.csv", thesis.str());
-    if (!spec.munoz.empty()) write_file_atomic(dir / "munoz11.csv", munoz.str());
-    if (!spec.jensen_buhler.empty()) write_file_atomic(dir / "jensen_buhler.csv", jb.str());
-    write_file_atomic(dir / "approximations.csv", approximations.str());
+    write_file_atomic(dir_ / "table_6_4.csv", t_.table.str());
+    write_file_atomic(dir_ / "error_vs_time.csv", t_.sweep.str());
+    write_file_atomic(dir_ / "decomposition.csv", t_.decomposition.str());
+    write_file_atomic(dir_ / "thesis_table_6_4.csv", thesis.str());
+    if (!spec_.munoz.empty()) write_file_atomic(dir_ / "munoz11.csv", t_.munoz.str());
+    if (!spec_.jensen_buhler.empty()) write_file_atomic(dir_ / "jensen_buhler.csv", t_.jb.str());
+    write_file_atomic(dir_ / "approximations.csv", t_.approximations.str());
+    return ours_vs_thesis.str();
+}
 
-    // Error against time, a figure per scene (scripts/plot.py "error_vs_time"), drawn here:
-    // this section is written before the report's other plots are. Against the SSS pass's time:
-    // the frame's other passes are the same for every model (raster and lighting are measured
-    // once per scene) and take nearly all of a frame of this software renderer.
-    std::vector<PlotRequest> plot_requests;
-    for (const SceneScores& ss : all) {
-        const std::string stem = "plots/realtime_error_vs_time_" + ss.scene;
-        std::ostringstream js, caption;
-        js << "{\"kind\": \"error_vs_time\", \"csv\": \"realtime/error_vs_time.csv\", \"scene\": "
-           << json_string(ss.scene) << ", \"taps\": " << spec.taps
-           << ", \"x\": \"sss_ms\", \"out\": " << json_string(stem) << "}";
-        caption << ss.scene << ": RMS error of the subsurface layer over the " << ss.pixels
-                << " medium pixels (RGB: the root of the channels' mean squared error) against the "
-                   "SSS pass time on this machine, both axes logarithmic. Not against the whole "
-                   "frame time: the rest of the frame (raster, shadow maps and lighting, measured "
-                   "once for the scene, and the composite) is the same work for every model and "
-                   "in this software renderer far longer than the pass (the last sentence gives "
-                   "both). Left against the screen-space 2D reference (the "
-                   "separability error), right against the path tracer (noise-corrected, error "
-                   "bars +-1 standard error). A line per swept model through its tap counts "
-                   "(points labelled by taps), solid without jitter, dashed with jitter "
-                << format_g(spec.jitter, 3)
-                << (spec.rotate ? ", dash-dotted with the pass axes rotated per pixel" : "")
-                << "; the table's models of one family at " << spec.taps
-                << " taps (SVD ranks, d'Eon's numbers of Gaussians) joined by a dotted line, "
-                   "points labelled by that parameter; other models as single markers.";
+/// Error against time, a figure per scene (scripts/plot.py "error_vs_time"). Against the SSS
+/// pass's time: the frame's other passes are the same for every model (raster and lighting
+/// are measured once per scene) and take nearly all of a frame of this software renderer.
+PlotRequest error_vs_time_request(const RealtimeStudySpec& spec, const SceneScores& ss) {
+    const std::string stem = "plots/realtime_error_vs_time_" + ss.scene;
+    std::ostringstream js, caption;
+    js << "{\"kind\": \"error_vs_time\", \"csv\": \"realtime/error_vs_time.csv\", \"scene\": "
+       << json_string(ss.scene) << ", \"taps\": " << spec.taps
+       << ", \"x\": \"sss_ms\", \"out\": " << json_string(stem) << "}";
+    caption << ss.scene << ": RMS error of the subsurface layer over the " << ss.pixels
+            << " medium pixels (RGB: the root of the channels' mean squared error) against the "
+               "SSS pass time on this machine, both axes logarithmic. Not against the whole "
+               "frame time: the rest of the frame (raster, shadow maps and lighting, measured "
+               "once for the scene, and the composite) is the same work for every model and "
+               "in this software renderer far longer than the pass (the last sentence gives "
+               "both). Left against the screen-space 2D reference (the "
+               "separability error), right against the path tracer (noise-corrected, error "
+               "bars +-1 standard error). A line per swept model through its tap counts "
+               "(points labelled by taps), solid without jitter, dashed with jitter "
+            << format_g(spec.jitter, 3)
+            << (spec.rotate ? ", dash-dotted with the pass axes rotated per pixel" : "")
+            << "; the table's models of one family at " << spec.taps
+            << " taps (SVD ranks, d'Eon's numbers of Gaussians) joined by a dotted line, "
+               "points labelled by that parameter; other models as single markers.";
+    return {js.str(),
+            {"realtime/error_vs_time.csv"},
+            {"realtime", ss.scene + ": error against SSS pass time", stem, caption.str()}};
+}
+
+/// The integrations over the surfaces, per scene: Munoz11's error against its parameters
+/// (the paper's Figs. 5, 2 and 3 as errors) and time, Jensen-Buhler's against the octree
+/// threshold, the number of points and time, and every approximation against time.
+void integration_requests(const RealtimeStudySpec& spec, const SceneScores& ss,
+                          std::vector<PlotRequest>& plot_requests) {
+    auto request = [&](const std::string& what, const std::string& csv, const std::string& title,
+                       const std::string& panels, const std::string& caption) {
+        const std::string stem = "plots/realtime_" + what + "_" + ss.scene;
+        std::ostringstream js;
+        js << "{\"kind\": \"sweep\", \"csv\": \"realtime/" << csv
+           << "\", \"scene\": " << json_string(ss.scene)
+           << ", \"y\": \"rms_vs_volpath\", \"ylabel\": \"RMS error against the path "
+              "tracer (RGB)\", \"title\": "
+           << json_string(ss.scene + ": " + title) << ", \"out\": " << json_string(stem)
+           << ", \"panels\": [" << panels << "]}";
         plot_requests.push_back(
             {js.str(),
-             {"realtime/error_vs_time.csv"},
-             {"realtime", ss.scene + ": error against SSS pass time", stem, caption.str()}});
-    }
-    // The integrations over the surfaces, per scene: Munoz11's error against its parameters
-    // (the paper's Figs. 5, 2 and 3 as errors) and time, Jensen-Buhler's against the octree
-    // threshold, the number of points and time, and every approximation against time.
-    const bool integrations = !spec.munoz.empty() || !spec.jensen_buhler.empty();
+             {"realtime/" + csv},
+             {"realtime-integrations", ss.scene + ": " + title, stem, ss.scene + ": " + caption}});
+    };
+    const std::string time_panel =
+        "{\"x\": \"seconds\", \"xscale\": \"log\", \"markers_only\": true, "
+        "\"xlabel\": \"seconds (two cores)\", \"title\": \"against time\"";
+    if (!spec.munoz.empty())
+        request("munoz11", "munoz11.csv", "Munoz11's layered convolution",
+                "{\"x\": \"layers\", \"xscale\": \"log\", \"min_points\": 2, \"series\": "
+                "[\"threshold\", \"downsample\", \"split\", \"kernel\"], \"title\": "
+                "\"against layers (Fig. 5)\"}, {\"x\": \"threshold\", \"xscale\": "
+                "\"symlog\", \"min_points\": 2, \"series\": [\"layers\", \"downsample\", "
+                "\"split\", \"kernel\"], \"xlabel\": \"t of Eq. 8\", \"title\": \"against "
+                "the threshold (Fig. 2)\"}, {\"x\": \"downsample\", \"xscale\": \"log\", "
+                "\"min_points\": 2, \"series\": [\"layers\", \"threshold\", \"split\", "
+                "\"kernel\"], \"xlabel\": \"down-sampling factor\", \"title\": \"against "
+                "layer resolution (Fig. 3)\"}, " +
+                    time_panel + ", \"series\": [\"kernel\"]}",
+                "the RGB RMS error of Munoz11's variants against the path tracer "
+                "(noise-corrected, +-1 SE) against the number of layers, the threshold t of "
+                "Eq. 8 and the down-sampling of the layers (a line per combination of the "
+                "other parameters that varies), and every variant against its time "
+                "(realtime/munoz11.csv). The paper shows these as images and times only.");
+    if (!spec.jensen_buhler.empty())
+        request("jensen_buhler", "jensen_buhler.csv", "Jensen-Buhler's hierarchical integration",
+                "{\"x\": \"threshold\", \"xscale\": \"log\", \"min_points\": 2, "
+                "\"series\": [\"points\", \"bound\", \"profile\"], \"xlabel\": \"octree "
+                "threshold [sr]\", \"title\": \"against the threshold\"}, {\"x\": "
+                "\"points\", \"xscale\": \"log\", \"min_points\": 2, \"series\": "
+                "[\"threshold\", \"bound\", \"profile\"], \"xlabel\": \"points in the "
+                "cloud\", \"title\": \"against the point density\"}, " +
+                    time_panel + ", \"series\": [\"profile\"]}",
+                "the RGB RMS error of Jensen-Buhler's variants against the path tracer "
+                "(noise-corrected, +-1 SE) against the octree's solid-angle threshold, the "
+                "number of points and the time (cloud, lighting and queries; "
+                "realtime/jensen_buhler.csv).");
+    request("approximations", "approximations.csv", "every approximation against time",
+            time_panel + ", \"series\": [\"family\"]}",
+            "the RGB RMS error of every approximation against the path tracer "
+            "(noise-corrected, +-1 SE) against the seconds of the pass that replaces the SSS "
+            "pass, a colour per family (realtime/approximations.csv).");
+}
+
+/// Every figure of the section, drawn before the report's other plots are.
+std::vector<PlotRequest> RealtimeRun::plot_requests(const std::vector<SceneScores>& all) const {
+    std::vector<PlotRequest> plot_requests;
+    for (const SceneScores& ss : all) plot_requests.push_back(error_vs_time_request(spec_, ss));
+    const bool integrations = !spec_.munoz.empty() || !spec_.jensen_buhler.empty();
     for (const SceneScores& ss : all) {
         if (!integrations) break;
-        auto request = [&](const std::string& what, const std::string& csv,
-                           const std::string& title, const std::string& panels,
-                           const std::string& caption) {
-            const std::string stem = "plots/realtime_" + what + "_" + ss.scene;
-            std::ostringstream js;
-            js << "{\"kind\": \"sweep\", \"csv\": \"realtime/" << csv
-               << "\", \"scene\": " << json_string(ss.scene)
-               << ", \"y\": \"rms_vs_volpath\", \"ylabel\": \"RMS error against the path "
-                  "tracer (RGB)\", \"title\": "
-               << json_string(ss.scene + ": " + title) << ", \"out\": " << json_string(stem)
-               << ", \"panels\": [" << panels << "]}";
-            plot_requests.push_back({js.str(),
-                                     {"realtime/" + csv},
-                                     {"realtime-integrations", ss.scene + ": " + title, stem,
-                                      ss.scene + ": " + caption}});
-        };
-        const std::string time_panel =
-            "{\"x\": \"seconds\", \"xscale\": \"log\", \"markers_only\": true, "
-            "\"xlabel\": \"seconds (two cores)\", \"title\": \"against time\"";
-        if (!spec.munoz.empty())
-            request("munoz11", "munoz11.csv", "Munoz11's layered convolution",
-                    "{\"x\": \"layers\", \"xscale\": \"log\", \"min_points\": 2, \"series\": "
-                    "[\"threshold\", \"downsample\", \"split\", \"kernel\"], \"title\": "
-                    "\"against layers (Fig. 5)\"}, {\"x\": \"threshold\", \"xscale\": "
-                    "\"symlog\", \"min_points\": 2, \"series\": [\"layers\", \"downsample\", "
-                    "\"split\", \"kernel\"], \"xlabel\": \"t of Eq. 8\", \"title\": \"against "
-                    "the threshold (Fig. 2)\"}, {\"x\": \"downsample\", \"xscale\": \"log\", "
-                    "\"min_points\": 2, \"series\": [\"layers\", \"threshold\", \"split\", "
-                    "\"kernel\"], \"xlabel\": \"down-sampling factor\", \"title\": \"against "
-                    "layer resolution (Fig. 3)\"}, " +
-                        time_panel + ", \"series\": [\"kernel\"]}",
-                    "the RGB RMS error of Munoz11's variants against the path tracer "
-                    "(noise-corrected, +-1 SE) against the number of layers, the threshold t of "
-                    "Eq. 8 and the down-sampling of the layers (a line per combination of the "
-                    "other parameters that varies), and every variant against its time "
-                    "(realtime/munoz11.csv). The paper shows these as images and times only.");
-        if (!spec.jensen_buhler.empty())
-            request("jensen_buhler", "jensen_buhler.csv",
-                    "Jensen-Buhler's hierarchical integration",
-                    "{\"x\": \"threshold\", \"xscale\": \"log\", \"min_points\": 2, "
-                    "\"series\": [\"points\", \"bound\", \"profile\"], \"xlabel\": \"octree "
-                    "threshold [sr]\", \"title\": \"against the threshold\"}, {\"x\": "
-                    "\"points\", \"xscale\": \"log\", \"min_points\": 2, \"series\": "
-                    "[\"threshold\", \"bound\", \"profile\"], \"xlabel\": \"points in the "
-                    "cloud\", \"title\": \"against the point density\"}, " +
-                        time_panel + ", \"series\": [\"profile\"]}",
-                    "the RGB RMS error of Jensen-Buhler's variants against the path tracer "
-                    "(noise-corrected, +-1 SE) against the octree's solid-angle threshold, the "
-                    "number of points and the time (cloud, lighting and queries; "
-                    "realtime/jensen_buhler.csv).");
-        request("approximations", "approximations.csv", "every approximation against time",
-                time_panel + ", \"series\": [\"family\"]}",
-                "the RGB RMS error of every approximation against the path tracer "
-                "(noise-corrected, +-1 SE) against the seconds of the pass that replaces the SSS "
-                "pass, a colour per family (realtime/approximations.csv).");
+        integration_requests(spec_, ss, plot_requests);
     }
-    const PlotResult plots = draw_plots(plot_requests, stage, cache, ctx.quiet);
+    return plot_requests;
+}
 
-    // The report section.
+/// The flip viewers' script and style: buttons flip between a scene's images, a checkbox shows
+/// the differences, a slider sets the exposure, the arrow keys and d do the same.
+const char* flip_viewer_script() {
+    return "<script>\n(function () {\n"
+           "  document.querySelectorAll('div.flip').forEach(function (v) {\n"
+           "    var img = v.querySelector('img.view'), which = v.querySelector('span.which');\n"
+           "    var buttons = Array.prototype.slice.call(v.querySelectorAll('button'));\n"
+           "    var range = v.querySelector('input.exposure'), ev = v.querySelector('span.ev');\n"
+           "    var diff = v.querySelector('input.diffmode'), at = 1;\n"
+           "    function show(i) {\n"
+           "      at = (i + buttons.length) % buttons.length;\n"
+           "      buttons.forEach(function (b, k) { b.className = k === at ? 'on' : ''; });\n"
+           "      var b = buttons[at];\n"
+           "      img.src = diff.checked ? b.dataset.diff : b.dataset.src;\n"
+           "      which.textContent = b.textContent + (diff.checked ? ' (difference)' : '');\n"
+           "      v.dataset.showing = img.getAttribute('src');\n"
+           "    }\n"
+           "    buttons.forEach(function (b, k) { b.addEventListener('click', function () { "
+           "show(k); }); });\n"
+           "    diff.addEventListener('change', function () { show(at); });\n"
+           "    range.addEventListener('input', function () {\n"
+           "      ev.textContent = range.value;\n"
+           "      img.style.filter = 'brightness(' + Math.pow(2, range.value) + ')';\n"
+           "    });\n"
+           "    v.tabIndex = 0;\n"
+           "    v.addEventListener('keydown', function (e) {\n"
+           "      if (e.key === 'ArrowRight') show(at + 1);\n"
+           "      else if (e.key === 'ArrowLeft') show(at - 1);\n"
+           "      else if (e.key === 'd') { diff.checked = !diff.checked; show(at); }\n"
+           "    });\n"
+           "    v.dataset.ready = 'yes';\n"
+           "  });\n"
+           "})();\n</script>\n"
+           "<style>div.flip button.on { font-weight: bold; background: #dde; } div.cuts { "
+           "display: flex; flex-wrap: wrap; gap: 4px; } div.cuts figure { margin: 0; width: "
+           "128px; font-size: 80%; } div.cuts img { width: 128px; display: block; "
+           "image-rendering: pixelated; }</style>\n";
+}
+
+/// The report section: the tables, the figures and the flip viewers.
+std::string RealtimeRun::section_html(const std::vector<SceneScores>& all,
+                                      const std::string& ours_vs_thesis,
+                                      const PlotResult& plots) const {
+    std::ostringstream html;
+    const bool integrations = !spec_.munoz.empty() || !spec_.jensen_buhler.empty();
     html << "<h2 id=\"realtime\">Real-time renderer against the ground truth</h2>\n<p>Each "
             "scene rasterized and shaded with shadow maps (realtime/frame.h), its subsurface "
             "light by the separable screen-space pass with each kernel model ("
-         << spec.taps
+         << spec_.taps
          << " importance-sampled taps per 1D pass, as the thesis), scored over the pixels that "
             "see only a medium against the same pipeline with the exact 2D kernel "
             "(<i>vs reference</i>: the separability error alone) and against the path tracer's "
@@ -964,7 +1132,7 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
             "the values).</p>\n<table><tr><th class=\"l\">scene / thesis</th><th "
             "class=\"l\">model</th><th>R</th><th>G</th><th>B</th><th>sum</th><th>thesis "
             "R</th><th>G</th><th>B</th><th>sum</th></tr>\n"
-         << ours_vs_thesis.str() << "</table>\n";
+         << ours_vs_thesis << "</table>\n";
     html << "<h3 id=\"realtime-errors\">Every model, per scene</h3>\n<p>RMS over the medium's "
             "pixels in radiance units: against the screen-space reference (the separability "
             "error) and against the path tracer (noise-corrected, &plusmn; its standard error); "
@@ -984,13 +1152,14 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
         }
         html << "</table>\n";
     }
-    csv_table(html, decomposition.str(),
+    csv_table(html, t_.decomposition.str(),
               "The error decomposition (realtime/decomposition.csv): separability, the "
               "screen-space assumption, lighting, total");
     html << "<h3 id=\"realtime-time\">Error against time</h3>\n<p>Every model of the "
             "table at "
-         << spec.taps << " taps, and the swept models over their tap counts with and without jitter"
-         << (spec.rotate ? " and with rotated pass axes" : "")
+         << spec_.taps
+         << " taps, and the swept models over their tap counts with and without jitter"
+         << (spec_.rotate ? " and with rotated pass axes" : "")
          << ": the "
             "error against the time the SSS pass took, per scene (the frame times are in the "
             "table). Table: <a "
@@ -998,7 +1167,7 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
     if (!plots.problem.empty())
         html << "<p class=\"note\">No plots: " << esc(plots.problem) << "</p>\n";
     figures(html, plots, "realtime");
-    csv_table(html, sweep.str(), "Error against frame time (realtime/error_vs_time.csv)");
+    csv_table(html, t_.sweep.str(), "Error against frame time (realtime/error_vs_time.csv)");
     if (integrations) {
         html << "<h3 id=\"realtime-integrations\">Integrations over the surfaces: Munoz11, "
                 "Jensen-Buhler, and every approximation</h3>\n<p>The SSS pass replaced by "
@@ -1011,46 +1180,19 @@ RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const Rend
                 "</a>, <a href=\"realtime/munoz11.csv\">munoz11.csv</a>, <a "
                 "href=\"realtime/jensen_buhler.csv\">jensen_buhler.csv</a>.</p>\n";
         figures(html, plots, "realtime-integrations");
-        csv_table(html, approximations.str(),
+        csv_table(html, t_.approximations.str(),
                   "Every approximation against the path tracer (realtime/approximations.csv)");
     }
-    html << viewers.str();
-    html << "<script>\n(function () {\n"
-            "  document.querySelectorAll('div.flip').forEach(function (v) {\n"
-            "    var img = v.querySelector('img.view'), which = v.querySelector('span.which');\n"
-            "    var buttons = Array.prototype.slice.call(v.querySelectorAll('button'));\n"
-            "    var range = v.querySelector('input.exposure'), ev = v.querySelector('span.ev');\n"
-            "    var diff = v.querySelector('input.diffmode'), at = 1;\n"
-            "    function show(i) {\n"
-            "      at = (i + buttons.length) % buttons.length;\n"
-            "      buttons.forEach(function (b, k) { b.className = k === at ? 'on' : ''; });\n"
-            "      var b = buttons[at];\n"
-            "      img.src = diff.checked ? b.dataset.diff : b.dataset.src;\n"
-            "      which.textContent = b.textContent + (diff.checked ? ' (difference)' : '');\n"
-            "      v.dataset.showing = img.getAttribute('src');\n"
-            "    }\n"
-            "    buttons.forEach(function (b, k) { b.addEventListener('click', function () { "
-            "show(k); }); });\n"
-            "    diff.addEventListener('change', function () { show(at); });\n"
-            "    range.addEventListener('input', function () {\n"
-            "      ev.textContent = range.value;\n"
-            "      img.style.filter = 'brightness(' + Math.pow(2, range.value) + ')';\n"
-            "    });\n"
-            "    v.tabIndex = 0;\n"
-            "    v.addEventListener('keydown', function (e) {\n"
-            "      if (e.key === 'ArrowRight') show(at + 1);\n"
-            "      else if (e.key === 'ArrowLeft') show(at - 1);\n"
-            "      else if (e.key === 'd') { diff.checked = !diff.checked; show(at); }\n"
-            "    });\n"
-            "    v.dataset.ready = 'yes';\n"
-            "  });\n"
-            "})();\n</script>\n"
-            "<style>div.flip button.on { font-weight: bold; background: #dde; } div.cuts { "
-            "display: flex; flex-wrap: wrap; gap: 4px; } div.cuts figure { margin: 0; width: "
-            "128px; font-size: 80%; } div.cuts img { width: 128px; display: block; "
-            "image-rendering: pixelated; }</style>\n";
-    res.html = html.str();
-    return res;
+    html << t_.viewers.str() << flip_viewer_script();
+    return html.str();
+}
+
+}  // namespace
+
+RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const RenderStudyContext& ctx,
+                                       const ArtifactCache& cache, const fs::path& results_root,
+                                       const fs::path& stage, std::vector<Metric>& metrics) {
+    return RealtimeRun(spec, ctx, cache, results_root, stage, metrics).run();
 }
 
 }  // namespace ssslab::runner
