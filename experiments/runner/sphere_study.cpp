@@ -144,22 +144,18 @@ SphereComparison compare(const std::vector<double>& model, const std::vector<dou
 
 }  // namespace
 
-SphereJob read_sphere_job(const SphereStudyInput& a) {
-    SphereJob job;
-    const std::string src = a.config.empty() ? std::string(kCommandLine) : a.config;
-    job.source = src;
-    job.doc = a.config.empty() ? ConfigDocument::empty(kCommandLine)
-                               : ConfigDocument::parse_file(a.config);
-    ConfigTable root = job.doc->root();
-    volpath::SphereScene& sc = job.scene;
-    sc.medium = read_material(root, a.material, src);
+namespace {
 
-    job.seed = static_cast<std::uint64_t>(root.integer("seed", 1, Range::nonnegative()));
-    if (a.seed) {
-        job.seed = *a.seed;
-        root.record("seed", static_cast<std::int64_t>(job.seed));
-    }
+/// A model's error: at its item of the config's `models`, or at --models.
+[[noreturn]] void models_error(ConfigTable& root, bool from_config, size_t i,
+                               const std::string& msg) {
+    if (from_config) root.fail_item("models", i, msg);
+    throw InputError({kCommandLine, 0, 0}, "--models", msg);
+}
 
+/// The models into `registry`, recorded; `from_config`: they came from the config's `models`.
+void read_sphere_models(ConfigTable& root, const SphereStudyInput& a, const std::string& src,
+                        ProfileModels& registry, bool& from_config) {
     // Models: `models` in the config (an array of names, or one comma-separated string, which is
     // how the resolved configuration records them) or --models; default dipole, better dipole,
     // photon beam diffusion.
@@ -180,14 +176,10 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
         models = split_list(a.models);
         if (models.size() == 1 && models[0] == "none") models.clear();
     }
-    auto models_error = [&](size_t i, const std::string& msg) {
-        if (a.models.empty() && models_in_config) root.fail_item("models", i, msg);
-        throw InputError({kCommandLine, 0, 0}, "--models", msg);
-    };
+    from_config = a.models.empty() && models_in_config;
     // Built-in names and profile files (experiments/runner/profile_models.h): a file relative to
     // the config that names it, or to the working directory for --models; the files' parameters
     // from [parameters."<file name>"].
-    ProfileModels registry;
     const std::string base = a.models.empty() && models_in_config
                                  ? std::filesystem::path(src).parent_path().string()
                                  : std::string();
@@ -196,7 +188,8 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
             registry.add(models[i], base);
         } catch (const std::invalid_argument& e) {
             const std::string msg = e.what();
-            models_error(i, msg.starts_with("unknown") ? msg + " (or \"none\")" : msg);
+            models_error(root, from_config, i,
+                         msg.starts_with("unknown") ? msg + " (or \"none\")" : msg);
         }
     }
     if (auto pt = root.table("parameters")) registry.read_parameters(*pt);
@@ -212,8 +205,12 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
         }
         root.record("models", list.empty() ? std::string("none") : list);
     }
-    job.models = registry.names();
+}
 
+/// [sphere]: the radius, the light's and the camera's angles, the image and the bins.
+void read_sphere_geometry(ConfigTable& root, const SphereStudyInput& a, const std::string& src,
+                          SphereJob& job) {
+    volpath::SphereScene& sc = job.scene;
     ConfigTable sp = root.table_or_empty("sphere");
     if (a.radius_mm) {
         if (sp.has("radius_mm") || sp.has("radius_cm"))
@@ -247,7 +244,10 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
     sc.beta_bins = static_cast<int>(sp.integer("beta_bins", 180, Range::closed(1, 100000)));
     sc.to_light = {direction(job.light_deg)[0], 0.0, direction(job.light_deg)[2]};
     sc.to_camera = {direction(job.camera_deg)[0], 0.0, direction(job.camera_deg)[2]};
+}
 
+/// [budget] and [volpath]: the path tracer's budget, batch and chromatic mode.
+void read_sphere_budget(ConfigTable& root, const SphereStudyInput& a, SphereJob& job) {
     ConfigTable budget = root.table_or_empty("budget");
     job.budget = mcml::read_budget(budget);
     job.batch = budget.integer("batch_photons", 0, Range::nonnegative());
@@ -270,7 +270,11 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
         job.mode = a.mode;
         vp.record("mode", a.mode);
     }
+}
 
+/// [integration]: the models' quadrature over the sphere and the image's supersampling.
+void read_sphere_integration(ConfigTable& root, const SphereStudyInput& a, SphereJob& job) {
+    const volpath::SphereScene& sc = job.scene;
     ConfigTable in = root.table_or_empty("integration");
     approx::SphereIntegration& ig = job.integration;
     ig.entry = in.enumerated("entry", approx::EntryWeight::kFresnel);
@@ -289,9 +293,12 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
     ig.radius = sc.radius_cm;
     ig.beta_bins = sc.beta_bins;
     ig.threads = a.threads;
-    root.finish();
+}
 
-    // Everything else the engines would refuse, before any work starts.
+/// Everything else the engines would refuse, before any work starts; the models' profiles.
+void check_sphere_job(ConfigTable& root, const std::string& src, const ProfileModels& registry,
+                      bool from_config, SphereJob& job) {
+    const volpath::SphereScene& sc = job.scene;
     const volpath::ChromaticMode mode =
         job.mode == "hero" ? volpath::ChromaticMode::kHero : volpath::ChromaticMode::kPerChannel;
     try {
@@ -309,22 +316,48 @@ SphereJob read_sphere_job(const SphereStudyInput& a) {
                 dm.thickness = std::numeric_limits<double>::infinity();  // a sphere, not a slab
                 per_channel[static_cast<size_t>(ch)] = registry.make(name, dm, ch);
             } catch (const std::exception& e) {
-                models_error(k, "model \"" + name + "\" refuses channel " + kChannelNames[ch] +
-                                    " of the material: " + e.what());
+                models_error(root, from_config, k,
+                             "model \"" + name + "\" refuses channel " + kChannelNames[ch] +
+                                 " of the material: " + e.what());
             }
         }
     }
+}
+
+}  // namespace
+
+SphereJob read_sphere_job(const SphereStudyInput& a) {
+    SphereJob job;
+    const std::string src = a.config.empty() ? std::string(kCommandLine) : a.config;
+    job.source = src;
+    job.doc = a.config.empty() ? ConfigDocument::empty(kCommandLine)
+                               : ConfigDocument::parse_file(a.config);
+    ConfigTable root = job.doc->root();
+    volpath::SphereScene& sc = job.scene;
+    sc.medium = read_material(root, a.material, src);
+
+    job.seed = static_cast<std::uint64_t>(root.integer("seed", 1, Range::nonnegative()));
+    if (a.seed) {
+        job.seed = *a.seed;
+        root.record("seed", static_cast<std::int64_t>(job.seed));
+    }
+
+    bool from_config = false;
+    ProfileModels registry;
+    read_sphere_models(root, a, src, registry, from_config);
+    job.models = registry.names();
+    read_sphere_geometry(root, a, src, job);
+    read_sphere_budget(root, a, job);
+    read_sphere_integration(root, a, job);
+    root.finish();
+    check_sphere_job(root, src, registry, from_config, job);
     return job;
 }
 
-SphereStudy run_sphere_study(SphereJob& job, volpath::SphereOptions so,
-                             const std::string& command_line) {
-    SphereStudy st;
-    volpath::SphereScene& sc = job.scene;
-    const approx::SphereView view = view_of(sc, job.supersampling);
-    check_same_camera(sc, view);
+namespace {
 
-    // The analytic models first (seconds): their failures come before the long run.
+/// The analytic models first (seconds: their failures come before the long run).
+void integrate_models(const SphereJob& job, SphereStudy& st) {
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<std::array<approx::SphereExitance, 3>>& tables = st.tables;
     tables.resize(job.models.size());
@@ -340,21 +373,13 @@ SphereStudy run_sphere_study(SphereJob& job, volpath::SphereOptions so,
             }
         }
     st.model_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const double model_seconds = st.model_seconds;
+}
 
-    // The path tracer.
-    so.seed = job.seed;
-    so.threads = job.integration.threads;
-    so.budget = job.budget;
-    so.batch_paths = job.batch;
-    so.mode =
-        job.mode == "hero" ? volpath::ChromaticMode::kHero : volpath::ChromaticMode::kPerChannel;
-    so.image = true;
-    st.run = volpath::simulate_sphere(sc, so);
+/// The image: volpath's layers, then one per model, and what ran in its metadata.
+void model_image(const SphereJob& job, const approx::SphereView& view, SphereStudy& st) {
+    const volpath::SphereScene& sc = job.scene;
+    const std::vector<std::array<approx::SphereExitance, 3>>& tables = st.tables;
     volpath::SphereRun& run = st.run;
-    if (run.interrupted) return st;
-
-    // Image: volpath's layers, then one per model.
     LayeredImage& img = st.image;
     img = std::move(*run.image);
     const int W = sc.width, H = sc.height;
@@ -378,8 +403,12 @@ SphereStudy run_sphere_study(SphereJob& job, volpath::SphereOptions so,
         img.metadata()["ssslab.radius_cm"] = format_g(sc.radius_cm, 9);
         img.metadata()["ssslab.entry"] = approx::to_string(job.integration.entry);
     }
+}
 
-    // Preview: volpath's exitance and the models side by side, one exposure.
+/// The preview: volpath's exitance and the models side by side, one exposure.
+void model_preview(const SphereJob& job, SphereStudy& st) {
+    const int W = job.scene.width, H = job.scene.height;
+    const LayeredImage& img = st.image;
     const int panels = 1 + static_cast<int>(job.models.size());
     st.preview = LayeredImage(W * panels, H);
     LayeredImage& preview = st.preview;
@@ -401,8 +430,13 @@ SphereStudy run_sphere_study(SphereJob& job, volpath::SphereOptions so,
         std::nth_element(values.begin(), values.begin() + static_cast<long>(q), values.end());
         if (values[q] > 0) exposure = -std::log2(static_cast<double>(values[q]));
     }
+}
 
-    // Beta profile table and comparisons.
+/// The beta profile table and the models' comparisons with the path tracer.
+void compare_models(const SphereJob& job, SphereStudy& st) {
+    const volpath::SphereScene& sc = job.scene;
+    const std::vector<std::array<approx::SphereExitance, 3>>& tables = st.tables;
+    const volpath::SphereRun& run = st.run;
     std::vector<std::array<SphereComparison, 3>>& cmp = st.cmp;
     cmp.resize(job.models.size());
     std::array<std::vector<double>, 3> bins_mc, bins_se;
@@ -458,8 +492,14 @@ SphereStudy run_sphere_study(SphereJob& job, volpath::SphereOptions so,
         }
         csv += "\n";
     }
+}
 
-    // Resolved configuration and results.
+/// The resolved configuration: results per channel, timing, provenance.
+void record_results(SphereJob& job, SphereStudy& st, const std::string& command_line) {
+    const std::vector<std::array<approx::SphereExitance, 3>>& tables = st.tables;
+    const std::vector<std::array<SphereComparison, 3>>& cmp = st.cmp;
+    const volpath::SphereRun& run = st.run;
+    const double model_seconds = st.model_seconds;
     ConfigTable root = job.doc->root();
     for (int ch = 0; ch < 3; ++ch) {
         const size_t c3 = static_cast<size_t>(ch);
@@ -507,6 +547,33 @@ SphereStudy run_sphere_study(SphereJob& job, volpath::SphereOptions so,
     st.resolved_toml =
         "# ssslab sphere: resolved configuration, results per channel, timing, provenance\n" +
         job.doc->resolved_toml();
+}
+
+}  // namespace
+
+SphereStudy run_sphere_study(SphereJob& job, volpath::SphereOptions so,
+                             const std::string& command_line) {
+    SphereStudy st;
+    volpath::SphereScene& sc = job.scene;
+    const approx::SphereView view = view_of(sc, job.supersampling);
+    check_same_camera(sc, view);
+    integrate_models(job, st);
+
+    // The path tracer.
+    so.seed = job.seed;
+    so.threads = job.integration.threads;
+    so.budget = job.budget;
+    so.batch_paths = job.batch;
+    so.mode =
+        job.mode == "hero" ? volpath::ChromaticMode::kHero : volpath::ChromaticMode::kPerChannel;
+    so.image = true;
+    st.run = volpath::simulate_sphere(sc, so);
+    if (st.run.interrupted) return st;
+
+    model_image(job, view, st);
+    model_preview(job, st);
+    compare_models(job, st);
+    record_results(job, st, command_line);
     return st;
 }
 
