@@ -258,6 +258,100 @@ size_t bench_integrations(const Scene& s, const realtime::RasterizedFrame& f,
     return points;
 }
 
+#if SSSLAB_HAVE_GL
+using GlBackend = realtime::gl::GlFrameBackend;
+#else
+struct GlBackend {};
+#endif
+
+/// What a scene's timing needs: the scene, its label, the frame options, kernels and profiles.
+struct BenchScene {
+    const Scene& s;
+    const std::string& label;
+    const realtime::FrameOptions& fo;
+    const std::map<int, realtime::FrameMaterial>& materials;
+    const std::map<int, RadialProfile>& profiles;
+};
+
+/// Every pass of one scene on `t` threads (in the caller's arena), the fastest of `repeat`
+/// runs, into `rows`; the integrations and the GL twin where asked. Returns the shadow maps.
+int time_passes(const BenchScene& bs, int repeat, int t, bool integrations, GlBackend* gl,
+                std::vector<Row>& rows, size_t& jb_points) {
+    const Scene& s = bs.s;
+    const std::string& label = bs.label;
+    const realtime::FrameOptions& fo = bs.fo;
+    const std::map<int, realtime::FrameMaterial>& materials = bs.materials;
+    int maps = 0;
+
+    realtime::RasterizedFrame f;
+    const double raster = best_seconds(repeat, [&] { realtime::rasterize_frame(s, fo, f); });
+    realtime::LitFrame lit;
+    double shadow = 1e300, lighting = 1e300;
+    for (int k = 0; k < repeat; ++k) {
+        realtime::light_frame(s, f, fo, lit);
+        shadow = std::min(shadow, lit.stats.shadow_ms);
+        lighting = std::min(lighting, lit.ms - lit.stats.shadow_ms);
+    }
+    maps = lit.stats.shadow_maps;
+    double sss = 1e300, composite = 1e300;
+    for (int k = 0; k < repeat; ++k) {
+        const realtime::FrameResult r = realtime::render_frame(s, f, lit, materials, fo);
+        for (const auto& p : r.times) {
+            if (p.pass == "sss") sss = std::min(sss, p.ms);
+            if (p.pass == "composite") composite = std::min(composite, p.ms);
+        }
+    }
+    // The floor: the SSS pass's bytes streamed, on a G-buffer of the frame's size.
+    realtime::SssGBuffer g(f.raster.sample_width(), f.raster.sample_height());
+    for (size_t i = 0; i < g.pixels(); ++i) g.material[i] = lit.gbuffer.material[i] >= 0 ? 0 : -1;
+    std::vector<float> a(g.irradiance.size()), b(g.irradiance.size());
+    const double floor = best_seconds(repeat, [&] {
+        stream_pass(g, g.irradiance, a);
+        stream_pass(g, a, b);
+    });
+    // A frame as an engine draws it, frame after frame into the same render
+    // targets (raster frame, G-buffer, shadow map scratch).
+    realtime::RasterizedFrame ff;
+    realtime::LitFrame lf;
+    const double frame = best_seconds(repeat, [&] {
+        realtime::rasterize_frame(s, fo, ff);
+        realtime::light_frame(s, ff, fo, lf);
+        realtime::render_frame(s, ff, lf, materials, fo);
+    });
+    rows.push_back({label, t, "raster", raster * 1e3, -1});
+    rows.push_back({label, t, "shadow maps", shadow, -1});
+    rows.push_back({label, t, "lighting", lighting, -1});
+    rows.push_back({label, t, "sss", sss, floor * 1e3});
+    rows.push_back({label, t, "composite", composite, -1});
+    rows.push_back({label, t, "frame", frame * 1e3, -1});
+    if (integrations)
+        jb_points =
+            bench_integrations(s, f, lit, materials, bs.profiles, fo, repeat, t, label, rows);
+#if SSSLAB_HAVE_GL
+    if (gl) bench_gl(*gl, s, f, lit, materials, fo, repeat, floor * 1e3, label, rows);
+#endif
+#if !SSSLAB_HAVE_GL
+    (void)gl;
+#endif
+    return maps;
+}
+
+/// The rows from `first` on, as the table prints them.
+void print_rows(const std::vector<Row>& rows, size_t first, int width, int height) {
+    for (size_t k = first; k < rows.size(); ++k) {
+        const Row& r = rows[k];
+        char size[32], fl[32] = "", ratio[32] = "";
+        std::snprintf(size, sizeof size, "%dx%d", width, height);
+        if (r.floor_ms >= 0) {
+            std::snprintf(fl, sizeof fl, "%.3f", r.floor_ms);
+            std::snprintf(ratio, sizeof ratio, "%.2f", r.ms / r.floor_ms);
+        }
+        const std::string th = r.backend == "gl" ? std::string("gl") : std::to_string(r.threads);
+        std::printf("%-18s %11s %7s %-19s %10.3f %10s %7s\n", r.scene.c_str(), size, th.c_str(),
+                    r.pass.c_str(), r.ms, fl, ratio);
+    }
+}
+
 int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, int width,
                        int height, int repeat, const std::string& only, const std::string& csv,
                        const std::string& backend, const std::string& platform, bool integrations) {
@@ -319,71 +413,17 @@ int run_realtime_bench(int threads, bool quick, const std::string& scenes_dir, i
                 const size_t first = rows.size();
                 tbb::task_arena arena(t);
                 arena.execute([&] {
-                    realtime::RasterizedFrame f;
-                    const double raster =
-                        best_seconds(repeat, [&] { realtime::rasterize_frame(s, fo, f); });
-                    realtime::LitFrame lit;
-                    double shadow = 1e300, lighting = 1e300;
-                    for (int k = 0; k < repeat; ++k) {
-                        realtime::light_frame(s, f, fo, lit);
-                        shadow = std::min(shadow, lit.stats.shadow_ms);
-                        lighting = std::min(lighting, lit.ms - lit.stats.shadow_ms);
-                    }
-                    maps = lit.stats.shadow_maps;
-                    double sss = 1e300, composite = 1e300;
-                    for (int k = 0; k < repeat; ++k) {
-                        const realtime::FrameResult r =
-                            realtime::render_frame(s, f, lit, materials, fo);
-                        for (const auto& p : r.times) {
-                            if (p.pass == "sss") sss = std::min(sss, p.ms);
-                            if (p.pass == "composite") composite = std::min(composite, p.ms);
-                        }
-                    }
-                    // The floor: the SSS pass's bytes streamed, on a G-buffer of the frame's size.
-                    realtime::SssGBuffer g(f.raster.sample_width(), f.raster.sample_height());
-                    for (size_t i = 0; i < g.pixels(); ++i)
-                        g.material[i] = lit.gbuffer.material[i] >= 0 ? 0 : -1;
-                    std::vector<float> a(g.irradiance.size()), b(g.irradiance.size());
-                    const double floor = best_seconds(repeat, [&] {
-                        stream_pass(g, g.irradiance, a);
-                        stream_pass(g, a, b);
-                    });
-                    // A frame as an engine draws it, frame after frame into the same render
-                    // targets (raster frame, G-buffer, shadow map scratch).
-                    realtime::RasterizedFrame ff;
-                    realtime::LitFrame lf;
-                    const double frame = best_seconds(repeat, [&] {
-                        realtime::rasterize_frame(s, fo, ff);
-                        realtime::light_frame(s, ff, fo, lf);
-                        realtime::render_frame(s, ff, lf, materials, fo);
-                    });
-                    rows.push_back({label, t, "raster", raster * 1e3, -1});
-                    rows.push_back({label, t, "shadow maps", shadow, -1});
-                    rows.push_back({label, t, "lighting", lighting, -1});
-                    rows.push_back({label, t, "sss", sss, floor * 1e3});
-                    rows.push_back({label, t, "composite", composite, -1});
-                    rows.push_back({label, t, "frame", frame * 1e3, -1});
-                    if (integrations && variant == 0 && t == counts.back())
-                        jb_points = bench_integrations(s, f, lit, materials, in.profiles, fo,
-                                                       repeat, t, label, rows);
+                    const BenchScene bs{s, label, fo, materials, in.profiles};
 #if SSSLAB_HAVE_GL
-                    if (gl && t == counts.back())
-                        bench_gl(*gl, s, f, lit, materials, fo, repeat, floor * 1e3, label, rows);
+                    GlBackend* g = t == counts.back() ? gl.get() : nullptr;
+#else
+                    GlBackend* g = nullptr;
 #endif
+                    maps = time_passes(bs, repeat, t,
+                                       integrations && variant == 0 && t == counts.back(), g, rows,
+                                       jb_points);
                 });
-                for (size_t k = first; k < rows.size(); ++k) {
-                    const Row& r = rows[k];
-                    char size[32], fl[32] = "", ratio[32] = "";
-                    std::snprintf(size, sizeof size, "%dx%d", width, height);
-                    if (r.floor_ms >= 0) {
-                        std::snprintf(fl, sizeof fl, "%.3f", r.floor_ms);
-                        std::snprintf(ratio, sizeof ratio, "%.2f", r.ms / r.floor_ms);
-                    }
-                    const std::string th =
-                        r.backend == "gl" ? std::string("gl") : std::to_string(r.threads);
-                    std::printf("%-18s %11s %7s %-19s %10.3f %10s %7s\n", r.scene.c_str(), size,
-                                th.c_str(), r.pass.c_str(), r.ms, fl, ratio);
-                }
+                print_rows(rows, first, width, height);
             }
             std::printf(
                 "%-18s %zu triangles, %zu medium material%s in view, %zu light%s, %d shadow "
