@@ -370,8 +370,17 @@ const BoundaryTransmittance& tabulated_boundary(double eta, double alpha, int co
 }
 
 LightPlan plan_lights(const Scene& scene, const Box& receivers, const LightingOptions& o) {
+    return plan_lights(scene, receivers, o,
+                       std::vector<Light>(scene.lights.begin(), scene.lights.end()));
+}
+
+LightPlan plan_lights(const Scene& scene, const Box& receivers, const LightingOptions& o,
+                      std::vector<Light> resolved) {
+    if (resolved.size() != scene.lights.size())
+        throw std::invalid_argument("plan_lights: the lights are not the scene's");
     LightPlan plan;
     plan.receivers = receivers;
+    plan.lights = std::move(resolved);
     Box& casters = plan.casters;
     for (const SceneShape& s : scene.shapes) {
         const auto b = s.mesh.bounds();
@@ -387,7 +396,6 @@ LightPlan plan_lights(const Scene& scene, const Box& receivers, const LightingOp
     // Light samples, in scene order: each light's stratified emitters (core/light.h), and the
     // first light's single view for the thickness layer (the emitter itself for a delta light).
     std::vector<LightSample>& samples = plan.samples;
-    for (const SceneLight& sl : scene.lights) plan.lights.emplace_back(sl);
     bool thickness_taken = false;
     for (std::size_t li = 0; li < plan.lights.size(); ++li) {
         const Light& l = plan.lights[li];
@@ -446,65 +454,140 @@ GBuffer shade(const Scene& scene, const RasterCamera& camera, const RasterFrame&
     return g;
 }
 
-void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& frame,
-           const LightingOptions& o, const std::vector<SlabTransmittance>& slabs,
-           LightingStats* stats, GBuffer& out) {
-    using clock = std::chrono::steady_clock;
-    const auto t_start = clock::now();
-    const int ss = frame.supersample;
-    const int W = frame.sample_width(), H = frame.sample_height();
-    const std::size_t N = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
-    check_lighting_inputs(camera, frame, o);
+namespace {
 
-    GBuffer& g = out;
-    // Sized only: the first pass below writes every entry of every array (a reused G-buffer of
-    // the same size keeps its storage and is not cleared twice).
-    g.resize(W, H);
+// The corners of the receivers' box that shade()'s receiver pass grows over a range of rows, as
+// plain numbers (Box::add per sample is a call).
+struct RowBox {
+    double lo[3], hi[3];
+    explicit RowBox(const Box& box)
+        : lo{box.lo.x, box.lo.y, box.lo.z}, hi{box.hi.x, box.hi.y, box.hi.z} {}
+    void grow(const Vec3& p) {
+        for (int c = 0; c < 3; ++c) {
+            lo[c] = std::min(lo[c], p[c]);
+            hi[c] = std::max(hi[c], p[c]);
+        }
+    }
+    // Writes the corners back into `box`.
+    void store(Box& box) const {
+        box.lo = {lo[0], lo[1], lo[2]};
+        box.hi = {hi[0], hi[1], hi[2]};
+    }
+};
 
-    const std::vector<const BoundaryTransmittance*> mat_T = boundary_tables(scene, o);
-    // Lambert's albedo / pi per diffuse material.
-    std::vector<RGB> albedo_pi(scene.materials.size());
-    for (std::size_t m = 0; m < scene.materials.size(); ++m)
-        for (std::size_t c = 0; c < 3; ++c) albedo_pi[m][c] = scene.materials[m].albedo[c] / kPi;
-    auto slab_of = [&](int m) -> const SlabTransmittance* {
-        if (m < 0 || static_cast<std::size_t>(m) >= slabs.size()) return nullptr;
-        const SlabTransmittance& s = slabs[static_cast<std::size_t>(m)];
-        return s.empty() ? nullptr : &s;
-    };
+// Scratch of the calling thread, kept between frames (shade() takes references: the passes'
+// worker threads must see this thread's, not theirs).
+struct ShadeScratch {
+    std::vector<Kind> kind;                // the receivers' kinds
+    std::vector<std::vector<Vec3>> facet;  // facet normals per shape
+    ShadowMap map;                         // the shadow map of the view being lit
+    std::vector<std::uint8_t> face;        // the cube face of each receiver
+};
+ShadeScratch& shade_scratch() {
+    static thread_local ShadeScratch scratch;
+    return scratch;
+}
 
+constexpr std::uint8_t kNoFace = 255;  // a receiver in none of a light sample's views
+
+// One shade() call: its inputs, the G-buffer it writes, the tables per material and per shape,
+// and the receivers' kinds; the receiver pass, then the light samples one at a time.
+struct ShadePass {
+    const Scene& scene;
+    const RasterCamera& camera;
+    const RasterFrame& frame;
+    const LightingOptions& o;
+    const std::vector<SlabTransmittance>& slabs;
+    GBuffer& g;
+    const int W, H;
+    const std::size_t N;
+    const std::vector<const BoundaryTransmittance*> mat_T;
+    std::vector<RGB> albedo_pi;  // Lambert's albedo / pi per diffuse material
     // Receivers and what the camera sees directly. A receiver (position, normals, direction
     // to the camera) is not stored: each pass over the light samples recomputes it from the
     // G-buffer (a few flops against ~100 bytes a sample of memory traffic), and only its kind
-    // is kept. Scratch of the calling thread, kept between frames (a reference: the passes'
-    // worker threads must see this thread's).
-    static thread_local std::vector<Kind> kind_scratch;
-    std::vector<Kind>& kind = kind_scratch;
-    kind.resize(N);  // written for every sample by the first pass below
+    // is kept.
+    std::vector<Kind>& kind;
     // The camera rays of RasterCamera::ray_direction, to the bit.
-    const RasterCamera::SampleRays rays = camera.sample_rays(ss);
+    const RasterCamera::SampleRays rays;
     // Facet normals as volpath/embree_scene.cpp computes them (double precision), once per
     // triangle rather than once per sample and light.
-    static thread_local std::vector<std::vector<Vec3>> facet_scratch;
-    std::vector<std::vector<Vec3>>& facet = facet_scratch;
-    facet.resize(scene.shapes.size());
-    for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
-        const TriangleMesh& m = scene.shapes[k].mesh;
-        facet[k].resize(m.triangles.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.triangles.size(), 4096),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t t = r.begin(); t != r.end(); ++t)
-                                  facet[k][t] = m.facet_normal(t);
-                          });
+    std::vector<std::vector<Vec3>>& facet;
+    // Per shape: its material and whether that is a medium.
+    std::vector<int> shape_material;
+    std::vector<char> shape_medium;
+    // The light pass's: the plan, its sphere lights, whether any material has a slab table, the
+    // shadow map (one map at a time, its storage reused from map to map and from frame to
+    // frame; the result does not depend on it), the receivers' cube faces (light samples with
+    // several views), the maps rendered and their time.
+    const LightPlan* plan = nullptr;
+    std::vector<int> spheres;
+    bool any_slab = false;
+    ShadowMap& sm;
+    std::vector<std::uint8_t>& face;
+    double shadow_ms = 0;
+    int maps = 0;
+
+    ShadePass(const Scene& scene_, const RasterCamera& camera_, const RasterFrame& frame_,
+              const LightingOptions& o_, const std::vector<SlabTransmittance>& slabs_, GBuffer& out)
+        : scene(scene_),
+          camera(camera_),
+          frame(frame_),
+          o(o_),
+          slabs(slabs_),
+          g(out),
+          W(frame_.sample_width()),
+          H(frame_.sample_height()),
+          N(static_cast<std::size_t>(W) * static_cast<std::size_t>(H)),
+          mat_T(boundary_tables(scene_, o_)),
+          albedo_pi(scene_.materials.size()),
+          kind(shade_scratch().kind),
+          rays(camera_.sample_rays(frame_.supersample)),
+          facet(shade_scratch().facet),
+          shape_material(scene_.shapes.size()),
+          shape_medium(scene_.shapes.size()),
+          sm(shade_scratch().map),
+          face(shade_scratch().face) {
+        // Sized only: the first pass below writes every entry of every array (a reused
+        // G-buffer of the same size keeps its storage and is not cleared twice).
+        g.resize(W, H);
+        for (std::size_t m = 0; m < scene.materials.size(); ++m)
+            for (std::size_t c = 0; c < 3; ++c)
+                albedo_pi[m][c] = scene.materials[m].albedo[c] / kPi;
+        kind.resize(N);  // written for every sample by the first pass below
+        facet.resize(scene.shapes.size());
+        for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
+            const TriangleMesh& m = scene.shapes[k].mesh;
+            facet[k].resize(m.triangles.size());
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.triangles.size(), 4096),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  for (std::size_t t = r.begin(); t != r.end(); ++t)
+                                      facet[k][t] = m.facet_normal(t);
+                              });
+        }
+        for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
+            shape_material[k] = scene.shapes[k].material;
+            shape_medium[k] = scene.materials[static_cast<std::size_t>(shape_material[k])].kind ==
+                              SceneMaterial::Kind::kMedium;
+        }
     }
+
+    // Material m's slab table; nullptr where it has none.
+    const SlabTransmittance* slab_of(int m) const {
+        if (m < 0 || static_cast<std::size_t>(m) >= slabs.size()) return nullptr;
+        const SlabTransmittance& s = slabs[static_cast<std::size_t>(m)];
+        return s.empty() ? nullptr : &s;
+    }
+
     // The receiver of sample (sx, sy), i its index, from the G-buffer as the first pass below
     // wrote it: the point at the sample's view depth on its camera ray (the rasterizer's depth
     // is that of the ray-plane intersection, to rounding), the facet normal as the G-buffer
     // holds it (float), and the camera ray normalized only where its length matters (a
     // medium's boundary terms). Every pass sees the same receiver.
-    auto point_at = [&](std::size_t i, const Vec3& du) {
+    Vec3 point_at(std::size_t i, const Vec3& du) const {
         return camera.position + du * frame.view_z[i];
-    };
-    auto receiver_at = [&](std::size_t i, int sx, int sy) {
+    }
+    Receiver receiver_at(std::size_t i, int sx, int sy) const {
         Receiver r;
         const Vec3 du = rays.unnormalized(sx, sy);
         r.p = point_at(i, du);
@@ -515,138 +598,129 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         r.material = g.material[i];
         r.ns = r.kind == Kind::kDiffuse && dot(r.n, r.wo) < 0 ? -r.n : r.n;
         return r;
-    };
-    // The nearest sphere light along from + t d (t in tl; nullptr and inf if none), and what a ray
-    // that meets no geometry sees: the environment and the suns' discs.
-    const std::vector<Light> lights(scene.lights.begin(), scene.lights.end());
-    auto nearest_sphere = [&](const Vec3& from, const Vec3& d, double& tl) {
-        return nearest_light_surface(lights, from, d, tl);
-    };
-    auto sky = [&](const Vec3& d) { return escaped_radiance(lights, d); };
-    const bool any_sphere = !sphere_lights(lights).empty();
-    // Per shape: its material and whether that is a medium.
-    std::vector<int> shape_material(scene.shapes.size());
-    std::vector<char> shape_medium(scene.shapes.size());
-    for (std::size_t k = 0; k < scene.shapes.size(); ++k) {
-        shape_material[k] = scene.shapes[k].material;
-        shape_medium[k] = scene.materials[static_cast<std::size_t>(shape_material[k])].kind ==
-                          SceneMaterial::Kind::kMedium;
     }
-    const Box receivers = tbb::parallel_reduce(
-        tbb::blocked_range<int>(0, H), Box{},
-        [&](const tbb::blocked_range<int>& rows, Box box) {
-            // The box's corners as plain numbers (Box::add per sample is a call).
-            double lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
-            auto grow = [&](const Vec3& p) {
-                for (int c = 0; c < 3; ++c) {
-                    lo[c] = std::min(lo[c], p[c]);
-                    hi[c] = std::max(hi[c], p[c]);
-                }
-            };
-            for (int sy = rows.begin(); sy != rows.end(); ++sy) {
-                // Every entry of the row is written here (the G-buffer is only sized): the
-                // lighting layers start at 0, the rest per sample below.
-                const std::size_t row = frame.sample_index(0, sy);
-                const auto w = static_cast<std::size_t>(W);
-                std::fill_n(g.irradiance.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w,
-                            0.f);
-                std::fill_n(g.specular.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w, 0.f);
-                std::fill_n(g.translucency.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w,
-                            0.f);
-                std::fill_n(g.surface.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w, 0.f);
-                std::fill_n(g.exit_weight.begin() + static_cast<std::ptrdiff_t>(row), w, 0.f);
-                std::fill_n(g.thickness.begin() + static_cast<std::ptrdiff_t>(row), w, 0.f);
-                // Depths and shapes as they are (the raster frame holds +inf, 0 and -1 where
-                // nothing is seen, what the G-buffer holds there), in loops that vectorise.
-                {
-                    const double* vz = &frame.view_z[row];
-                    const double* rt = &frame.ray_t[row];
-                    float* gz = &g.view_z[row];
-                    float* gt = &g.ray_t[row];
-                    for (std::size_t x = 0; x < w; ++x) gz[x] = static_cast<float>(vz[x]);
-                    for (std::size_t x = 0; x < w; ++x) gt[x] = static_cast<float>(rt[x]);
-                    std::copy_n(&frame.shape[row], w, &g.shape[row]);
-                }
-                for (int sx = 0; sx < W; ++sx) {
-                    const std::size_t i = row + static_cast<std::size_t>(sx);
-                    const int s = frame.shape[i];
-                    kind[i] = Kind::kNone;
-                    // Sphere lights are not rasterized (nor in volpath's BVH): the nearest in
-                    // front of the geometry is what the sample shows.
-                    const Light* light_in_front = nullptr;
-                    if (any_sphere || s < 0) {
-                        const Vec3 d = rays.direction(sx, sy);
-                        double tl = kInf;
-                        const Light* hit = nearest_sphere(camera.position, d, tl);
-                        if (hit && (s < 0 || tl < frame.ray_t[i])) light_in_front = hit;
-                        if (s < 0) {
-                            const RGB surf = hit ? hit->L : sky(d);
-                            for (std::size_t c = 0; c < 3; ++c)
-                                g.surface[3 * i + c] = static_cast<float>(surf[c]);
-                        }
-                    }
-                    if (s < 0) {
-                        g.material[i] = -1;
-                        for (std::size_t c = 0; c < 3; ++c) g.normal[3 * i + c] = 0.f;
-                        continue;
-                    }
-                    const auto su = static_cast<std::size_t>(s);
-                    const int mat = shape_material[su];
-                    const bool medium = shape_medium[su] != 0;
-                    g.material[i] = mat;
-                    const Vec3& fn = facet[su][frame.triangle[i]];
-                    for (int c = 0; c < 3; ++c)
-                        g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(fn[c]);
-                    if (light_in_front) {  // a sphere light in front: nothing to light
-                        for (std::size_t c = 0; c < 3; ++c)
-                            g.surface[3 * i + c] = static_cast<float>(light_in_front->L[c]);
-                        continue;
-                    }
-                    if (!medium) {
-                        kind[i] = Kind::kDiffuse;
-                        grow(point_at(i, rays.unnormalized(sx, sy)));  // all the box needs
-                        continue;
-                    }
-                    // A medium is provisional until it is seen from outside (below).
-                    kind[i] = Kind::kMedium;
-                    const Receiver r = receiver_at(i, sx, sy);
-                    if (!(dot(r.n, r.wo) > 0)) {
-                        kind[i] = Kind::kNone;  // a medium seen from inside: not lit here
-                        continue;
-                    }
-                    grow(r.p);
-                    const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(mat)];
-                    g.exit_weight[i] = static_cast<float>(T.exit_weight(dot(r.n, r.wo)));
-                    if (T.alpha() == 0) {
-                        // Mirror: F times what the reflected ray sees of the sphere lights, the
-                        // environment and the suns (unoccluded).
-                        const Vec3 rd = r.n * (2 * dot(r.n, r.wo)) - r.wo;
-                        const double F = dielectric::fresnel_dielectric(dot(r.n, r.wo), T.eta());
-                        double tb = kInf;
-                        const Light* sl = nearest_sphere(r.p, rd, tb);
-                        const RGB Lr = sl ? sl->L : sky(rd);
-                        for (std::size_t c = 0; c < 3; ++c)
-                            g.specular[3 * i + c] = static_cast<float>(F * Lr[c]);
-                    }
-                }
-            }
-            box.lo = {lo[0], lo[1], lo[2]};
-            box.hi = {hi[0], hi[1], hi[2]};
-            return box;
-        },
-        [](Box a, const Box& b) {
-            if (!b.empty()) {
-                a.add(b.lo);
-                a.add(b.hi);
-            }
-            return a;
-        });
 
-    const LightPlan plan = plan_lights(scene, receivers, o);
-    const std::vector<LightSample>& samples = plan.samples;
-    const std::vector<int> spheres = sphere_lights(plan.lights);
+    // ---- The receiver pass.
+
+    // Every entry of the row starting at sample `row` that is not written per sample: the
+    // lighting layers start at 0, depths and shapes as they are (the raster frame holds +inf, 0
+    // and -1 where nothing is seen, what the G-buffer holds there), in loops that vectorise.
+    void start_row(std::size_t row) {
+        const auto w = static_cast<std::size_t>(W);
+        std::fill_n(g.irradiance.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w, 0.f);
+        std::fill_n(g.specular.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w, 0.f);
+        std::fill_n(g.translucency.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w, 0.f);
+        std::fill_n(g.surface.begin() + static_cast<std::ptrdiff_t>(3 * row), 3 * w, 0.f);
+        std::fill_n(g.exit_weight.begin() + static_cast<std::ptrdiff_t>(row), w, 0.f);
+        std::fill_n(g.thickness.begin() + static_cast<std::ptrdiff_t>(row), w, 0.f);
+        const double* vz = &frame.view_z[row];
+        const double* rt = &frame.ray_t[row];
+        float* gz = &g.view_z[row];
+        float* gt = &g.ray_t[row];
+        for (std::size_t x = 0; x < w; ++x) gz[x] = static_cast<float>(vz[x]);
+        for (std::size_t x = 0; x < w; ++x) gt[x] = static_cast<float>(rt[x]);
+        std::copy_n(&frame.shape[row], w, &g.shape[row]);
+    }
+
+    // Sample i = (sx, sy): its material, normal and kind of receiver, what it shows where no
+    // light pass lights it (a sphere light in front, the sky), and for a medium seen from
+    // outside its exit weight and a smooth boundary's mirror reflection; `box` grows by the
+    // receivers. The nearest sphere light along a ray and what a ray that meets no geometry
+    // sees (the environment and the suns' discs) from `lights`.
+    void receive_sample(std::size_t i, int sx, int sy, const std::vector<Light>& lights,
+                        bool any_sphere, RowBox& box) {
+        const int s = frame.shape[i];
+        kind[i] = Kind::kNone;
+        // Sphere lights are not rasterized (nor in volpath's BVH): the nearest in front of the
+        // geometry is what the sample shows.
+        const Light* light_in_front = nullptr;
+        if (any_sphere || s < 0) {
+            const Vec3 d = rays.direction(sx, sy);
+            double tl = kInf;
+            const Light* hit = nearest_light_surface(lights, camera.position, d, tl);
+            if (hit && (s < 0 || tl < frame.ray_t[i])) light_in_front = hit;
+            if (s < 0) {
+                const RGB surf = hit ? hit->L : escaped_radiance(lights, d);
+                for (std::size_t c = 0; c < 3; ++c)
+                    g.surface[3 * i + c] = static_cast<float>(surf[c]);
+            }
+        }
+        if (s < 0) {
+            g.material[i] = -1;
+            for (std::size_t c = 0; c < 3; ++c) g.normal[3 * i + c] = 0.f;
+            return;
+        }
+        const auto su = static_cast<std::size_t>(s);
+        const int mat = shape_material[su];
+        const bool medium = shape_medium[su] != 0;
+        g.material[i] = mat;
+        const Vec3& fn = facet[su][frame.triangle[i]];
+        for (int c = 0; c < 3; ++c)
+            g.normal[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(fn[c]);
+        if (light_in_front) {  // a sphere light in front: nothing to light
+            for (std::size_t c = 0; c < 3; ++c)
+                g.surface[3 * i + c] = static_cast<float>(light_in_front->L[c]);
+            return;
+        }
+        if (!medium) {
+            kind[i] = Kind::kDiffuse;
+            box.grow(point_at(i, rays.unnormalized(sx, sy)));  // all the box needs
+            return;
+        }
+        // A medium is provisional until it is seen from outside (below).
+        kind[i] = Kind::kMedium;
+        const Receiver r = receiver_at(i, sx, sy);
+        if (!(dot(r.n, r.wo) > 0)) {
+            kind[i] = Kind::kNone;  // a medium seen from inside: not lit here
+            return;
+        }
+        box.grow(r.p);
+        const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(mat)];
+        g.exit_weight[i] = static_cast<float>(T.exit_weight(dot(r.n, r.wo)));
+        if (T.alpha() == 0) {
+            // Mirror: F times what the reflected ray sees of the sphere lights, the
+            // environment and the suns (unoccluded).
+            const Vec3 rd = r.n * (2 * dot(r.n, r.wo)) - r.wo;
+            const double F = dielectric::fresnel_dielectric(dot(r.n, r.wo), T.eta());
+            double tb = kInf;
+            const Light* sl = nearest_light_surface(lights, r.p, rd, tb);
+            const RGB Lr = sl ? sl->L : escaped_radiance(lights, rd);
+            for (std::size_t c = 0; c < 3; ++c)
+                g.specular[3 * i + c] = static_cast<float>(F * Lr[c]);
+        }
+    }
+
+    // The first pass: every entry of the G-buffer written (receive_sample per sample), the
+    // receivers' kinds; returns the receivers' box that the shadow maps are fitted to.
+    Box receiver_pass(const std::vector<Light>& lights) {
+        const bool any_sphere = !sphere_lights(lights).empty();
+        return tbb::parallel_reduce(
+            tbb::blocked_range<int>(0, H), Box{},
+            [&](const tbb::blocked_range<int>& rows, Box box) {
+                RowBox grown(box);
+                for (int sy = rows.begin(); sy != rows.end(); ++sy) {
+                    const std::size_t row = frame.sample_index(0, sy);
+                    start_row(row);
+                    for (int sx = 0; sx < W; ++sx)
+                        receive_sample(row + static_cast<std::size_t>(sx), sx, sy, lights,
+                                       any_sphere, grown);
+                }
+                grown.store(box);
+                return box;
+            },
+            [](Box a, const Box& b) {
+                if (!b.empty()) {
+                    a.add(b.lo);
+                    a.add(b.hi);
+                }
+                return a;
+            });
+    }
+
+    // ---- The light pass.
+
     // Whether the sample can light r at all (before shadows), or give it translucency.
-    auto reaches = [&](const LightSample& s, const Receiver& r) {
+    bool reaches(const LightSample& s, const Receiver& r) const {
         if (r.kind == Kind::kNone) return false;
         Vec3 wi;
         RGB E;
@@ -654,20 +728,32 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
         const double c = dot(r.ns, wi);
         if (c > 0) return true;
         return r.kind == Kind::kMedium && (s.thickness_view || slab_of(r.material) != nullptr);
-    };
+    }
+    // Whether the sample reaches any receiver.
+    bool reaches_any(const LightSample& s) const {
+        return tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, N, 4096), false,
+            [&](const tbb::blocked_range<std::size_t>& br, bool acc) {
+                for (std::size_t i = br.begin(); i != br.end() && !acc; ++i)
+                    if (kind[i] != Kind::kNone)
+                        acc = reaches(
+                            s, receiver_at(i, static_cast<int>(i % W), static_cast<int>(i / W)));
+                return acc;
+            },
+            [](bool a, bool b) { return a || b; });
+    }
 
     // What a lit diffuse sample i of material m reflects (Lambert) of irradiance E at normal
     // incidence arriving at cosine cs > 0.
-    auto add_diffuse = [&](int m, const RGB& E, double cs, std::size_t i) {
+    void add_diffuse(int m, const RGB& E, double cs, std::size_t i) {
         const RGB& a = albedo_pi[static_cast<std::size_t>(m)];
         for (std::size_t c = 0; c < 3; ++c)
             g.surface[3 * i + c] += static_cast<float>(a[c] * E[c] * cs);
-    };
+    }
     // What a lit medium sample i receives from direction wi (irradiance E at normal
     // incidence, cosine cs > 0 to its normal): the irradiance transmitted through its boundary
     // and, for a rough one, the GGX reflection towards the camera.
-    auto add_medium = [&](const Receiver& r, const Vec3& wi, const RGB& E, double cs,
-                          std::size_t i) {
+    void add_medium(const Receiver& r, const Vec3& wi, const RGB& E, double cs, std::size_t i) {
         const BoundaryTransmittance& T = *mat_T[static_cast<std::size_t>(r.material)];
         const double t = T(cs);
         for (std::size_t c = 0; c < 3; ++c)
@@ -681,162 +767,180 @@ void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& fr
             for (std::size_t c = 0; c < 3; ++c)
                 g.specular[3 * i + c] += static_cast<float>(f * cs * E[c]);
         }
-    };
-    const bool any_slab = any_slab_table(slabs);
-    // One map at a time, its storage reused from map to map and from frame to frame (scratch
-    // of the calling thread; the result does not depend on it).
-    // (A reference: the light passes' worker threads must see this thread's map, not theirs.)
-    static thread_local ShadowMap scratch_map;
-    ShadowMap& sm = scratch_map;
-    // The cube face of each receiver (light samples with several views; per calling thread).
-    static thread_local std::vector<std::uint8_t> face_scratch;
-    std::vector<std::uint8_t>& face = face_scratch;
-    constexpr std::uint8_t kNoFace = 255;
-    double shadow_ms = 0;
-    int maps = 0;
-    for (const LightSample& s : samples) {
-        const bool any = tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, N, 4096), false,
-            [&](const tbb::blocked_range<std::size_t>& br, bool acc) {
-                for (std::size_t i = br.begin(); i != br.end() && !acc; ++i)
-                    if (kind[i] != Kind::kNone)
-                        acc = reaches(
-                            s, receiver_at(i, static_cast<int>(i % W), static_cast<int>(i / W)));
-                return acc;
-            },
-            [](bool a, bool b) { return a || b; });
-        if (!any) continue;
-        const std::vector<ShadowView> views = plan.views(s, o);
-        const bool need_map = o.shadows || s.thickness_view || any_slab;
-        // Cube faces: a receiver belongs to the first face it projects into, found once per
-        // light sample (kNoFace: none), so that each face's pass skips the others' receivers.
-        if (views.size() > 1) {
-            face.resize(N);
-            tbb::parallel_for(
-                tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
-                    for (int sy = rows.begin(); sy != rows.end(); ++sy)
-                        for (int sx = 0; sx < W; ++sx) {
-                            const std::size_t i = frame.sample_index(sx, sy);
-                            face[i] = kNoFace;
-                            if (kind[i] == Kind::kNone) continue;
-                            const std::size_t k = first_view(views, receiver_at(i, sx, sy).p);
-                            if (k < views.size()) face[i] = static_cast<std::uint8_t>(k);
-                        }
-                });
+    }
+
+    // Cube faces: a receiver belongs to the first face it projects into, found once per
+    // light sample (kNoFace: none), so that each face's pass skips the others' receivers.
+    void assign_faces(const std::vector<ShadowView>& views) {
+        face.resize(N);
+        tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
+            for (int sy = rows.begin(); sy != rows.end(); ++sy)
+                for (int sx = 0; sx < W; ++sx) {
+                    const std::size_t i = frame.sample_index(sx, sy);
+                    face[i] = kNoFace;
+                    if (kind[i] == Kind::kNone) continue;
+                    const std::size_t k = first_view(views, receiver_at(i, sx, sy).p);
+                    if (k < views.size()) face[i] = static_cast<std::uint8_t>(k);
+                }
+        });
+    }
+
+    // The common case (a delta or sun direction, a direction of the environment, one
+    // orthographic view, shadows on, no thickness, no slab tables, no sphere lights): the shadow
+    // tests of a row at once (directional_row), then what the lit samples receive.
+    void light_directional(const LightSample& s, const ShadowView& view,
+                           const ShadowView::Projection& proj) {
+        DirectionalRow k;
+        k.camera = camera.position;
+        k.forward = rays.forward;
+        k.right = rays.right;
+        k.up = rays.up;
+        k.w = s.w;
+        k.proj = proj;
+        const double texel = view.texel_size(0.0);  // orthographic: any depth
+        k.offset = o.normal_offset_texels * texel;
+        k.bias = o.depth_bias_texels * texel;
+        k.size = view.size;
+        tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
+            static thread_local std::vector<double> cos_tl;
+            static thread_local std::vector<std::uint8_t> lit_tl;
+            cos_tl.resize(static_cast<std::size_t>(W));
+            lit_tl.resize(static_cast<std::size_t>(W));
+            for (int sy = rows.begin(); sy != rows.end(); ++sy) {
+                const std::size_t row = frame.sample_index(0, sy);
+                directional_row(k, W, rays.ndc_x.data(), rays.ndc_y[static_cast<std::size_t>(sy)],
+                                &frame.view_z[row], &g.normal[3 * row], &kind[row], sm.depth.data(),
+                                cos_tl.data(), lit_tl.data());
+                for (int sx = 0; sx < W; ++sx) {
+                    const std::size_t i = row + static_cast<std::size_t>(sx);
+                    const double cs = cos_tl[static_cast<std::size_t>(sx)];
+                    if (kind[i] == Kind::kNone || !(cs > 0) ||
+                        !lit_tl[static_cast<std::size_t>(sx)])
+                        continue;
+                    const RGB& E = s.value;
+                    if (kind[i] == Kind::kDiffuse) {
+                        add_diffuse(g.material[i], E, cs, i);
+                    } else {
+                        add_medium(receiver_at(i, sx, sy), s.w, E, cs, i);
+                    }
+                }
+            }
+        });
+    }
+
+    // What light sample s gives receiver i = (sx, sy) through view `view` (projection `proj`,
+    // its map in sm where need_map): the thickness layer, the light of a lit side, the
+    // translucency of a medium lit from behind.
+    void light_receiver(const LightSample& s, const ShadowView& view,
+                        const ShadowView::Projection& proj, bool need_map, std::size_t i, int sx,
+                        int sy) {
+        const Receiver r = receiver_at(i, sx, sy);
+        Vec3 wi;
+        RGB E;
+        if (!incident_light(s, r.p, wi, E)) return;
+        const double cs = dot(r.ns, wi);
+        // The point's map coordinates, once for both lookups below.
+        const ClipVertex pc = need_map ? proj.at(r.p) : ClipVertex{};
+        // Thickness along the light's ray from the map's first hit, if that is
+        // the receiver's own shape [Jimenez10].
+        double d_thick = -1;
+        if (r.kind == Kind::kMedium && need_map &&
+            (s.thickness_view || (cs < 0 && slab_of(r.material)))) {
+            const ShadowMap::Lookup lk = sm.lookup(pc, r.p, true);
+            if (lk.inside && lk.shape == r.shape && std::isfinite(lk.map_depth))
+                d_thick =
+                    std::max(0.0, lk.point_depth - lk.map_depth_smooth) * lk.distance_per_depth;
         }
-        for (std::size_t vi = 0; vi < views.size(); ++vi) {
-            if (need_map) {
-                const auto t0 = clock::now();
-                render_shadow_map(scene, views[vi], sm);
-                shadow_ms += std::chrono::duration<double, std::milli>(clock::now() - t0).count();
-                ++maps;
+        if (s.thickness_view) g.thickness[i] = static_cast<float>(std::max(0.0, d_thick));
+        if (!s.lights) return;
+        if (cs > 0) {
+            bool lit = true;
+            if (o.shadows) lit = lit_in_map(sm, view, proj, pc, r.n, wi, o);
+            if (!lit || (!spheres.empty() && behind_sphere(plan->lights, spheres, s, r.p, wi)))
+                return;
+            if (r.kind == Kind::kDiffuse) {
+                add_diffuse(r.material, E, cs, i);
+            } else {
+                add_medium(r, wi, E, cs, i);
             }
-            const ShadowView::Projection proj = views[vi].projection();
-            const bool ortho = views[vi].orthographic;
-            // The common case (a delta or sun direction, a direction of the environment):
-            // the shadow tests of a row at once (directional_row), then what the lit samples
-            // receive.
-            if (s.directional && s.lights && views.size() == 1 && ortho && o.shadows &&
-                !s.thickness_view && !any_slab && spheres.empty()) {
-                DirectionalRow k;
-                k.camera = camera.position;
-                k.forward = rays.forward;
-                k.right = rays.right;
-                k.up = rays.up;
-                k.w = s.w;
-                k.proj = proj;
-                const double texel = views[vi].texel_size(0.0);  // orthographic: any depth
-                k.offset = o.normal_offset_texels * texel;
-                k.bias = o.depth_bias_texels * texel;
-                k.size = views[vi].size;
-                tbb::parallel_for(
-                    tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
-                        static thread_local std::vector<double> cos_tl;
-                        static thread_local std::vector<std::uint8_t> lit_tl;
-                        cos_tl.resize(static_cast<std::size_t>(W));
-                        lit_tl.resize(static_cast<std::size_t>(W));
-                        for (int sy = rows.begin(); sy != rows.end(); ++sy) {
-                            const std::size_t row = frame.sample_index(0, sy);
-                            directional_row(k, W, rays.ndc_x.data(),
-                                            rays.ndc_y[static_cast<std::size_t>(sy)],
-                                            &frame.view_z[row], &g.normal[3 * row], &kind[row],
-                                            sm.depth.data(), cos_tl.data(), lit_tl.data());
-                            for (int sx = 0; sx < W; ++sx) {
-                                const std::size_t i = row + static_cast<std::size_t>(sx);
-                                const double cs = cos_tl[static_cast<std::size_t>(sx)];
-                                if (kind[i] == Kind::kNone || !(cs > 0) ||
-                                    !lit_tl[static_cast<std::size_t>(sx)])
-                                    continue;
-                                const RGB& E = s.value;
-                                if (kind[i] == Kind::kDiffuse) {
-                                    add_diffuse(g.material[i], E, cs, i);
-                                } else {
-                                    add_medium(receiver_at(i, sx, sy), s.w, E, cs, i);
-                                }
-                            }
-                        }
-                    });
-                continue;
+        } else if (r.kind == Kind::kMedium && d_thick >= 0) {
+            if (const SlabTransmittance* st = slab_of(r.material)) {
+                const auto Ts = st->at(d_thick * scene.unit_mm);
+                for (std::size_t c = 0; c < 3; ++c)
+                    g.translucency[3 * i + c] += static_cast<float>(E[c] * (-cs) * Ts[c]);
             }
-            tbb::parallel_for(
-                tbb::blocked_range<int>(0, H, std::max(1, 1024 / W)),
-                [&](const tbb::blocked_range<int>& rows) {
-                    for (int sy = rows.begin(); sy != rows.end(); ++sy)
-                        for (int sx = 0; sx < W; ++sx) {
-                            const std::size_t i = frame.sample_index(sx, sy);
-                            if (kind[i] == Kind::kNone) continue;
-                            if (views.size() > 1 && face[i] != vi) continue;
-                            const Receiver r = receiver_at(i, sx, sy);
-                            Vec3 wi;
-                            RGB E;
-                            if (!incident_light(s, r.p, wi, E)) continue;
-                            const double cs = dot(r.ns, wi);
-                            // The point's map coordinates, once for both lookups below.
-                            const ClipVertex pc = need_map ? proj.at(r.p) : ClipVertex{};
-                            // Thickness along the light's ray from the map's first hit, if that is
-                            // the receiver's own shape [Jimenez10].
-                            double d_thick = -1;
-                            if (r.kind == Kind::kMedium && need_map &&
-                                (s.thickness_view || (cs < 0 && slab_of(r.material)))) {
-                                const ShadowMap::Lookup lk = sm.lookup(pc, r.p, true);
-                                if (lk.inside && lk.shape == r.shape && std::isfinite(lk.map_depth))
-                                    d_thick = std::max(0.0, lk.point_depth - lk.map_depth_smooth) *
-                                              lk.distance_per_depth;
-                            }
-                            if (s.thickness_view)
-                                g.thickness[i] = static_cast<float>(std::max(0.0, d_thick));
-                            if (!s.lights) continue;
-                            if (cs > 0) {
-                                bool lit = true;
-                                if (o.shadows)
-                                    lit = lit_in_map(sm, views[vi], proj, pc, r.n, wi, o);
-                                if (!lit || (!spheres.empty() &&
-                                             behind_sphere(plan.lights, spheres, s, r.p, wi)))
-                                    continue;
-                                if (r.kind == Kind::kDiffuse) {
-                                    add_diffuse(r.material, E, cs, i);
-                                } else {
-                                    add_medium(r, wi, E, cs, i);
-                                }
-                            } else if (r.kind == Kind::kMedium && d_thick >= 0) {
-                                if (const SlabTransmittance* st = slab_of(r.material)) {
-                                    const auto Ts = st->at(d_thick * scene.unit_mm);
-                                    for (std::size_t c = 0; c < 3; ++c)
-                                        g.translucency[3 * i + c] +=
-                                            static_cast<float>(E[c] * (-cs) * Ts[c]);
-                                }
-                            }
-                        }
-                });
         }
     }
 
+    // View vi of light sample s: its shadow map (need_map), then what it gives the receivers
+    // (light_directional where that applies, light_receiver per receiver of the view).
+    void light_view(const LightSample& s, const std::vector<ShadowView>& views, std::size_t vi,
+                    bool need_map) {
+        using clock = std::chrono::steady_clock;
+        if (need_map) {
+            const auto t0 = clock::now();
+            render_shadow_map(scene, views[vi], sm);
+            shadow_ms += std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+            ++maps;
+        }
+        const ShadowView::Projection proj = views[vi].projection();
+        const bool ortho = views[vi].orthographic;
+        if (s.directional && s.lights && views.size() == 1 && ortho && o.shadows &&
+            !s.thickness_view && !any_slab && spheres.empty()) {
+            light_directional(s, views[vi], proj);
+            return;
+        }
+        tbb::parallel_for(tbb::blocked_range<int>(0, H, std::max(1, 1024 / W)),
+                          [&](const tbb::blocked_range<int>& rows) {
+                              for (int sy = rows.begin(); sy != rows.end(); ++sy)
+                                  for (int sx = 0; sx < W; ++sx) {
+                                      const std::size_t i = frame.sample_index(sx, sy);
+                                      if (kind[i] == Kind::kNone) continue;
+                                      if (views.size() > 1 && face[i] != vi) continue;
+                                      light_receiver(s, views[vi], proj, need_map, i, sx, sy);
+                                  }
+                          });
+    }
+
+    // The light samples of `light_plan` in order, each one's views in turn (a sample that
+    // reaches no receiver renders no map).
+    void light_pass(const LightPlan& light_plan) {
+        plan = &light_plan;
+        spheres = sphere_lights(light_plan.lights);
+        any_slab = any_slab_table(slabs);
+        for (const LightSample& s : light_plan.samples) {
+            if (!reaches_any(s)) continue;
+            const std::vector<ShadowView> views = light_plan.views(s, o);
+            const bool need_map = o.shadows || s.thickness_view || any_slab;
+            if (views.size() > 1) assign_faces(views);
+            for (std::size_t vi = 0; vi < views.size(); ++vi) light_view(s, views, vi, need_map);
+        }
+    }
+};
+
+}  // namespace
+
+void shade(const Scene& scene, const RasterCamera& camera, const RasterFrame& frame,
+           const LightingOptions& o, const std::vector<SlabTransmittance>& slabs,
+           LightingStats* stats, GBuffer& out) {
+    using clock = std::chrono::steady_clock;
+    const auto t_start = clock::now();
+    check_lighting_inputs(camera, frame, o);
+    ShadePass pass(scene, camera, frame, o, slabs, out);
+    // The scene's lights resolved once (core/light.h): what the receiver pass's rays see of
+    // them, then the plan's (LightPlan::lights) for the light pass.
+    std::vector<Light> lights(scene.lights.begin(), scene.lights.end());
+    const Box receivers = pass.receiver_pass(lights);
+    const LightPlan plan = plan_lights(scene, receivers, o, std::move(lights));
+    pass.light_pass(plan);
+
     if (stats) {
-        stats->shadow_maps = maps;
-        stats->light_samples = static_cast<int>(samples.size());
-        stats->shadow_ms = shadow_ms;
+        stats->shadow_maps = pass.maps;
+        stats->light_samples = static_cast<int>(plan.samples.size());
+        stats->shadow_ms = pass.shadow_ms;
         stats->shading_ms =
-            std::chrono::duration<double, std::milli>(clock::now() - t_start).count() - shadow_ms;
+            std::chrono::duration<double, std::milli>(clock::now() - t_start).count() -
+            pass.shadow_ms;
     }
 }
 

@@ -180,6 +180,11 @@ struct LightPlan {
 /// (Fibonacci), for receivers within `receivers`: sphere lights sample the cap of them that
 /// the box can see (none for an empty box).
 LightPlan plan_lights(const Scene& scene, const Box& receivers, const LightingOptions& o);
+/// The same with the scene's lights already resolved (`resolved`: Light(scene.lights[k]) for
+/// every k, in order), moved into LightPlan::lights: what a pass that reads the lights before it
+/// plans (shade(), the GL twin) resolves once. std::invalid_argument if the count differs.
+LightPlan plan_lights(const Scene& scene, const Box& receivers, const LightingOptions& o,
+                      std::vector<Light> resolved);
 
 struct LightingStats {
     int shadow_maps = 0;
