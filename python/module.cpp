@@ -127,19 +127,8 @@ py::dict image_layers(const LayeredImage& img) {
     return d;
 }
 
-}  // namespace
-
-}  // namespace ssslab::python
-
-PYBIND11_MODULE(ssslab, m) {
-    using namespace ssslab;
-    using namespace ssslab::python;
-    m.doc() =
-        "ssslab: Monte Carlo ground truth for subsurface scattering (an MCML port and a volumetric "
-        "path tracer) and the approximations renderers use, scored against it. Units are in the "
-        "names: coefficients per cm, R_d per cm^2.";
-    m.attr("__version__") = SSSLAB_VERSION;
-
+// ssslab.InputError, InfeasibleError and IoError, and the translation of the C++ errors into them.
+void bind_errors(py::module_& m) {
     // Bad input carries its location (file:line:column, key, the offending line) in the message.
     static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
     static py::exception<InfeasibleError> infeasible_error(m, "InfeasibleError", PyExc_ValueError);
@@ -155,7 +144,10 @@ PYBIND11_MODULE(ssslab, m) {
             io_error(e.what());
         }
     });
+}
 
+// ssslab.Medium and the measured materials.
+void bind_media(py::module_& m) {
     // ---- Media --------------------------------------------------------------------------------
     py::class_<Medium>(m, "Medium",
                        "A homogeneous slab per RGB channel: coefficients per cm, Henyey-Greenstein "
@@ -227,7 +219,10 @@ PYBIND11_MODULE(ssslab, m) {
             return *md;
         },
         py::arg("name"), "A measured material by name (case-insensitive), e.g. \"Skin1\".");
+}
 
+// ssslab.Profile and read_profile.
+void bind_profiles(py::module_& m) {
     // ---- Radial profiles ----------------------------------------------------------------------
     py::class_<RadialProfile>(m, "Profile",
                               "A radial diffuse reflectance profile R_d(r) per RGB channel with "
@@ -267,7 +262,10 @@ PYBIND11_MODULE(ssslab, m) {
             py::arg("unit") = "mm");
     m.def("read_profile", &read_profile_csv, py::arg("path"),
           "A profile from a CSV written by ssslab (either unit).");
+}
 
+// The two Monte Carlo engines' pencil beams: mcml_profile, pencil_profile.
+void bind_engines(py::module_& m) {
     m.def(
         "mcml_profile",
         [](const Medium& md, std::optional<double> photons, std::optional<double> seconds,
@@ -312,7 +310,10 @@ PYBIND11_MODULE(ssslab, m) {
         py::arg("nr") = py::none(),
         "The same pencil beam by the path tracer, the independent engine: (all diffuse "
         "reflectance, its single-scattering part), both Profiles.");
+}
 
+// The analytic diffusion profiles: diffusion_models, diffusion_profile.
+void bind_diffusion(py::module_& m) {
     // ---- Analytic profiles --------------------------------------------------------------------
     m.def("diffusion_models", &approx::diffusion_model_names,
           "The analytic profile models: dipole, better-dipole, multipole, qd, pbd, burley-*.");
@@ -363,7 +364,10 @@ PYBIND11_MODULE(ssslab, m) {
         "entry Fresnel factor: multiply by 1 - rsp to compare with the Monte Carlo profiles). "
         "With annulus=True, r_cm are bin edges and each value the area mean over [r_i, r_i+1) "
         "(the last is NaN).");
+}
 
+// The separable kernel models and their scores: kernel_models, score_kernel.
+void bind_kernels(py::module_& m) {
     // ---- Kernel models ------------------------------------------------------------------------
     m.def("kernel_models", &approx::model_names,
           "The separable kernel models' names (built-in and registered).");
@@ -417,7 +421,10 @@ PYBIND11_MODULE(ssslab, m) {
         "it in kernel space: rms, max_abs, l1_error, radial_asymmetry; the model's 1D factors "
         "(rank, n) as cell masses at x = (i + 1/2) h_mm and their signs. `material` names a "
         "Freude14 Table A.1 row for manual:table_a1.");
+}
 
+// Scene rendering and the experiment runner: render, run_experiment.
+void bind_scenes(py::module_& m) {
     // ---- Scenes and experiments ---------------------------------------------------------------
     m.def(
         "render",
@@ -478,4 +485,25 @@ PYBIND11_MODULE(ssslab, m) {
         "Run an experiment config as `ssslab run` does (cache under <results>/cache/, outputs "
         "in <results>/<name>/): its directory, what was computed and reused, and its metrics "
         "as {name: (value, standard error)}.");
+}
+
+}  // namespace
+
+}  // namespace ssslab::python
+
+PYBIND11_MODULE(ssslab, m) {
+    using namespace ssslab::python;
+    m.doc() =
+        "ssslab: Monte Carlo ground truth for subsurface scattering (an MCML port and a volumetric "
+        "path tracer) and the approximations renderers use, scored against it. Units are in the "
+        "names: coefficients per cm, R_d per cm^2.";
+    m.attr("__version__") = SSSLAB_VERSION;
+
+    bind_errors(m);
+    bind_media(m);
+    bind_profiles(m);
+    bind_engines(m);
+    bind_diffusion(m);
+    bind_kernels(m);
+    bind_scenes(m);
 }

@@ -168,244 +168,326 @@ KernelStudySpec read_kernel_study(ConfigTable& t, const std::vector<std::string>
     return s;
 }
 
-std::map<std::string, std::string> run_kernel_study(
-    const KernelStudySpec& spec, const std::map<std::string, RadialProfile>& profiles,
-    std::string& summary) {
-    std::map<std::string, std::string> files;
-    std::ostringstream kernels, image, singular, slices, versus;
-    kernels << "material,channel,model,label,rank,convolutions_1d,build_s,kernel_rms,max_abs,"
-               "sum,l1_error,radial_asymmetry,constraint_error,iterations,grid_n,h_mm\n";
-    image << "material,signal,model,label,sampling,channel,rms,max_abs,energy,fov_mm,pixels\n";
-    singular << "material,channel,index,sigma,sigma_over_sigma1\n";
-    slices << "material,channel,model,direction,r_mm,value_per_mm2\n";
-    versus << "material,signal,model,reference,channel,rms\n";
-    struct Rms {
-        std::string material, column, spec;
-        int channel;
-        double rms;
-    };
-    std::vector<Rms> for_compare;
-    // Per model, over materials and channels: what Table 5.1 lists, measured.
-    struct Aggregate {
-        int rank = 0, convolutions = 0, kernels = 0;
-        double build_sum = 0, build_max = 0, kernel_rms_sum = 0, l1_error_max = 0;
-        double image_rms_sum = 0, taps_rms_sum = 0;
-        int images = 0, taps_images = 0;
-    };
-    std::vector<Aggregate> agg(spec.models.size());
-    // Regression metrics (`ssslab check`): deterministic functions of the fixed-seed profiles.
-    std::ostringstream metrics;
-    metrics << "metric,unit,value,tolerance\n";
-    auto metric = [&](const std::string& name, const char* unit, double v) {
-        metrics << name << ',' << unit << ',' << format_g(v, 17) << ",1e-4\n";
-    };
-    const auto t0 = Clock::now();
+namespace {
 
-    for (const auto& material : spec.materials) {
-        const RadialProfile& profile = profiles.at(material);
-        const approx::KernelGrid grid = approx::KernelGrid::from_profile(profile, spec.refine);
-        std::vector<std::unique_ptr<approx::Kernel2D>> k;
+// One model's kernel-space RMS in one channel, for the Table 6.3 comparison.
+struct Rms {
+    std::string material, column, spec;
+    int channel;
+    double rms;
+};
+
+// Per model, over materials and channels: what Table 5.1 lists, measured.
+struct Aggregate {
+    int rank = 0, convolutions = 0, kernels = 0;
+    double build_sum = 0, build_max = 0, kernel_rms_sum = 0, l1_error_max = 0;
+    double image_rms_sum = 0, taps_rms_sum = 0;
+    int images = 0, taps_images = 0;
+};
+
+using SignalImages = std::pair<approx::ImageRGB, approx::ImageRGB>;
+
+// The image grid: given, or 8 times the radius holding 90 % of the widest channel's
+// pre-integrated kernel.
+double image_fov(const KernelStudySpec& spec,
+                 const std::vector<std::unique_ptr<approx::Kernel2D>>& k,
+                 const approx::KernelGrid& grid) {
+    double fov = spec.fov_mm;
+    if (fov <= 0) {
+        double r90 = 0;
+        for (int c = 0; c < 3; ++c) {
+            const approx::ModelResult p = approx::preintegration(*k[static_cast<size_t>(c)]);
+            r90 = std::max(r90, mass_radius(p.kernel.terms[0].a, grid.h_mm, 0.9));
+        }
+        fov = 8.0 * r90;
+    }
+    return fov;
+}
+
+// One material of a study: its three 2D kernels, the image grid, the test signals made so far
+// and the models built from its kernels.
+struct MaterialKernels {
+    std::string material;
+    approx::KernelGrid grid;
+    std::vector<std::unique_ptr<approx::Kernel2D>> k;
+    double fov = 0;
+    approx::SignalParams sp;
+    // Each signal and its exact convolution, made once (image-space fits use them too).
+    std::map<approx::Signal, SignalImages> signal_images;
+    // Models, per channel.
+    std::vector<std::array<approx::ModelResult, 3>> built;
+
+    MaterialKernels(const KernelStudySpec& spec, const std::string& material_,
+                    const RadialProfile& profile)
+        : material(material_), grid(approx::KernelGrid::from_profile(profile, spec.refine)) {
         for (int c = 0; c < 3; ++c)
             k.push_back(std::make_unique<approx::Kernel2D>(profile, c, grid));
+    }
 
-        if (spec.singular_values > 0)
-            for (int c = 0; c < 3; ++c) {
-                const auto sv =
-                    approx::singular_values(*k[static_cast<size_t>(c)], spec.singular_values);
-                for (size_t i = 0; i < sv.size(); ++i) {
-                    singular << material << ',' << kChannelNames[c] << ',' << i + 1 << ','
-                             << format_g(sv[i], 8) << ',' << format_g(sv[i] / sv[0], 8) << '\n';
-                    if (i > 0 && i < 6)
-                        metric(spec.name + "." + material + "." + kChannelNames[c] + ".sigma" +
-                                   std::to_string(i + 1) + "_over_sigma1",
-                               "1", sv[i] / sv[0]);
-                }
-            }
-
-        // The image grid: given, or 8 times the radius holding 90 % of the widest channel's
-        // pre-integrated kernel.
-        double fov = spec.fov_mm;
-        if (fov <= 0) {
-            double r90 = 0;
-            for (int c = 0; c < 3; ++c) {
-                const approx::ModelResult p = approx::preintegration(*k[static_cast<size_t>(c)]);
-                r90 = std::max(r90, mass_radius(p.kernel.terms[0].a, grid.h_mm, 0.9));
-            }
-            fov = 8.0 * r90;
-        }
-        approx::SignalParams sp;
+    // The image grid's signal parameters, once the kernels are known.
+    void set_image_grid(const KernelStudySpec& spec) {
+        fov = image_fov(spec, k, grid);
         sp.size = spec.pixels;
         sp.pixel_mm = fov / spec.pixels;
         sp.dot_radius_mm = fov / 64.0;
-        // Each signal and its exact convolution, made once (image-space fits use them too).
-        std::map<approx::Signal, std::pair<approx::ImageRGB, approx::ImageRGB>> signal_images;
-        auto images_of =
-            [&](approx::Signal sig) -> const std::pair<approx::ImageRGB, approx::ImageRGB>& {
-            auto it = signal_images.find(sig);
-            if (it == signal_images.end()) {
-                approx::ImageRGB e = approx::make_signal(sig, sp);
-                approx::ImageRGB exact =
-                    approx::convolve_exact(e, {k[0].get(), k[1].get(), k[2].get()});
-                it = signal_images.emplace(sig, std::make_pair(std::move(e), std::move(exact)))
-                         .first;
-            }
-            return it->second;
-        };
+    }
 
-        // Models, per channel.
-        std::vector<std::array<approx::ModelResult, 3>> built;
-        for (const auto& m : spec.models) {
-            std::array<approx::ModelResult, 3> r;
-            for (int c = 0; c < 3; ++c) {
-                r[static_cast<size_t>(c)] =
-                    approx::build_model(m, *k[static_cast<size_t>(c)], {material, c, images_of});
-                const approx::ModelResult& x = r[static_cast<size_t>(c)];
-                const approx::KernelErrors e =
-                    approx::kernel_errors(*k[static_cast<size_t>(c)], x.kernel);
-                auto info = [&](const char* key) {
-                    const auto it = x.info.find(key);
-                    return it == x.info.end() ? std::string() : format_g(it->second, 8);
-                };
-                kernels << material << ',' << kChannelNames[c] << ",\"" << m.text << "\","
-                        << m.label() << ',' << x.kernel.rank() << ',' << x.kernel.convolutions_1d()
-                        << ',' << format_g(x.build_seconds, 8) << ',' << format_g(e.rms, 8) << ','
-                        << format_g(e.max_abs, 8) << ',' << format_g(x.kernel.sum(), 8) << ','
-                        << format_g(e.l1_error, 8) << ',' << format_g(e.radial_asymmetry, 8) << ','
-                        << info("constraint_error") << ',' << info("iterations") << ',' << grid.n
-                        << ',' << format_g(grid.h_mm, 8) << '\n';
-                const std::string col = thesis_column(m);
-                if (!col.empty()) for_compare.push_back({material, col, m.text, c, e.rms});
-                Aggregate& g = agg[static_cast<size_t>(&m - spec.models.data())];
-                g.rank = std::max(g.rank, x.kernel.rank());
-                g.convolutions = std::max(g.convolutions, x.kernel.convolutions_1d());
-                ++g.kernels;
-                g.build_sum += x.build_seconds;
-                g.build_max = std::max(g.build_max, x.build_seconds);
-                g.kernel_rms_sum += e.rms;
-                g.l1_error_max = std::max(g.l1_error_max, std::fabs(e.l1_error));
-                metric(spec.name + "." + material + "." + m.label() + "." + kChannelNames[c] +
-                           ".kernel_rms",
-                       "1", e.rms);
-            }
-            built.push_back(std::move(r));
+    // A signal and its exact convolution with the three kernels, made at the first call.
+    const SignalImages& images_of(approx::Signal sig) {
+        auto it = signal_images.find(sig);
+        if (it == signal_images.end()) {
+            approx::ImageRGB e = approx::make_signal(sig, sp);
+            approx::ImageRGB exact =
+                approx::convolve_exact(e, {k[0].get(), k[1].get(), k[2].get()});
+            it = signal_images.emplace(sig, std::make_pair(std::move(e), std::move(exact))).first;
         }
+        return it->second;
+    }
+};
 
-        if (spec.kernel_plots) {
-            // Slices as Freude14 Fig. 6.2: along the main axis (cells (i, 0)) and the diagonal
-            // (cells (i, i)), at most 400 points each.
-            for (int c = 0; c < 3; ++c) {
-                const approx::Kernel2D& kc = *k[static_cast<size_t>(c)];
-                const int n = kc.n(), stride = std::max(1, n / 400);
-                const double h = kc.h_mm(), area = h * h;
-                auto emit = [&](const std::string& model, auto value) {
-                    for (int i = 0; i < n; i += stride) {
-                        slices << material << ',' << kChannelNames[c] << ',' << model << ",axis,"
-                               << format_g(std::sqrt((i + 0.5) * (i + 0.5) + 0.25) * h, 8) << ','
-                               << format_g(value(i, 0) / area, 8) << '\n';
-                        slices << material << ',' << kChannelNames[c] << ',' << model
-                               << ",diagonal," << format_g((i + 0.5) * std::sqrt(2.0) * h, 8) << ','
-                               << format_g(value(i, i) / area, 8) << '\n';
-                    }
-                };
-                emit("ground_truth", [&](int i, int j) { return kc.at(i, j); });
-                for (size_t mi = 0; mi < built.size(); ++mi) {
-                    const approx::SeparableKernel& sk = built[mi][static_cast<size_t>(c)].kernel;
-                    emit(spec.models[mi].label(), [&](int i, int j) { return sk.at(i, j); });
-                }
-            }
-        }
+// One kernel study's run: its tables, metrics and files, filled material by material.
+class KernelStudyRun {
+  public:
+    explicit KernelStudyRun(const KernelStudySpec& spec) : spec_(spec), agg_(spec.models.size()) {
+        kernels_ << "material,channel,model,label,rank,convolutions_1d,build_s,kernel_rms,"
+                    "max_abs,sum,l1_error,radial_asymmetry,constraint_error,iterations,grid_n,"
+                    "h_mm\n";
+        image_ << "material,signal,model,label,sampling,channel,rms,max_abs,energy,fov_mm,pixels\n";
+        singular_ << "material,channel,index,sigma,sigma_over_sigma1\n";
+        slices_ << "material,channel,model,direction,r_mm,value_per_mm2\n";
+        versus_ << "material,signal,model,reference,channel,rms\n";
+        metrics_ << "metric,unit,value,tolerance\n";
+    }
 
-        if (!spec.signals.empty()) {
-            for (approx::Signal sig : spec.signals) {
-                // Not a structured binding: lambdas below capture them (Clang 14 cannot).
-                const auto& images = images_of(sig);
-                const auto& e = std::get<0>(images);
-                const auto& exact = std::get<1>(images);
-                const std::string dir = "images/" + material + "/" + approx::signal_name(sig) + "/";
-                std::vector<std::pair<std::string, approx::ImageRGB>> outs;
-                auto record = [&](const approx::ModelSpec& m, const std::string& sampling,
-                                  const approx::ImageRGB& out) {
-                    const approx::ImageErrors ie = approx::image_errors(out, exact);
-                    const double mean_rms = (ie.rms[0] + ie.rms[1] + ie.rms[2]) / 3.0;
-                    Aggregate& g = agg[static_cast<size_t>(&m - spec.models.data())];
-                    if (sampling == "full") {
-                        g.image_rms_sum += mean_rms;
-                        ++g.images;
-                    } else if (sampling.find("jitter") == std::string::npos) {
-                        g.taps_rms_sum += mean_rms;
-                        ++g.taps_images;
-                    }
-                    metric(spec.name + "." + material + "." + approx::signal_name(sig) + "." +
-                               m.label() + "." + sampling + ".image_rms",
-                           "1", mean_rms);
-                    for (int c = 0; c < 3; ++c)
-                        image << material << ',' << approx::signal_name(sig) << ",\"" << m.text
-                              << "\"," << m.label() << ',' << sampling << ',' << kChannelNames[c]
-                              << ',' << format_g(ie.rms[static_cast<size_t>(c)], 8) << ','
-                              << format_g(ie.max_abs[static_cast<size_t>(c)], 8) << ','
-                              << format_g(ie.energy[static_cast<size_t>(c)], 8) << ','
-                              << format_g(fov, 8) << ',' << spec.pixels << '\n';
-                };
-                for (size_t mi = 0; mi < built.size(); ++mi) {
-                    const auto& m = spec.models[mi];
-                    const std::array<const approx::SeparableKernel*, 3> a = {
-                        &built[mi][0].kernel, &built[mi][1].kernel, &built[mi][2].kernel};
-                    const approx::ImageRGB full = approx::convolve_separable(e, a);
-                    record(m, "full", full);
-                    outs.push_back({m.label(), full});
-                    if (spec.taps > 0 && built[mi][0].kernel.rank() == 1) {
-                        const approx::TapKernel taps = approx::make_taps(a, spec.taps);
-                        record(m, "taps" + std::to_string(spec.taps),
-                               approx::convolve_taps(e, taps, 0.0));
-                        if (spec.jitter > 0)
-                            record(m, "taps" + std::to_string(spec.taps) + "_jitter",
-                                   approx::convolve_taps(e, taps, spec.jitter));
-                    }
-                }
-                if (!spec.reference.empty()) {
-                    const approx::ImageRGB* ref = nullptr;
-                    for (size_t mi = 0; mi < built.size(); ++mi)
-                        if (spec.models[mi].text == spec.reference) ref = &outs[mi].second;
-                    for (size_t mi = 0; mi < built.size(); ++mi) {
-                        if (&outs[mi].second == ref) continue;
-                        const approx::ImageErrors ie = approx::image_errors(outs[mi].second, *ref);
-                        for (int c = 0; c < 3; ++c)
-                            versus << material << ',' << approx::signal_name(sig) << ",\""
-                                   << spec.models[mi].text << "\",\"" << spec.reference << "\","
-                                   << kChannelNames[c] << ','
-                                   << format_g(ie.rms[static_cast<size_t>(c)], 8) << '\n';
-                    }
-                }
-                if (spec.images) {
-                    files[dir + "input.png"] = png_of(e);
-                    files[dir + "exact.png"] = png_of(exact);
-                    // Differences normalised across the models of this signal, as the thesis.
-                    double scale = 1e-30;
-                    for (const auto& [label, out] : outs) {
-                        const approx::ImageErrors ie = approx::image_errors(out, exact);
-                        for (double v : ie.max_abs) scale = std::max(scale, v);
-                    }
-                    for (const auto& [label, out] : outs) {
-                        files[dir + label + ".png"] = png_of(out);
-                        files[dir + label + "_diff.png"] = encode_png_rgb8(
-                            out.width, out.height, approx::difference_rgb8(out, exact, scale));
-                    }
-                }
+    // Every table and study of one material.
+    void add_material(const std::string& material, const RadialProfile& profile) {
+        MaterialKernels mk(spec_, material, profile);
+        if (spec_.singular_values > 0) write_singular_values(mk);
+        mk.set_image_grid(spec_);
+        build_models(mk);
+        if (spec_.kernel_plots) write_slices(mk);
+        for (approx::Signal sig : spec_.signals) score_signal(mk, sig);
+    }
+
+    // The files of the study (after every material).
+    std::map<std::string, std::string> files() {
+        files_["kernels.csv"] = kernels_.str();
+        if (!spec_.signals.empty()) files_["image.csv"] = image_.str();
+        if (spec_.singular_values > 0) files_["singular_values.csv"] = singular_.str();
+        if (spec_.kernel_plots) files_["slices.csv"] = slices_.str();
+        if (!spec_.reference.empty()) files_["image_vs_reference.csv"] = versus_.str();
+        if (spec_.compare == "freude14_table_6_3") files_["comparison.csv"] = comparison_csv();
+        if (!spec_.models.empty()) files_["properties.csv"] = properties_csv();
+        files_["metrics.csv"] = metrics_.str();
+        return std::move(files_);
+    }
+
+  private:
+    const KernelStudySpec& spec_;
+    std::map<std::string, std::string> files_;
+    std::ostringstream kernels_, image_, singular_, slices_, versus_;
+    std::vector<Rms> for_compare_;
+    std::vector<Aggregate> agg_;
+    // Regression metrics (`ssslab check`): deterministic functions of the fixed-seed profiles.
+    std::ostringstream metrics_;
+
+    // One regression metric.
+    void metric(const std::string& name, const char* unit, double v) {
+        metrics_ << name << ',' << unit << ',' << format_g(v, 17) << ",1e-4\n";
+    }
+
+    // The aggregate of model m (a reference into spec_.models).
+    Aggregate& aggregate_of(const approx::ModelSpec& m) {
+        return agg_[static_cast<size_t>(&m - spec_.models.data())];
+    }
+
+    // The leading singular values of each channel's kernel (Freude14 Fig. 5.1).
+    void write_singular_values(const MaterialKernels& mk) {
+        for (int c = 0; c < 3; ++c) {
+            const auto sv =
+                approx::singular_values(*mk.k[static_cast<size_t>(c)], spec_.singular_values);
+            for (size_t i = 0; i < sv.size(); ++i) {
+                singular_ << mk.material << ',' << kChannelNames[c] << ',' << i + 1 << ','
+                          << format_g(sv[i], 8) << ',' << format_g(sv[i] / sv[0], 8) << '\n';
+                if (i > 0 && i < 6)
+                    metric(spec_.name + "." + mk.material + "." + kChannelNames[c] + ".sigma" +
+                               std::to_string(i + 1) + "_over_sigma1",
+                           "1", sv[i] / sv[0]);
             }
         }
     }
 
-    files["kernels.csv"] = kernels.str();
-    if (!spec.signals.empty()) files["image.csv"] = image.str();
-    if (spec.singular_values > 0) files["singular_values.csv"] = singular.str();
-    if (spec.kernel_plots) files["slices.csv"] = slices.str();
-    if (!spec.reference.empty()) files["image_vs_reference.csv"] = versus.str();
-    if (spec.compare == "freude14_table_6_3") {
+    // Every model for every channel, scored in kernel space.
+    void build_models(MaterialKernels& mk) {
+        auto fit = [&mk](approx::Signal sig) -> const SignalImages& { return mk.images_of(sig); };
+        for (const auto& m : spec_.models) {
+            std::array<approx::ModelResult, 3> r;
+            for (int c = 0; c < 3; ++c) {
+                r[static_cast<size_t>(c)] =
+                    approx::build_model(m, *mk.k[static_cast<size_t>(c)], {mk.material, c, fit});
+                record_kernel(mk, m, c, r[static_cast<size_t>(c)]);
+            }
+            mk.built.push_back(std::move(r));
+        }
+    }
+
+    // One built model's kernel-space errors: its row, its share of the aggregate, its metric.
+    void record_kernel(const MaterialKernels& mk, const approx::ModelSpec& m, int c,
+                       const approx::ModelResult& x) {
+        const approx::KernelErrors e =
+            approx::kernel_errors(*mk.k[static_cast<size_t>(c)], x.kernel);
+        auto info = [&](const char* key) {
+            const auto it = x.info.find(key);
+            return it == x.info.end() ? std::string() : format_g(it->second, 8);
+        };
+        kernels_ << mk.material << ',' << kChannelNames[c] << ",\"" << m.text << "\"," << m.label()
+                 << ',' << x.kernel.rank() << ',' << x.kernel.convolutions_1d() << ','
+                 << format_g(x.build_seconds, 8) << ',' << format_g(e.rms, 8) << ','
+                 << format_g(e.max_abs, 8) << ',' << format_g(x.kernel.sum(), 8) << ','
+                 << format_g(e.l1_error, 8) << ',' << format_g(e.radial_asymmetry, 8) << ','
+                 << info("constraint_error") << ',' << info("iterations") << ',' << mk.grid.n << ','
+                 << format_g(mk.grid.h_mm, 8) << '\n';
+        const std::string col = thesis_column(m);
+        if (!col.empty()) for_compare_.push_back({mk.material, col, m.text, c, e.rms});
+        Aggregate& g = aggregate_of(m);
+        g.rank = std::max(g.rank, x.kernel.rank());
+        g.convolutions = std::max(g.convolutions, x.kernel.convolutions_1d());
+        ++g.kernels;
+        g.build_sum += x.build_seconds;
+        g.build_max = std::max(g.build_max, x.build_seconds);
+        g.kernel_rms_sum += e.rms;
+        g.l1_error_max = std::max(g.l1_error_max, std::fabs(e.l1_error));
+        metric(spec_.name + "." + mk.material + "." + m.label() + "." + kChannelNames[c] +
+                   ".kernel_rms",
+               "1", e.rms);
+    }
+
+    // Slices as Freude14 Fig. 6.2: along the main axis (cells (i, 0)) and the diagonal
+    // (cells (i, i)), at most 400 points each.
+    void write_slices(const MaterialKernels& mk) {
+        for (int c = 0; c < 3; ++c) {
+            const approx::Kernel2D& kc = *mk.k[static_cast<size_t>(c)];
+            const int n = kc.n(), stride = std::max(1, n / 400);
+            const double h = kc.h_mm(), area = h * h;
+            auto emit = [&](const std::string& model, auto value) {
+                for (int i = 0; i < n; i += stride) {
+                    slices_ << mk.material << ',' << kChannelNames[c] << ',' << model << ",axis,"
+                            << format_g(std::sqrt((i + 0.5) * (i + 0.5) + 0.25) * h, 8) << ','
+                            << format_g(value(i, 0) / area, 8) << '\n';
+                    slices_ << mk.material << ',' << kChannelNames[c] << ',' << model
+                            << ",diagonal," << format_g((i + 0.5) * std::sqrt(2.0) * h, 8) << ','
+                            << format_g(value(i, i) / area, 8) << '\n';
+                }
+            };
+            emit("ground_truth", [&](int i, int j) { return kc.at(i, j); });
+            for (size_t mi = 0; mi < mk.built.size(); ++mi) {
+                const approx::SeparableKernel& sk = mk.built[mi][static_cast<size_t>(c)].kernel;
+                emit(spec_.models[mi].label(), [&](int i, int j) { return sk.at(i, j); });
+            }
+        }
+    }
+
+    // Every model applied to one test signal (full resolution, taps, jittered taps), scored
+    // against the exact convolution and, with a reference, against the reference model's image.
+    void score_signal(MaterialKernels& mk, approx::Signal sig) {
+        // Not a structured binding: lambdas below capture them (Clang 14 cannot).
+        const auto& images = mk.images_of(sig);
+        const auto& e = std::get<0>(images);
+        const auto& exact = std::get<1>(images);
+        std::vector<std::pair<std::string, approx::ImageRGB>> outs;
+        auto record = [&](const approx::ModelSpec& m, const std::string& sampling,
+                          const approx::ImageRGB& out) {
+            record_image(mk, sig, m, sampling, out, exact);
+        };
+        for (size_t mi = 0; mi < mk.built.size(); ++mi) {
+            const auto& m = spec_.models[mi];
+            const std::array<const approx::SeparableKernel*, 3> a = {
+                &mk.built[mi][0].kernel, &mk.built[mi][1].kernel, &mk.built[mi][2].kernel};
+            const approx::ImageRGB full = approx::convolve_separable(e, a);
+            record(m, "full", full);
+            outs.push_back({m.label(), full});
+            if (spec_.taps > 0 && mk.built[mi][0].kernel.rank() == 1) {
+                const approx::TapKernel taps = approx::make_taps(a, spec_.taps);
+                record(m, "taps" + std::to_string(spec_.taps), approx::convolve_taps(e, taps, 0.0));
+                if (spec_.jitter > 0)
+                    record(m, "taps" + std::to_string(spec_.taps) + "_jitter",
+                           approx::convolve_taps(e, taps, spec_.jitter));
+            }
+        }
+        if (!spec_.reference.empty()) write_versus_reference(mk, sig, outs);
+        if (spec_.images) write_images(mk, sig, e, exact, outs);
+    }
+
+    // One model's image of a signal against the exact one: its rows, aggregate and metric.
+    void record_image(const MaterialKernels& mk, approx::Signal sig, const approx::ModelSpec& m,
+                      const std::string& sampling, const approx::ImageRGB& out,
+                      const approx::ImageRGB& exact) {
+        const approx::ImageErrors ie = approx::image_errors(out, exact);
+        const double mean_rms = (ie.rms[0] + ie.rms[1] + ie.rms[2]) / 3.0;
+        Aggregate& g = aggregate_of(m);
+        if (sampling == "full") {
+            g.image_rms_sum += mean_rms;
+            ++g.images;
+        } else if (sampling.find("jitter") == std::string::npos) {
+            g.taps_rms_sum += mean_rms;
+            ++g.taps_images;
+        }
+        metric(spec_.name + "." + mk.material + "." + approx::signal_name(sig) + "." + m.label() +
+                   "." + sampling + ".image_rms",
+               "1", mean_rms);
+        for (int c = 0; c < 3; ++c)
+            image_ << mk.material << ',' << approx::signal_name(sig) << ",\"" << m.text << "\","
+                   << m.label() << ',' << sampling << ',' << kChannelNames[c] << ','
+                   << format_g(ie.rms[static_cast<size_t>(c)], 8) << ','
+                   << format_g(ie.max_abs[static_cast<size_t>(c)], 8) << ','
+                   << format_g(ie.energy[static_cast<size_t>(c)], 8) << ',' << format_g(mk.fov, 8)
+                   << ',' << spec_.pixels << '\n';
+    }
+
+    // Every model's full-resolution image of a signal against the reference model's.
+    void write_versus_reference(const MaterialKernels& mk, approx::Signal sig,
+                                const std::vector<std::pair<std::string, approx::ImageRGB>>& outs) {
+        const approx::ImageRGB* ref = nullptr;
+        for (size_t mi = 0; mi < mk.built.size(); ++mi)
+            if (spec_.models[mi].text == spec_.reference) ref = &outs[mi].second;
+        for (size_t mi = 0; mi < mk.built.size(); ++mi) {
+            if (&outs[mi].second == ref) continue;
+            const approx::ImageErrors ie = approx::image_errors(outs[mi].second, *ref);
+            for (int c = 0; c < 3; ++c)
+                versus_ << mk.material << ',' << approx::signal_name(sig) << ",\""
+                        << spec_.models[mi].text << "\",\"" << spec_.reference << "\","
+                        << kChannelNames[c] << ',' << format_g(ie.rms[static_cast<size_t>(c)], 8)
+                        << '\n';
+        }
+    }
+
+    // The signal, its exact convolution, every model's image and its difference as PNGs.
+    void write_images(const MaterialKernels& mk, approx::Signal sig, const approx::ImageRGB& e,
+                      const approx::ImageRGB& exact,
+                      const std::vector<std::pair<std::string, approx::ImageRGB>>& outs) {
+        const std::string dir = "images/" + mk.material + "/" + approx::signal_name(sig) + "/";
+        files_[dir + "input.png"] = png_of(e);
+        files_[dir + "exact.png"] = png_of(exact);
+        // Differences normalised across the models of this signal, as the thesis.
+        double scale = 1e-30;
+        for (const auto& [label, out] : outs) {
+            const approx::ImageErrors ie = approx::image_errors(out, exact);
+            for (double v : ie.max_abs) scale = std::max(scale, v);
+        }
+        for (const auto& [label, out] : outs) {
+            files_[dir + label + ".png"] = png_of(out);
+            files_[dir + label + "_diff.png"] =
+                encode_png_rgb8(out.width, out.height, approx::difference_rgb8(out, exact, scale));
+        }
+    }
+
+    // The kernel-space RMS beside [Freude14 Table 6.3].
+    std::string comparison_csv() const {
         // Normalise as the thesis did: by the entry its table is normalised to (Ketchup, manual,
         // B) when the study has it, otherwise by the study's largest entry.
         double ref = 0;
-        for (const auto& x : for_compare) ref = std::max(ref, x.rms);
-        for (const auto& x : for_compare)
+        for (const auto& x : for_compare_) ref = std::max(ref, x.rms);
+        for (const auto& x : for_compare_)
             if (x.material == "Ketchup" && x.column == "manual" && x.channel == 2) ref = x.rms;
         auto thesis_of = [](const std::string& material, const std::string& column, int c) {
             for (const auto& row : thesis_table_6_3())
@@ -415,12 +497,12 @@ std::map<std::string, std::string> run_kernel_study(
         // Within a material and channel the ratio to SVD rank-1 does not depend on how the table
         // is normalised, nor on the grid's cell count: the like-for-like comparison.
         std::map<std::pair<std::string, int>, double> svd1;
-        for (const auto& x : for_compare)
+        for (const auto& x : for_compare_)
             if (x.column == "svd1") svd1[{x.material, x.channel}] = x.rms;
         std::ostringstream cmp;
         cmp << "material,model,thesis_column,channel,rms,normalised,thesis_normalised,ratio,"
                "over_svd1,thesis_over_svd1,ratio_over_svd1\n";
-        for (const auto& x : for_compare) {
+        for (const auto& x : for_compare_) {
             const double thesis = thesis_of(x.material, x.column, x.channel);
             const double norm = ref > 0 ? x.rms / ref : 0;
             const auto s1 = svd1.find({x.material, x.channel});
@@ -435,16 +517,17 @@ std::map<std::string, std::string> run_kernel_study(
                 << (theirs >= 0 ? format_g(theirs, 8) : "") << ','
                 << (ours >= 0 && theirs > 0 ? format_g(ours / theirs, 8) : "") << '\n';
         }
-        files["comparison.csv"] = cmp.str();
+        return cmp.str();
     }
-    if (!spec.models.empty()) {
-        // [Freude14 Table 5.1], filled from this study's measurements.
+
+    // [Freude14 Table 5.1], filled from this study's measurements.
+    std::string properties_csv() const {
         std::ostringstream pr;
         pr << "model,label,rank,separable,convolutions_1d,closed_form,build_s_mean,build_s_max,"
               "kernel_rms_mean,l1_error_max,image_rms_mean,taps_rms_mean\n";
-        for (size_t i = 0; i < spec.models.size(); ++i) {
-            const Aggregate& g = agg[i];
-            const approx::ModelSpec& m = spec.models[i];
+        for (size_t i = 0; i < spec_.models.size(); ++i) {
+            const Aggregate& g = agg_[i];
+            const approx::ModelSpec& m = spec_.models[i];
             pr << '"' << m.text << "\"," << m.label() << ',' << g.rank << ','
                << (g.rank == 1 ? "yes" : "no") << ',' << g.convolutions << ','
                << (m.closed_form() ? "yes" : "no") << ','
@@ -455,9 +538,19 @@ std::map<std::string, std::string> run_kernel_study(
                << (g.images ? format_g(g.image_rms_sum / g.images, 8) : "") << ','
                << (g.taps_images ? format_g(g.taps_rms_sum / g.taps_images, 8) : "") << '\n';
         }
-        files["properties.csv"] = pr.str();
+        return pr.str();
     }
-    files["metrics.csv"] = metrics.str();
+};
+
+}  // namespace
+
+std::map<std::string, std::string> run_kernel_study(
+    const KernelStudySpec& spec, const std::map<std::string, RadialProfile>& profiles,
+    std::string& summary) {
+    KernelStudyRun run(spec);
+    const auto t0 = Clock::now();
+    for (const auto& material : spec.materials) run.add_material(material, profiles.at(material));
+    std::map<std::string, std::string> files = run.files();
     std::ostringstream sum;
     sum << spec.materials.size() << " materials x " << spec.models.size() << " models";
     if (!spec.signals.empty()) sum << " x " << spec.signals.size() << " signals";
