@@ -317,240 +317,309 @@ InputError checkpoint_refusal(const std::string& path, const std::string& before
                           what + "); remove the file or run again with --fresh to start afresh");
 }
 
-BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simulate) {
+namespace {
+
+// The options run_batches refuses.
+void check_batch_options(const BatchRunOptions& opt) {
     const SampleBudget& b = opt.budget;
     if (!b.any()) throw std::invalid_argument("run_batches: the budget has no limit");
     if (opt.batch_samples <= 0) throw std::invalid_argument("run_batches: batch_samples <= 0");
     if (b.rel_error && !opt.quantity)
         throw std::invalid_argument("run_batches: a rel_error budget needs a quantity");
-    BatchRunResult res;
-    res.threads = opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency();
+}
 
-    const std::uint64_t bs = static_cast<std::uint64_t>(opt.batch_samples);
-    const std::uint64_t total = b.samples ? static_cast<std::uint64_t>(*b.samples) : 0;
-    const std::uint64_t max_batches = total > 0 ? (total + bs - 1) / bs : ~std::uint64_t(0);
-    auto batch_size = [&](std::uint64_t index) -> std::int64_t {
-        if (total == 0) return opt.batch_samples;
-        return static_cast<std::int64_t>(std::min<std::uint64_t>(bs, total - index * bs));
-    };
+// One run_batches call: its options, the state the steps share, and the steps, in the order
+// run() takes them.
+class BatchRun {
+  public:
+    BatchRun(const BatchRunOptions& opt, const BatchFunction& simulate)
+        : opt_(opt),
+          simulate_(simulate),
+          b_(opt.budget),
+          bs_(static_cast<std::uint64_t>(opt.batch_samples)),
+          total_(b_.samples ? static_cast<std::uint64_t>(*b_.samples) : 0),
+          max_batches_(total_ > 0 ? (total_ + bs_ - 1) / bs_ : ~std::uint64_t(0)),
+          distributed_(dist::active()),
+          rank_(dist::rank()),
+          ranks_(dist::size()),
+          root_(rank_ == 0),
+          acc_(opt.tally_size),
+          in_order_(opt.tally_size, ranks_) {
+        res_.threads = opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency();
+    }
 
-    // Under MPI (core/distributed.h) every rank simulates the batches dealt to it (index %
-    // ranks == rank) and rank 0 folds all of them in batch order: the same statistics as one
-    // process. Rank 0 alone reads and writes the checkpoint and decides when to stop.
-    const bool distributed = dist::active();
-    const int rank = dist::rank(), ranks = dist::size();
-    const bool root = rank == 0;
-    auto owner = [&](std::uint64_t index) { return batch_owner(index, ranks); };
+    BatchRunResult run() {
+        if (root_ && !opt_.checkpoint_path.empty() && !opt_.fresh) resume();
+        make_pool();
+        t0_ = Clock::now();
+        last_checkpoint_ = t0_;
+        res_.reason = BatchStop::kSamples;
+        agree_on_start();
+        if (!stop_flag_) {
+            auto body = [this] { pipeline(); };
+            if (opt_.threads > 0)
+                tbb::task_arena(res_.threads).execute(body);
+            else
+                body();
+        }
+        if (distributed_ && root_)
+            drain_workers();
+        else if (distributed_)
+            sender_.finish();
+        if (!distributed_ || root_) finish();
+        if (distributed_) share_result();
+        return std::move(res_);
+    }
 
-    BatchAccumulator acc(opt.tally_size);
-    double resumed_seconds = 0.0;
-    if (root && !opt.checkpoint_path.empty() && !opt.fresh) {
-        if (auto ck = load_checkpoint(opt.checkpoint_path)) {
-            if (ck->fingerprint != opt.fingerprint || ck->sum.size() != opt.tally_size ||
-                ck->q.size() != opt.tally_size)
-                throw checkpoint_refusal(opt.checkpoint_path, ck->fingerprint, opt.fingerprint);
-            acc.raw_sum() = std::move(ck->sum);
-            acc.raw_q() = std::move(ck->q);
-            acc.set_counts(ck->samples, ck->batches);
-            res.work = ck->work;
-            resumed_seconds = ck->seconds;
-            res.history = std::move(ck->history);
-            res.snapshots = std::move(ck->snapshots);
-            res.resumed = true;
-            if (opt.on_resume) {
-                BatchProgress at{acc.samples(), resumed_seconds, 0.0, 0.0};
-                if (!res.history.empty()) at = res.history.back();
-                opt.on_resume(at);
-            }
+  private:
+    // The samples of batch `index` (the last one of a sample budget may be short).
+    std::int64_t batch_size(std::uint64_t index) const {
+        if (total_ == 0) return opt_.batch_samples;
+        return static_cast<std::int64_t>(std::min<std::uint64_t>(bs_, total_ - index * bs_));
+    }
+    int owner(std::uint64_t index) const { return batch_owner(index, ranks_); }
+    bool cancelled() const { return opt_.cancel && opt_.cancel->load(std::memory_order_relaxed); }
+
+    // Rank 0: the checkpoint's state, if there is one (refused if it is of other input).
+    void resume() {
+        auto ck = load_checkpoint(opt_.checkpoint_path);
+        if (!ck) return;
+        if (ck->fingerprint != opt_.fingerprint || ck->sum.size() != opt_.tally_size ||
+            ck->q.size() != opt_.tally_size)
+            throw checkpoint_refusal(opt_.checkpoint_path, ck->fingerprint, opt_.fingerprint);
+        acc_.raw_sum() = std::move(ck->sum);
+        acc_.raw_q() = std::move(ck->q);
+        acc_.set_counts(ck->samples, ck->batches);
+        res_.work = ck->work;
+        resumed_seconds_ = ck->seconds;
+        res_.history = std::move(ck->history);
+        res_.snapshots = std::move(ck->snapshots);
+        res_.resumed = true;
+        if (opt_.on_resume) {
+            BatchProgress at{acc_.samples(), resumed_seconds_, 0.0, 0.0};
+            if (!res_.history.empty()) at = res_.history.back();
+            opt_.on_resume(at);
         }
     }
 
-    using Work = BatchWork;
-    const size_t tokens = static_cast<size_t>(2 * res.threads);
-    std::vector<std::unique_ptr<Work>> pool;
-    tbb::concurrent_queue<Work*> free_list;
-    for (size_t i = 0; i < tokens; ++i) {
-        pool.push_back(std::make_unique<Work>());
-        pool.back()->tally.resize(opt.tally_size);
-        free_list.push(pool.back().get());
+    // The pipeline's tokens, each with a batch's Work.
+    void make_pool() {
+        tokens_ = static_cast<size_t>(2 * res_.threads);
+        for (size_t i = 0; i < tokens_; ++i) {
+            pool_.push_back(std::make_unique<BatchWork>());
+            pool_.back()->tally.resize(opt_.tally_size);
+            free_list_.push(pool_.back().get());
+        }
     }
-
-    const auto t0 = Clock::now();
-    auto last_checkpoint = t0;
-    std::atomic<bool> stop_flag{false};
-    res.reason = BatchStop::kSamples;
 
     // Whether the budget is met after `nb` batches with progress `p`: sets the reason.
-    auto budget_met = [&](std::uint64_t nb, const BatchProgress& p) {
-        if (nb >= max_batches) {
-            res.reason = BatchStop::kSamples;
+    bool budget_met(std::uint64_t nb, const BatchProgress& p) {
+        if (nb >= max_batches_) {
+            res_.reason = BatchStop::kSamples;
             return true;
         }
-        if (b.seconds && p.seconds >= *b.seconds) {
-            res.reason = BatchStop::kTime;
+        if (b_.seconds && p.seconds >= *b_.seconds) {
+            res_.reason = BatchStop::kTime;
             return true;
         }
-        if (b.rel_error && nb >= static_cast<std::uint64_t>(opt.min_batches_for_error) &&
-            p.value != 0 && p.se <= *b.rel_error * std::abs(p.value)) {
-            res.reason = BatchStop::kRelError;
+        if (b_.rel_error && nb >= static_cast<std::uint64_t>(opt_.min_batches_for_error) &&
+            p.value != 0 && p.se <= *b_.rel_error * std::abs(p.value)) {
+            res_.reason = BatchStop::kRelError;
             return true;
         }
         return false;
-    };
-    // A checkpoint of a run that had finished (kept until its caller stored the result) or
-    // that already holds the budget: nothing more to run, the result is the checkpoint's.
-    if (res.resumed) {
-        BatchProgress at{acc.samples(), resumed_seconds, 0.0, 0.0};
-        if (opt.quantity && acc.batches() > 0) opt.quantity(acc, at.value, at.se);
-        stop_flag = budget_met(acc.batches(), at);
     }
-    // Where the run starts, and whether it is over already: rank 0's word.
-    std::uint64_t first = acc.batches();
-    if (distributed) {
-        std::string start(sizeof(std::uint64_t) + 1, '\0');
-        std::memcpy(start.data(), &first, sizeof first);
-        start.back() = stop_flag ? 1 : 0;
-        dist::broadcast(start);
-        std::memcpy(&first, start.data(), sizeof first);
-        stop_flag = start.back() != 0;
-    }
-    const std::uint64_t batches_at_start = first;
-    // This rank's batches: first, first + ranks, ... shifted to the ones it owns.
-    std::uint64_t next = first + static_cast<std::uint64_t>((rank - owner(first) + ranks) % ranks);
 
-    auto write_checkpoint = [&]() {
+    // Where the run starts and whether it is over already (rank 0's word), and this rank's
+    // first batch.
+    void agree_on_start() {
+        // A checkpoint of a run that had finished (kept until its caller stored the result) or
+        // that already holds the budget: nothing more to run, the result is the checkpoint's.
+        if (res_.resumed) {
+            BatchProgress at{acc_.samples(), resumed_seconds_, 0.0, 0.0};
+            if (opt_.quantity && acc_.batches() > 0) opt_.quantity(acc_, at.value, at.se);
+            stop_flag_ = budget_met(acc_.batches(), at);
+        }
+        std::uint64_t first = acc_.batches();
+        if (distributed_) {
+            std::string start(sizeof(std::uint64_t) + 1, '\0');
+            std::memcpy(start.data(), &first, sizeof first);
+            start.back() = stop_flag_ ? 1 : 0;
+            dist::broadcast(start);
+            std::memcpy(&first, start.data(), sizeof first);
+            stop_flag_ = start.back() != 0;
+        }
+        batches_at_start_ = first;
+        // This rank's batches: first, first + ranks, ... shifted to the ones it owns.
+        next_ = first + static_cast<std::uint64_t>((rank_ - owner(first) + ranks_) % ranks_);
+    }
+
+    void write_checkpoint() {
         Checkpoint ck;
-        ck.fingerprint = opt.fingerprint;
-        ck.samples = acc.samples();
-        ck.batches = acc.batches();
-        ck.work = res.work;
-        ck.seconds = resumed_seconds + seconds_since(t0);
-        ck.sum = acc.raw_sum();
-        ck.q = acc.raw_q();
-        ck.history = res.history;
-        ck.snapshots = res.snapshots;
-        save_checkpoint(opt.checkpoint_path, ck);
-    };
+        ck.fingerprint = opt_.fingerprint;
+        ck.samples = acc_.samples();
+        ck.batches = acc_.batches();
+        ck.work = res_.work;
+        ck.seconds = resumed_seconds_ + seconds_since(t0_);
+        ck.sum = acc_.raw_sum();
+        ck.q = acc_.raw_q();
+        ck.history = res_.history;
+        ck.snapshots = res_.snapshots;
+        save_checkpoint(opt_.checkpoint_path, ck);
+    }
 
-    auto fold = [&](Work* w) {
-        if (stop_flag.load(std::memory_order_relaxed)) return;
-        acc.add_batch(w->tally.data(), static_cast<std::uint64_t>(w->samples));
-        res.work += w->work;
-        BatchProgress p{acc.samples(), resumed_seconds + seconds_since(t0), 0.0, 0.0};
-        if (opt.quantity) opt.quantity(acc, p.value, p.se);
-        res.history.push_back(p);
-        const std::uint64_t nb = acc.batches();
-        if (opt.snapshots && nb >= 4 && (nb & (nb - 1)) == 0)
-            res.snapshots.push_back({acc.samples(), nb, p.seconds, acc.means()});
-        if (opt.on_batch) opt.on_batch(p);
+    // Folds batch w (the next in order) into the tally: progress, snapshot, the budget and a
+    // checkpoint when one is due.
+    void fold(BatchWork* w) {
+        if (stop_flag_.load(std::memory_order_relaxed)) return;
+        acc_.add_batch(w->tally.data(), static_cast<std::uint64_t>(w->samples));
+        res_.work += w->work;
+        BatchProgress p{acc_.samples(), resumed_seconds_ + seconds_since(t0_), 0.0, 0.0};
+        if (opt_.quantity) opt_.quantity(acc_, p.value, p.se);
+        res_.history.push_back(p);
+        const std::uint64_t nb = acc_.batches();
+        if (opt_.snapshots && nb >= 4 && (nb & (nb - 1)) == 0)
+            res_.snapshots.push_back({acc_.samples(), nb, p.seconds, acc_.means()});
+        if (opt_.on_batch) opt_.on_batch(p);
         if (budget_met(nb, p)) {
-            stop_flag = true;
-        } else if (b.rel_error && !b.seconds && !b.samples && nb >= 10000 && p.value == 0) {
-            throw InfeasibleError("a relative-error budget cannot be met: " + opt.quantity_name +
+            stop_flag_ = true;
+        } else if (b_.rel_error && !b_.seconds && !b_.samples && nb >= 10000 && p.value == 0) {
+            throw InfeasibleError("a relative-error budget cannot be met: " + opt_.quantity_name +
                                   " stayed 0 for 10000 batches");
         }
-        if (!opt.checkpoint_path.empty() && !stop_flag &&
-            seconds_since(last_checkpoint) >= opt.checkpoint_seconds) {
+        if (!opt_.checkpoint_path.empty() && !stop_flag_ &&
+            seconds_since(last_checkpoint_) >= opt_.checkpoint_seconds) {
             write_checkpoint();
-            last_checkpoint = Clock::now();
+            last_checkpoint_ = Clock::now();
         }
-    };
-    auto cancelled = [&] { return opt.cancel && opt.cancel->load(std::memory_order_relaxed); };
-
-    InOrderFolds in_order(opt.tally_size, ranks);  // rank 0 of a distributed run
-    BatchSender sender;                            // a worker rank
-    auto free_own = [&](Work* w) { free_list.push(w); };
-    auto fold_in_order = [&] {
-        in_order.fold_in_order(acc, max_batches, stop_flag, fold, free_own);
-    };
-
-    const std::uint64_t stride = static_cast<std::uint64_t>(ranks);
-    auto body = [&] {
-        tbb::parallel_pipeline(
-            tokens,
-            tbb::make_filter<void, Work*>(tbb::filter_mode::serial_in_order,
-                                          [&](tbb::flow_control& fc) -> Work* {
-                                              if (stop_flag.load(std::memory_order_relaxed) ||
-                                                  next >= max_batches || cancelled()) {
-                                                  fc.stop();
-                                                  return nullptr;
-                                              }
-                                              Work* w = nullptr;
-                                              if (!free_list.try_pop(w)) {
-                                                  pool.push_back(std::make_unique<Work>());
-                                                  w = pool.back().get();
-                                                  w->tally.resize(opt.tally_size);
-                                              }
-                                              w->index = next;
-                                              next += stride;
-                                              w->samples = batch_size(w->index);
-                                              return w;
-                                          }) &
-                tbb::make_filter<Work*, Work*>(tbb::filter_mode::parallel,
-                                               [&](Work* w) -> Work* {
-                                                   std::fill(w->tally.begin(), w->tally.end(), 0.0);
-                                                   w->work = simulate(w->index, w->samples,
-                                                                      w->tally.data());
-                                                   return w;
-                                               }) &
-                tbb::make_filter<Work*, void>(tbb::filter_mode::serial_in_order, [&](Work* w) {
-                    if (!distributed) {
-                        fold(w);
-                        free_list.push(w);
-                    } else if (!root) {
-                        if (!sender.stop_received) sender.send(*w, opt.tally_size, stop_flag);
-                        free_list.push(w);
-                    } else if (stop_flag.load(std::memory_order_relaxed) || in_order.lost()) {
-                        free_list.push(w);
-                    } else {
-                        in_order.hold(w);
-                        fold_in_order();
-                    }
-                }));
-    };
-    if (!stop_flag) {
-        if (opt.threads > 0)
-            tbb::task_arena(res.threads).execute(body);
-        else
-            body();
     }
 
-    if (distributed && root) {
-        // Rank 0's own batches are done; the others' may still be on their way.
-        while (!stop_flag && !in_order.lost() && !cancelled() && acc.batches() < max_batches &&
-               owner(acc.batches()) != rank)
+    // Rank 0 of a distributed run: folds what is next in order (InOrderFolds::fold_in_order).
+    void fold_in_order() {
+        auto fold_one = [this](BatchWork* w) { fold(w); };
+        auto free_own = [this](BatchWork* w) { free_list_.push(w); };
+        in_order_.fold_in_order(acc_, max_batches_, stop_flag_, fold_one, free_own);
+    }
+
+    // The pipeline's first stage: the next batch this rank owns, or nullptr once it stops.
+    BatchWork* take_batch(tbb::flow_control& fc) {
+        if (stop_flag_.load(std::memory_order_relaxed) || next_ >= max_batches_ || cancelled()) {
+            fc.stop();
+            return nullptr;
+        }
+        BatchWork* w = nullptr;
+        if (!free_list_.try_pop(w)) {
+            pool_.push_back(std::make_unique<BatchWork>());
+            w = pool_.back().get();
+            w->tally.resize(opt_.tally_size);
+        }
+        w->index = next_;
+        next_ += static_cast<std::uint64_t>(ranks_);
+        w->samples = batch_size(w->index);
+        return w;
+    }
+
+    // The pipeline's last stage: folds w (one process), sends it (a worker) or holds it for its
+    // turn (rank 0).
+    void deliver(BatchWork* w) {
+        if (!distributed_) {
+            fold(w);
+            free_list_.push(w);
+        } else if (!root_) {
+            if (!sender_.stop_received) sender_.send(*w, opt_.tally_size, stop_flag_);
+            free_list_.push(w);
+        } else if (stop_flag_.load(std::memory_order_relaxed) || in_order_.lost()) {
+            free_list_.push(w);
+        } else {
+            in_order_.hold(w);
             fold_in_order();
-        in_order.finish(acc, free_own);
-    } else if (distributed) {
-        sender.finish();
+        }
     }
 
-    if (!distributed || root) {
-        res.seconds = resumed_seconds + seconds_since(t0);
-        const bool finished = stop_flag.load();
-        if (!finished) res.reason = BatchStop::kInterrupted;
+    // Simulates this rank's batches, `tokens_` in flight, delivered in batch order.
+    void pipeline() {
+        tbb::parallel_pipeline(
+            tokens_, tbb::make_filter<void, BatchWork*>(
+                         tbb::filter_mode::serial_in_order,
+                         [this](tbb::flow_control& fc) -> BatchWork* { return take_batch(fc); }) &
+                         tbb::make_filter<BatchWork*, BatchWork*>(
+                             tbb::filter_mode::parallel,
+                             [this](BatchWork* w) -> BatchWork* {
+                                 std::fill(w->tally.begin(), w->tally.end(), 0.0);
+                                 w->work = simulate_(w->index, w->samples, w->tally.data());
+                                 return w;
+                             }) &
+                         tbb::make_filter<BatchWork*, void>(tbb::filter_mode::serial_in_order,
+                                                            [this](BatchWork* w) { deliver(w); }));
+    }
+
+    // Rank 0 of a distributed run, after the pipeline: its own batches are done; the others'
+    // may still be on their way.
+    void drain_workers() {
+        while (!stop_flag_ && !in_order_.lost() && !cancelled() && acc_.batches() < max_batches_ &&
+               owner(acc_.batches()) != rank_)
+            fold_in_order();
+        auto free_own = [this](BatchWork* w) { free_list_.push(w); };
+        in_order_.finish(acc_, free_own);
+    }
+
+    // Rank 0 (or the one process): the stop reason, the last checkpoint and the result.
+    void finish() {
+        res_.seconds = resumed_seconds_ + seconds_since(t0_);
+        const bool finished = stop_flag_.load();
+        if (!finished) res_.reason = BatchStop::kInterrupted;
         // Finished or not, the state is kept: a kill before the caller has stored the result
         // must not lose the run. The caller removes the checkpoint after storing
         // (remove_checkpoints).
-        if (!opt.checkpoint_path.empty() &&
-            !(res.resumed && finished && acc.batches() == batches_at_start))
+        if (!opt_.checkpoint_path.empty() &&
+            !(res_.resumed && finished && acc_.batches() == batches_at_start_))
             write_checkpoint();
-        res.samples = acc.samples();
-        res.batches = acc.batches();
-        res.mean = acc.means();
-        res.se = acc.standard_errors();
-        if (opt.snapshots && finished && res.batches > 0 &&
-            (res.snapshots.empty() || res.snapshots.back().batches != res.batches))
-            res.snapshots.push_back(
-                {res.samples, res.batches, res.history.back().seconds, res.mean});
+        res_.samples = acc_.samples();
+        res_.batches = acc_.batches();
+        res_.mean = acc_.means();
+        res_.se = acc_.standard_errors();
+        if (opt_.snapshots && finished && res_.batches > 0 &&
+            (res_.snapshots.empty() || res_.snapshots.back().batches != res_.batches))
+            res_.snapshots.push_back(
+                {res_.samples, res_.batches, res_.history.back().seconds, res_.mean});
     }
-    if (distributed) {
-        // Every rank returns rank 0's result.
-        std::string bytes = root ? serialize_batch_result(res) : std::string();
+
+    // A distributed run: every rank returns rank 0's result.
+    void share_result() {
+        std::string bytes = root_ ? serialize_batch_result(res_) : std::string();
         dist::broadcast(bytes);
-        if (!root) res = deserialize_batch_result(bytes, "the result from rank 0");
+        if (!root_) res_ = deserialize_batch_result(bytes, "the result from rank 0");
     }
-    return res;
+
+    const BatchRunOptions& opt_;
+    const BatchFunction& simulate_;
+    const SampleBudget& b_;
+    BatchRunResult res_;
+    const std::uint64_t bs_, total_, max_batches_;
+    // Under MPI (core/distributed.h) every rank simulates the batches dealt to it (index %
+    // ranks == rank) and rank 0 folds all of them in batch order: the same statistics as one
+    // process. Rank 0 alone reads and writes the checkpoint and decides when to stop.
+    const bool distributed_;
+    const int rank_, ranks_;
+    const bool root_;
+    BatchAccumulator acc_;
+    double resumed_seconds_ = 0.0;
+    size_t tokens_ = 0;
+    std::vector<std::unique_ptr<BatchWork>> pool_;
+    tbb::concurrent_queue<BatchWork*> free_list_;
+    Clock::time_point t0_, last_checkpoint_;
+    std::atomic<bool> stop_flag_{false};
+    std::uint64_t batches_at_start_ = 0;
+    std::uint64_t next_ = 0;  // this rank's next batch
+    InOrderFolds in_order_;   // rank 0 of a distributed run
+    BatchSender sender_;      // a worker rank
+};
+
+}  // namespace
+
+BatchRunResult run_batches(const BatchRunOptions& opt, const BatchFunction& simulate) {
+    check_batch_options(opt);
+    return BatchRun(opt, simulate).run();
 }
 
 std::string serialize_batch_result(const BatchRunResult& r) {

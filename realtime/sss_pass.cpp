@@ -723,6 +723,276 @@ void rotated_pass(const SssGBuffer& g, const std::vector<std::vector<PreparedTer
     }
 }
 
+// Term t's taps prepared for the pass, with jitter amplitude `jitter`.
+PreparedTerm prepare_term(const SssTerm& t, double jitter) {
+    const bool jittered = jitter > 0;
+    PreparedTerm pt;
+    pt.term = &t;
+    pt.range = approx::tap_jitter_range(t.taps, jitter);
+    const size_t count = t.taps.offset_mm.size();
+    pt.weight.assign(count, F4{});
+    pt.lo_mm = pt.hi_mm = t.taps.offset_mm[0];
+    for (size_t i = 0; i < count; ++i) {
+        for (int ch = 0; ch < 3; ++ch) {
+            pt.weight_sum[ch] += t.taps.weight[ch][i];
+            pt.weight[i][ch] = static_cast<float>(t.taps.weight[ch][i]);
+        }
+        pt.weight[i][3] = 0;
+        // The positions a tap reaches: jittered_offset_mm is monotonic in xi.
+        const double lo =
+            jittered ? approx::jittered_offset_mm(t.taps, pt.range, i, -1.0) : t.taps.offset_mm[i];
+        const double hi =
+            jittered ? approx::jittered_offset_mm(t.taps, pt.range, i, 1.0) : t.taps.offset_mm[i];
+        pt.lo_mm = std::min(pt.lo_mm, lo);
+        pt.hi_mm = std::max(pt.hi_mm, hi);
+    }
+    return pt;
+}
+
+// Every material's prepared terms, the extreme offsets [mm] their taps reach, and the largest
+// number of terms.
+struct PreparedMaterials {
+    std::vector<std::vector<PreparedTerm>> prep;
+    std::vector<std::array<double, 2>> reach_mm;
+    size_t rank = 0;
+};
+
+PreparedMaterials prepare_materials(const std::vector<SssMaterialKernel>& materials,
+                                    const SssParams& p) {
+    PreparedMaterials pm;
+    pm.prep.resize(materials.size());
+    pm.reach_mm.assign(materials.size(), {0.0, 0.0});
+    for (size_t m = 0; m < materials.size(); ++m) {
+        pm.rank = std::max(pm.rank, materials[m].terms.size());
+        for (const SssTerm& t : materials[m].terms) {
+            PreparedTerm pt = prepare_term(t, p.jitter);
+            pm.reach_mm[m][0] = std::min(pm.reach_mm[m][0], pt.lo_mm);
+            pm.reach_mm[m][1] = std::max(pm.reach_mm[m][1], pt.hi_mm);
+            pm.prep[m].push_back(std::move(pt));
+        }
+    }
+    return pm;
+}
+
+// The output starts as the input (what material -1 keeps), copied in parallel blocks.
+void copy_input(const SssGBuffer& g, std::vector<float>& out) {
+    out.resize(g.irradiance.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.irradiance.size(), size_t{1} << 16),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          std::copy(g.irradiance.begin() + static_cast<ptrdiff_t>(r.begin()),
+                                    g.irradiance.begin() + static_cast<ptrdiff_t>(r.end()),
+                                    out.begin() + static_cast<ptrdiff_t>(r.begin()));
+                      });
+}
+
+// The fast path's pairs (unclamped, unjittered, follow-surface or none).
+using PairFn = void (*)(const F4*, int, double, const F4*, int, double, const double*, const F4*,
+                        size_t, float, F4*);
+
+// The pass along the image's axes, per term: horizontal, then vertical.
+//
+// The horizontal pass reads a row of R, G, B, z texels (built per row, so it stays in cache)
+// and writes its result transposed (column-major), so that the vertical pass reads contiguous
+// memory too: columns x0..x1 of the box, rows ry0..ry1 (hr of them). The scratch image is kept
+// between calls (no page faults, no zero fill).
+class SeparablePass {
+  public:
+    SeparablePass(const SssGBuffer& g, const std::vector<std::vector<PreparedTerm>>& prep,
+                  const SssParams& p, const LineParams& lp, const Extent& ext, double px_per_mm_z,
+                  double py_per_mm_z, std::vector<float>& out)
+        : g_(g),
+          prep_(prep),
+          lp_(lp),
+          ext_(ext),
+          px_per_mm_z_(px_per_mm_z),
+          py_per_mm_z_(py_per_mm_z),
+          out_(out),
+          column_fn_{pick<ColumnLine>(p.mode, p.jitter > 0, false),
+                     pick<ColumnLine>(p.mode, p.jitter > 0, true)},
+          pair_fn_(p.jitter > 0 || p.mode == SssEdgeMode::kReject ? nullptr
+                   : p.mode == SssEdgeMode::kFollowSurface        ? fast_pair_follow
+                                                                  : fast_pair_none),
+          bw_(ext.x1 - ext.x0 + 1),
+          hr_(ext.ry1 - ext.ry0 + 1),
+          tmp_s_(static_cast<size_t>(bw_) * hr_),
+          tmp_(tmp_s_.data()),
+          blocks_((hr_ + kBlock - 1) / kBlock),
+          busy_(static_cast<size_t>(blocks_) * bw_, 0) {}
+
+    // Every term, summed into the output.
+    void run(size_t rank) {
+        for (size_t k = 0; k < rank; ++k) {
+            horizontal(k);
+            vertical(k);
+        }
+    }
+
+  private:
+    // Blocks of kBlock rows from ry0: the horizontal pass writes each column of a block as
+    // kBlock contiguous texels, and notes which block columns hold a medium pixel (busy), so
+    // that the vertical pass skips the rest (it would store nothing there).
+    static constexpr int kBlock = 16;
+    static constexpr int kGrain = 16;
+
+    // One 1D pass of term k at positions [begin, end) of a line of len texels, materials at
+    // mat[pos * mstride]: calls store(pos, value) for the medium pixels whose kernel has term k,
+    // store(pos, nullptr) for the others.
+    template <class Store>
+    void run_line(const ColumnLine& line, const int32_t* mat, ptrdiff_t mstride, int len, int begin,
+                  int end, size_t k, int dir, int index, double per_mm_z, Store&& store) const {
+        for (int pos = begin; pos < end; ++pos) {
+            const int32_t m = mat[pos * mstride];
+            if (m < 0 || k >= prep_[static_cast<size_t>(m)].size()) {
+                store(pos, nullptr);
+                continue;
+            }
+            const PreparedTerm& pt = prep_[static_cast<size_t>(m)][k];
+            const F4 c = line.texel(pos);
+            const double scale = per_mm_z / c[3];
+            if (pt.term->taps.support_mm * scale < 0.5) {
+                // The whole kernel within the centre pixel's bin: the identity times the
+                // kernel's mass (approx/convolve.h's convention).
+                F4 v{};
+                for (int ch = 0; ch < 3; ++ch)
+                    v[ch] = static_cast<float>(pt.weight_sum[ch] * c[ch]);
+                store(pos, &v);
+                continue;
+            }
+            const bool inside = pos + pt.lo_mm * scale >= 0 && pos + pt.hi_mm * scale < len - 1;
+            if (pair_fn_ && inside && pos + 1 < end && mat[(pos + 1) * mstride] == m) {
+                // The next pixel on the fast path too: both at once.
+                const F4 c1 = line.texel(pos + 1);
+                const double scale1 = per_mm_z / c1[3];
+                if (!(pt.term->taps.support_mm * scale1 < 0.5) &&
+                    pos + 1 + pt.lo_mm * scale1 >= 0 && pos + 1 + pt.hi_mm * scale1 < len - 1) {
+                    F4 v2[2];
+                    pair_fn_(line.at(pos), pos, scale, line.at(pos + 1), pos + 1, scale1,
+                             pt.term->taps.offset_mm.data(), pt.weight.data(),
+                             pt.term->taps.offset_mm.size(), lp_.follow, v2);
+                    store(pos, &v2[0]);
+                    store(pos + 1, &v2[1]);
+                    ++pos;
+                    continue;
+                }
+            }
+            const int x = dir == 0 ? pos : index, y = dir == 0 ? index : pos;
+            const F4 v = column_fn_[inside](line, mat, mstride, len, pos, pt, scale, lp_, x, y,
+                                            static_cast<int>(2 * k) + dir);
+            store(pos, &v);
+        }
+    }
+
+    // Horizontal, written transposed: pixels without term k hold their input.
+    void horizontal(size_t k) {
+        tbb::parallel_for(tbb::blocked_range<int>(0, blocks_, 1),
+                          [&](const tbb::blocked_range<int>& r) {
+                              const int w = g_.width;
+                              thread_local std::vector<F4> buf_tl, block_tl;
+                              if (buf_tl.size() < static_cast<size_t>(w))
+                                  buf_tl.resize(static_cast<size_t>(w));
+                              if (block_tl.size() < static_cast<size_t>(bw_) * kBlock)
+                                  block_tl.resize(static_cast<size_t>(bw_) * kBlock);
+                              for (int b = r.begin(); b < r.end(); ++b)
+                                  horizontal_block(k, b, buf_tl.data(), block_tl.data());
+                          });
+    }
+
+    // Block b of the horizontal pass of term k, through the row buffer buf and the block
+    // buffer block (bw x kBlock texels), into the transposed image.
+    void horizontal_block(size_t k, int b, F4* const buf, F4* const block) {
+        const int w = g_.width;
+        const int y0 = ext_.ry0 + b * kBlock, y1 = std::min(ext_.ry1 + 1, y0 + kBlock);
+        for (int y = y0; y < y1; ++y) {
+            const size_t row = static_cast<size_t>(y) * w;
+            // Local pointers: the byte stores below may alias anything, which would reload the
+            // vectors' pointers every pixel and keep GCC from vectorising.
+            const float* const irr = g_.irradiance.data() + 3 * row;
+            const float* const vz = g_.view_z.data() + row;
+            const int32_t* const mrow = g_.material.data() + row;
+            for (int x = ext_.cx0; x <= ext_.cx1; ++x)
+                buf[x] = F4{irr[3 * x], irr[3 * x + 1], irr[3 * x + 2], vz[x]};
+            if (k == 0) {
+                uint8_t* const bz = busy_.data() + static_cast<size_t>(b) * bw_;
+                const int32_t* const mb = mrow + ext_.x0;
+                for (int x = 0; x < bw_; ++x)
+                    bz[x] = static_cast<uint8_t>(bz[x] | (mb[x] >= 0 ? 1 : 0));
+            }
+            const ColumnLine line{buf};
+            const int x0 = ext_.x0;
+            run_line(line, &g_.material[row], 1, w, ext_.x0, ext_.x1 + 1, k, 0, y, px_per_mm_z_,
+                     [&](int x, const F4* v) {
+                         F4& dst = block[static_cast<size_t>(x - x0) * kBlock + (y - y0)];
+                         const F4 src = buf[x];
+                         dst = v ? *v : src;
+                         dst[3] = src[3];
+                     });
+        }
+        for (int x = 0; x < bw_; ++x)
+            std::memcpy(&tmp_[static_cast<size_t>(x) * hr_ + (y0 - ext_.ry0)],
+                        &block[static_cast<size_t>(x) * kBlock],
+                        static_cast<size_t>(y1 - y0) * sizeof(F4));
+    }
+
+    // Vertical, over the columns, summed with the term's signs into the output (term 0 sets
+    // it: a material without terms gives 0, as an empty sum).
+    void vertical(size_t k) {
+        tbb::parallel_for(tbb::blocked_range<int>(0, bw_, kGrain),
+                          [&](const tbb::blocked_range<int>& r) {
+                              for (int xb = r.begin(); xb < r.end(); ++xb) vertical_column(k, xb);
+                          });
+    }
+
+    // Column xb of the box in the vertical pass of term k.
+    void vertical_column(size_t k, int xb) {
+        const int w = g_.width, h = g_.height;
+        const int x = ext_.x0 + xb;
+        const ColumnLine line{&tmp_[static_cast<size_t>(xb) * hr_], ext_.ry0};
+        // The taps reach far along the column, in no order a hardware prefetcher follows: the
+        // next column is fetched while this one is filtered.
+        if (xb + 1 < bw_) {
+            const char* next =
+                reinterpret_cast<const char*>(&tmp_[static_cast<size_t>(xb + 1) * hr_]);
+            for (size_t o = 0; o < static_cast<size_t>(hr_) * sizeof(F4); o += 64)
+                __builtin_prefetch(next + o);
+        }
+        std::vector<float>& out = out_;
+        for (int b = 0; b < blocks_; ++b) {
+            if (!busy_[static_cast<size_t>(b) * bw_ + xb]) continue;
+            const int y0 = ext_.ry0 + b * kBlock;
+            run_line(line, &g_.material[static_cast<size_t>(x)], w, h, y0,
+                     std::min(ext_.ry1 + 1, y0 + kBlock), k, 1, x, py_per_mm_z_,
+                     [&](int y, const F4* v) {
+                         const size_t c = static_cast<size_t>(y) * w + x;
+                         const int32_t m = g_.material[c];
+                         if (!v) {
+                             if (k == 0 && m >= 0)
+                                 for (int ch = 0; ch < 3; ++ch) out[3 * c + ch] = 0;
+                             return;
+                         }
+                         const SssTerm& t = *prep_[static_cast<size_t>(m)][k].term;
+                         for (int ch = 0; ch < 3; ++ch) {
+                             const float sv = static_cast<float>(t.sign[ch]) * (*v)[ch];
+                             out[3 * c + ch] = k == 0 ? sv : out[3 * c + ch] + sv;
+                         }
+                     });
+        }
+    }
+
+    const SssGBuffer& g_;
+    const std::vector<std::vector<PreparedTerm>>& prep_;
+    const LineParams& lp_;
+    const Extent& ext_;
+    const double px_per_mm_z_, py_per_mm_z_;
+    std::vector<float>& out_;
+    const PixelFn<ColumnLine> column_fn_[2];
+    const PairFn pair_fn_;
+    const int bw_, hr_;
+    Scratch tmp_s_;
+    F4* const tmp_;
+    const int blocks_;
+    std::vector<uint8_t> busy_;
+};
+
 }  // namespace
 
 std::vector<float> sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materials,
@@ -736,51 +1006,11 @@ void sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materia
               const SssParams& p, std::vector<float>& out) {
     check_sss_inputs(g, materials, p);
     const int w = g.width, h = g.height;
-    const bool jitter = p.jitter > 0;
-
-    std::vector<std::vector<PreparedTerm>> prep(materials.size());
-    std::vector<std::array<double, 2>> reach_mm(materials.size(), {0.0, 0.0});
-    size_t rank = 0;
-    for (size_t m = 0; m < materials.size(); ++m) {
-        rank = std::max(rank, materials[m].terms.size());
-        for (const SssTerm& t : materials[m].terms) {
-            PreparedTerm pt;
-            pt.term = &t;
-            pt.range = approx::tap_jitter_range(t.taps, p.jitter);
-            const size_t count = t.taps.offset_mm.size();
-            pt.weight.assign(count, F4{});
-            pt.lo_mm = pt.hi_mm = t.taps.offset_mm[0];
-            for (size_t i = 0; i < count; ++i) {
-                for (int ch = 0; ch < 3; ++ch) {
-                    pt.weight_sum[ch] += t.taps.weight[ch][i];
-                    pt.weight[i][ch] = static_cast<float>(t.taps.weight[ch][i]);
-                }
-                pt.weight[i][3] = 0;
-                // The positions a tap reaches: jittered_offset_mm is monotonic in xi.
-                const double lo = jitter ? approx::jittered_offset_mm(t.taps, pt.range, i, -1.0)
-                                         : t.taps.offset_mm[i];
-                const double hi = jitter ? approx::jittered_offset_mm(t.taps, pt.range, i, 1.0)
-                                         : t.taps.offset_mm[i];
-                pt.lo_mm = std::min(pt.lo_mm, lo);
-                pt.hi_mm = std::max(pt.hi_mm, hi);
-            }
-            reach_mm[m][0] = std::min(reach_mm[m][0], pt.lo_mm);
-            reach_mm[m][1] = std::max(reach_mm[m][1], pt.hi_mm);
-            prep[m].push_back(std::move(pt));
-        }
-    }
+    const PreparedMaterials pm = prepare_materials(materials, p);
     LineParams lp;
     lp.follow = static_cast<float>(p.follow_strength / p.tan_half);
     lp.reject_depth = static_cast<float>(p.reject_depth);
     lp.seed = p.seed;
-    const PixelFn<ColumnLine> column_fn[2] = {pick<ColumnLine>(p.mode, jitter, false),
-                                              pick<ColumnLine>(p.mode, jitter, true)};
-    // The fast path's pairs (unclamped, unjittered, follow-surface or none).
-    using PairFn = void (*)(const F4*, int, double, const F4*, int, double, const double*,
-                            const F4*, size_t, float, F4*);
-    const PairFn pair_fn = jitter || p.mode == SssEdgeMode::kReject ? nullptr
-                           : p.mode == SssEdgeMode::kFollowSurface  ? fast_pair_follow
-                                                                    : fast_pair_none;
 
     // Kernel scale [Freude14 Eq. 4.11]: pixels per mm at view depth z, along y and along x.
     const double py_per_mm_z = h / (2.0 * p.tan_half * p.unit_mm);
@@ -789,166 +1019,15 @@ void sss_pass(const SssGBuffer& g, const std::vector<SssMaterialKernel>& materia
     // The pixels checked, and the region the pass touches: the medium's bounding box, and the
     // rows and columns its taps can read (the horizontal pass runs on those rows only, and the
     // vertical pass reads nothing else).
-    const Extent ext = scan_pixels(g, materials, reach_mm, px_per_mm_z, py_per_mm_z);
+    const Extent ext = scan_pixels(g, materials, pm.reach_mm, px_per_mm_z, py_per_mm_z);
 
-    // The output starts as the input (what material -1 keeps), copied in parallel blocks.
-    out.resize(g.irradiance.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.irradiance.size(), size_t{1} << 16),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          std::copy(g.irradiance.begin() + static_cast<ptrdiff_t>(r.begin()),
-                                    g.irradiance.begin() + static_cast<ptrdiff_t>(r.end()),
-                                    out.begin() + static_cast<ptrdiff_t>(r.begin()));
-                      });
+    copy_input(g, out);
     if (ext.x0 > ext.x1) return;  // no medium pixel
     if (p.rotate) {
-        rotated_pass(g, prep, rank, p, lp, px_per_mm_z, py_per_mm_z, out);
+        rotated_pass(g, pm.prep, pm.rank, p, lp, px_per_mm_z, py_per_mm_z, out);
         return;
     }
-
-    // One 1D pass of term k at positions [begin, end) of a line of len texels, materials at
-    // mat[pos * mstride]: calls store(pos, value) for the medium pixels whose kernel has term k,
-    // store(pos, nullptr) for the others.
-    auto run_line = [&](const auto& line, const auto* fn, const int32_t* mat, ptrdiff_t mstride,
-                        int len, int begin, int end, size_t k, int dir, int index, double per_mm_z,
-                        auto&& store) {
-        for (int pos = begin; pos < end; ++pos) {
-            const int32_t m = mat[pos * mstride];
-            if (m < 0 || k >= prep[static_cast<size_t>(m)].size()) {
-                store(pos, nullptr);
-                continue;
-            }
-            const PreparedTerm& pt = prep[static_cast<size_t>(m)][k];
-            const F4 c = line.texel(pos);
-            const double scale = per_mm_z / c[3];
-            if (pt.term->taps.support_mm * scale < 0.5) {
-                // The whole kernel within the centre pixel's bin: the identity times the
-                // kernel's mass (approx/convolve.h's convention).
-                F4 v{};
-                for (int ch = 0; ch < 3; ++ch)
-                    v[ch] = static_cast<float>(pt.weight_sum[ch] * c[ch]);
-                store(pos, &v);
-                continue;
-            }
-            const bool inside = pos + pt.lo_mm * scale >= 0 && pos + pt.hi_mm * scale < len - 1;
-            if (pair_fn && inside && pos + 1 < end && mat[(pos + 1) * mstride] == m) {
-                // The next pixel on the fast path too: both at once.
-                const F4 c1 = line.texel(pos + 1);
-                const double scale1 = per_mm_z / c1[3];
-                if (!(pt.term->taps.support_mm * scale1 < 0.5) &&
-                    pos + 1 + pt.lo_mm * scale1 >= 0 && pos + 1 + pt.hi_mm * scale1 < len - 1) {
-                    F4 v2[2];
-                    pair_fn(line.at(pos), pos, scale, line.at(pos + 1), pos + 1, scale1,
-                            pt.term->taps.offset_mm.data(), pt.weight.data(),
-                            pt.term->taps.offset_mm.size(), lp.follow, v2);
-                    store(pos, &v2[0]);
-                    store(pos + 1, &v2[1]);
-                    ++pos;
-                    continue;
-                }
-            }
-            const int x = dir == 0 ? pos : index, y = dir == 0 ? index : pos;
-            const F4 v = fn[inside](line, mat, mstride, len, pos, pt, scale, lp, x, y,
-                                    static_cast<int>(2 * k) + dir);
-            store(pos, &v);
-        }
-    };
-
-    // The horizontal pass reads a row of R, G, B, z texels (built per row, so it stays in
-    // cache) and writes its result transposed (column-major), so that the vertical pass reads
-    // contiguous memory too: columns x0..x1 of the box, rows ry0..ry1 (hr of them). The
-    // scratch image is kept between calls (no page faults, no zero fill).
-    const int bw = ext.x1 - ext.x0 + 1, hr = ext.ry1 - ext.ry0 + 1;
-    Scratch tmp_s(static_cast<size_t>(bw) * hr);
-    F4* const tmp = tmp_s.data();
-    const int grain = 16;
-    // Blocks of kBlock rows from ry0: the horizontal pass writes each column of a block as
-    // kBlock contiguous texels, and notes which block columns hold a medium pixel (busy), so
-    // that the vertical pass skips the rest (it would store nothing there).
-    constexpr int kBlock = 16;
-    const int blocks = (hr + kBlock - 1) / kBlock;
-    std::vector<uint8_t> busy(static_cast<size_t>(blocks) * bw, 0);
-    for (size_t k = 0; k < rank; ++k) {
-        // Horizontal, written transposed: pixels without term k hold their input.
-        tbb::parallel_for(
-            tbb::blocked_range<int>(0, blocks, 1), [&](const tbb::blocked_range<int>& r) {
-                thread_local std::vector<F4> buf_tl, block_tl;
-                if (buf_tl.size() < static_cast<size_t>(w)) buf_tl.resize(static_cast<size_t>(w));
-                if (block_tl.size() < static_cast<size_t>(bw) * kBlock)
-                    block_tl.resize(static_cast<size_t>(bw) * kBlock);
-                F4* const buf = buf_tl.data();
-                F4* const block = block_tl.data();
-                for (int b = r.begin(); b < r.end(); ++b) {
-                    const int y0 = ext.ry0 + b * kBlock, y1 = std::min(ext.ry1 + 1, y0 + kBlock);
-                    for (int y = y0; y < y1; ++y) {
-                        const size_t row = static_cast<size_t>(y) * w;
-                        // Local pointers: the byte stores below may alias anything, which
-                        // would reload the vectors' pointers every pixel and keep GCC from
-                        // vectorising.
-                        const float* const irr = g.irradiance.data() + 3 * row;
-                        const float* const vz = g.view_z.data() + row;
-                        const int32_t* const mrow = g.material.data() + row;
-                        for (int x = ext.cx0; x <= ext.cx1; ++x)
-                            buf[x] = F4{irr[3 * x], irr[3 * x + 1], irr[3 * x + 2], vz[x]};
-                        if (k == 0) {
-                            uint8_t* const bz = busy.data() + static_cast<size_t>(b) * bw;
-                            const int32_t* const mb = mrow + ext.x0;
-                            for (int x = 0; x < bw; ++x)
-                                bz[x] = static_cast<uint8_t>(bz[x] | (mb[x] >= 0 ? 1 : 0));
-                        }
-                        const ColumnLine line{buf};
-                        run_line(line, column_fn, &g.material[row], 1, w, ext.x0, ext.x1 + 1, k, 0,
-                                 y, px_per_mm_z, [&](int x, const F4* v) {
-                                     F4& dst =
-                                         block[static_cast<size_t>(x - ext.x0) * kBlock + (y - y0)];
-                                     const F4 src = buf[x];
-                                     dst = v ? *v : src;
-                                     dst[3] = src[3];
-                                 });
-                    }
-                    for (int x = 0; x < bw; ++x)
-                        std::memcpy(&tmp[static_cast<size_t>(x) * hr + (y0 - ext.ry0)],
-                                    &block[static_cast<size_t>(x) * kBlock],
-                                    static_cast<size_t>(y1 - y0) * sizeof(F4));
-                }
-            });
-        // Vertical, over the columns, summed with the term's signs into the output (term 0
-        // sets it: a material without terms gives 0, as an empty sum).
-        tbb::parallel_for(
-            tbb::blocked_range<int>(0, bw, grain), [&](const tbb::blocked_range<int>& r) {
-                for (int xb = r.begin(); xb < r.end(); ++xb) {
-                    const int x = ext.x0 + xb;
-                    const ColumnLine line{&tmp[static_cast<size_t>(xb) * hr], ext.ry0};
-                    // The taps reach far along the column, in no order a hardware prefetcher
-                    // follows: the next column is fetched while this one is filtered.
-                    if (xb + 1 < bw) {
-                        const char* next =
-                            reinterpret_cast<const char*>(&tmp[static_cast<size_t>(xb + 1) * hr]);
-                        for (size_t o = 0; o < static_cast<size_t>(hr) * sizeof(F4); o += 64)
-                            __builtin_prefetch(next + o);
-                    }
-                    for (int b = 0; b < blocks; ++b) {
-                        if (!busy[static_cast<size_t>(b) * bw + xb]) continue;
-                        const int y0 = ext.ry0 + b * kBlock;
-                        run_line(line, column_fn, &g.material[static_cast<size_t>(x)], w, h, y0,
-                                 std::min(ext.ry1 + 1, y0 + kBlock), k, 1, x, py_per_mm_z,
-                                 [&](int y, const F4* v) {
-                                     const size_t c = static_cast<size_t>(y) * w + x;
-                                     const int32_t m = g.material[c];
-                                     if (!v) {
-                                         if (k == 0 && m >= 0)
-                                             for (int ch = 0; ch < 3; ++ch) out[3 * c + ch] = 0;
-                                         return;
-                                     }
-                                     const SssTerm& t = *prep[static_cast<size_t>(m)][k].term;
-                                     for (int ch = 0; ch < 3; ++ch) {
-                                         const float sv = static_cast<float>(t.sign[ch]) * (*v)[ch];
-                                         out[3 * c + ch] = k == 0 ? sv : out[3 * c + ch] + sv;
-                                     }
-                                 });
-                    }
-                }
-            });
-    }
+    SeparablePass(g, pm.prep, p, lp, ext, px_per_mm_z, py_per_mm_z, out).run(pm.rank);
 }
 
 }  // namespace ssslab::realtime
