@@ -1,6 +1,6 @@
-// [outputs.realtime] (experiments/runner/realtime_study.h): a small experiment end to end through
-// `ssslab run`: the tables a script reads, the metrics `ssslab check` compares, the report's flip
-// viewer driven in headless Chromium, and its config errors.
+// [outputs.realtime] (experiments/runner/studies/realtime/realtime_study.cpp): a small experiment
+// end to end through `ssslab run`: the tables a script reads, the metrics `ssslab check` compares,
+// the report's flip viewer driven in headless Chromium, and its config errors.
 #include "core/build_info.h"
 #include "experiments/runner/plots.h"
 #include "testing.h"

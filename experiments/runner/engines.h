@@ -30,13 +30,7 @@ namespace ssslab::runner {
 std::map<std::string, std::string> engine_tables(const ExperimentRun& r,
                                                  std::vector<Metric>& metrics);
 
-/// Plot specs (JSON for scripts/plot.py) and their report entries; `inputs` lists the tables
-/// each plot reads.
-struct PlotRequest {
-    std::string json;
-    std::vector<std::string> inputs;
-    PlotFile file;
-};
+/// The plots of these outputs (plots.h PlotRequest).
 std::vector<PlotRequest> engine_plots(const ExperimentRun& r);
 
 /// The report sections of these outputs (tables from `files`, figures from `plots`).

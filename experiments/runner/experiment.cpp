@@ -171,11 +171,6 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
                                    "\" is defined twice");
         }
     }
-    if (auto t = outs.table("render"))
-        e.render = read_render_study(*t, std::filesystem::path(e.source).parent_path().string());
-    if (auto t = outs.table("realtime"))
-        e.realtime =
-            read_realtime_study(*t, std::filesystem::path(e.source).parent_path().string());
     for (const auto& [name, factory] : study_registry())
         if (auto t = outs.table(name))
             e.studies.push_back(
@@ -183,14 +178,13 @@ Experiment parse(std::shared_ptr<ConfigDocument> doc) {
     const bool material_outputs = e.profiles.enabled || e.profile_plots.enabled ||
                                   e.convergence.enabled || !e.kernel_studies.empty() ||
                                   e.crossval.enabled || e.pencil.enabled || e.efficiency.enabled;
-    if (!material_outputs && !e.render.enabled && !e.realtime.enabled && e.studies.empty()) {
+    if (!material_outputs && e.studies.empty()) {
         std::string plugins;
         for (const auto& [name, factory] : study_registry()) plugins += ", [outputs." + name + "]";
         outs.fail("profiles",
                   "no outputs: give at least one of [outputs.profiles], "
                   "[outputs.profile_plots], [outputs.convergence], [[outputs.kernels]], "
-                  "[outputs.crossval], [outputs.pencil], [outputs.efficiency], [outputs.render], "
-                  "[outputs.realtime]" +
+                  "[outputs.crossval], [outputs.pencil], [outputs.efficiency]" +
                       plugins);
     }
     if (material_outputs && e.materials.empty())

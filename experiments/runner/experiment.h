@@ -24,10 +24,11 @@
 //   [[outputs.kernels]]      kernel studies: separable models scored in kernel and image space
 //                            (experiments/runner/kernel_study.h)
 //   [outputs.render]         ground-truth images of scene files with rays/s and time to 1 %
-//                            (experiments/runner/render_study.h); needs no [materials]
+//                            (a plugin: experiments/runner/studies/render/); needs no [materials]
 //   [outputs.realtime]       the real-time renderer's frames of scene files scored against the
 //                            screen-space reference and the path tracer, Freude14 Table 6.4
-//                            (experiments/runner/realtime_study.h); needs no [materials]
+//                            (a plugin: experiments/runner/studies/realtime/); needs no
+//                            [materials]
 //   [outputs.stiff]          the stiff sweep: every engine and model on the extremes of its
 //                            inputs (a plugin: experiments/runner/studies/stiff/); needs no
 //                            [materials]
@@ -42,8 +43,7 @@
 #include "core/profile.h"
 #include "experiments/runner/kernel_study.h"
 #include "experiments/runner/profile_models.h"
-#include "experiments/runner/realtime_study.h"
-#include "experiments/runner/render_study.h"
+#include "experiments/runner/scene_renders.h"
 #include "mcml/engine.h"
 #include "mcml/profile.h"
 
@@ -117,8 +117,6 @@ struct Experiment {
     } efficiency;
 
     std::vector<KernelStudySpec> kernel_studies;  ///< [[outputs.kernels]]
-    RenderStudySpec render;                       ///< [outputs.render]
-    RealtimeStudySpec realtime;                   ///< [outputs.realtime]
     /// The plugin studies (experiments/runner/study.h) this config has an [outputs.<name>] of,
     /// in the registry's order.
     struct PluginStudy {

@@ -22,11 +22,18 @@ struct PlotResult {
 };
 
 class ArtifactCache;
-struct PlotRequest;  ///< engines.h: a spec for plot.py, the tables it reads, its report entry
+
+/// A plot spec (JSON for scripts/plot.py), the tables it reads (relative to the results folder)
+/// and its report entry.
+struct PlotRequest {
+    std::string json;
+    std::vector<std::string> inputs;
+    PlotFile file;
+};
 
 /// Draw the plots the experiment asks for into <dir>/plots/ (CSV inputs already in <dir>), with
-/// draw_plots. The real-time study draws its own (realtime_study.h): its report section is
-/// written before these.
+/// draw_plots. The plugin studies' plots (study.h StudyResult::plots) are drawn by the runner
+/// after each study's files are written.
 PlotResult make_plots(const ExperimentRun& r, const std::filesystem::path& dir,
                       const ArtifactCache& cache, bool quiet);
 

@@ -469,14 +469,96 @@ void metrics_tables(std::ostringstream& os, const std::vector<Metric>& ms) {
     os << "</div>\n";
 }
 
-// A plugin study's section (study.h): its title, paragraphs, tables and images, every text
-// escaped.
-void study_section_html(std::ostringstream& os, const StudySection& s) {
-    os << "<h2 id=\"" << esc(s.id) << "\">" << esc(s.title) << "</h2>\n";
+// A flip viewer (study.h FlipViewer); flip_viewer_script drives it.
+void flip_viewer_html(std::ostringstream& os, const FlipViewer& v) {
+    os << "<div class=\"flip\" id=\"" << esc(v.id) << "\">\n<p class=\"flipbar\">";
+    for (size_t i = 0; i < v.images.size(); ++i)
+        os << "<button type=\"button\" data-src=\"" << esc(v.images[i].path) << "\" data-diff=\""
+           << esc(v.images[i].diff) << "\"" << (i == v.first ? " class=\"on\"" : "") << ">"
+           << esc(v.images[i].caption) << "</button> ";
+    const FlipViewer::Image* first = v.first < v.images.size() ? &v.images[v.first] : nullptr;
+    os << "<br><label>exposure <input type=\"range\" class=\"exposure\" min=\"-4\" "
+          "max=\"4\" step=\"0.5\" value=\"0\"> <span class=\"ev\">0</span> "
+          "stops</label> <label><input type=\"checkbox\" class=\"diffmode\"> "
+          "difference to "
+       << esc(v.diff_of)
+       << "</label> (keys: left / right flip, d difference)</p>\n<img class=\"view\" src=\""
+       << (first ? esc(first->path) : "") << "\" alt=\"" << esc(v.what)
+       << "\" style=\"width:" << v.width_px
+       << "px;image-rendering:pixelated\">\n<p class=\"caption\">" << esc(v.what)
+       << "; showing <span class=\"which\">" << (first ? esc(first->caption) : "")
+       << "</span>.</p>\n<div class=\"cuts\">";
+    for (const FlipViewer::Image& e : v.images)
+        os << "<figure><img src=\"" << esc(e.cut) << "\" alt=\"cut-out " << esc(e.caption)
+           << "\"><br><img src=\"" << esc(e.cut_diff) << "\" alt=\"difference " << esc(e.caption)
+           << "\"><br>" << esc(e.caption) << "</figure>";
+    os << "</div>\n</div>\n";
+}
+
+// The flip viewers' script and style: buttons flip between a viewer's images, a checkbox shows
+// the differences, a slider sets the exposure, the arrow keys and d do the same.
+const char* flip_viewer_script() {
+    return "<script>\n(function () {\n"
+           "  document.querySelectorAll('div.flip').forEach(function (v) {\n"
+           "    var img = v.querySelector('img.view'), which = v.querySelector('span.which');\n"
+           "    var buttons = Array.prototype.slice.call(v.querySelectorAll('button'));\n"
+           "    var range = v.querySelector('input.exposure'), ev = v.querySelector('span.ev');\n"
+           "    var diff = v.querySelector('input.diffmode');\n"
+           "    var at = Math.max(0, buttons.findIndex(function (b) { return b.className === "
+           "'on'; }));\n"
+           "    function show(i) {\n"
+           "      at = (i + buttons.length) % buttons.length;\n"
+           "      buttons.forEach(function (b, k) { b.className = k === at ? 'on' : ''; });\n"
+           "      var b = buttons[at];\n"
+           "      img.src = diff.checked ? b.dataset.diff : b.dataset.src;\n"
+           "      which.textContent = b.textContent + (diff.checked ? ' (difference)' : '');\n"
+           "      v.dataset.showing = img.getAttribute('src');\n"
+           "    }\n"
+           "    buttons.forEach(function (b, k) { b.addEventListener('click', function () { "
+           "show(k); }); });\n"
+           "    diff.addEventListener('change', function () { show(at); });\n"
+           "    range.addEventListener('input', function () {\n"
+           "      ev.textContent = range.value;\n"
+           "      img.style.filter = 'brightness(' + Math.pow(2, range.value) + ')';\n"
+           "    });\n"
+           "    v.tabIndex = 0;\n"
+           "    v.addEventListener('keydown', function (e) {\n"
+           "      if (e.key === 'ArrowRight') show(at + 1);\n"
+           "      else if (e.key === 'ArrowLeft') show(at - 1);\n"
+           "      else if (e.key === 'd') { diff.checked = !diff.checked; show(at); }\n"
+           "    });\n"
+           "    v.dataset.ready = 'yes';\n"
+           "  });\n"
+           "})();\n</script>\n"
+           "<style>div.flip button.on { font-weight: bold; background: #dde; } div.cuts { "
+           "display: flex; flex-wrap: wrap; gap: 4px; } div.cuts figure { margin: 0; width: "
+           "128px; font-size: 80%; } div.cuts img { width: 128px; display: block; "
+           "image-rendering: pixelated; }</style>\n";
+}
+
+// A plugin study's section (study.h): its heading (h2, subsections h3), paragraphs, the figures
+// of its plots, tables, figures, flip viewers and subsections, every text escaped. Says whether
+// it holds a flip viewer.
+bool study_section_html(std::ostringstream& os, const StudySection& s, const PlotResult& plots,
+                        int level = 2) {
+    os << "<h" << level << " id=\"" << esc(s.id) << "\">" << esc(s.title) << "</h" << level
+       << ">\n";
     for (const std::string& p : s.paragraphs) os << "<p>" << esc(p) << "</p>\n";
+    if (!s.plot_section.empty()) {
+        if (!plots.problem.empty())
+            os << "<p class=\"note\">No plots: " << esc(plots.problem) << "</p>\n";
+        figures(os, plots, s.plot_section);
+    }
     for (const StudySection::Table& t : s.tables) csv_table(os, t.csv, esc(t.title).c_str());
-    for (const std::string& img : s.images)
-        os << "<figure><img src=\"" << esc(img) << "\" alt=\"" << esc(img) << "\"></figure>\n";
+    for (const StudySection::Figure& f : s.figures)
+        os << "<figure><img src=\"" << esc(f.path) << "\" alt=\"" << esc(f.caption)
+           << "\" style=\"max-width:256px\"><figcaption>" << esc(f.caption)
+           << "</figcaption></figure>\n";
+    bool viewers = !s.viewers.empty();
+    for (const FlipViewer& v : s.viewers) flip_viewer_html(os, v);
+    for (const StudySection& sub : s.subsections)
+        viewers = study_section_html(os, sub, plots, level + 1) || viewers;
+    return viewers;
 }
 
 // A table of contents of the page's sections: every <h2 id> of `body`, with its <h3 id>s.
@@ -603,8 +685,6 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
        << "</code> from <code>" << esc(e.source) << "</code> &middot; "
        << (r.quick ? "<b>--quick</b> (budgets &times; " +
                          format_g(!e.materials.empty() ? e.mcml.quick_factor
-                                  : e.realtime.enabled ? e.realtime.quick_factor
-                                  : e.render.enabled   ? e.render.quick_factor
                                   : !e.studies.empty() ? e.studies.front().study->quick_factor()
                                                        : 1.0,
                                   6) +
@@ -691,9 +771,10 @@ std::string render_report(const ExperimentRun& r, const ReportContent& c) {
         os << "<h2 id=\"kernels\">Kernel studies</h2>\n";
         for (const auto& so : c.studies) study_section(os, so, c.plots);
     }
-    os << c.render_html;
-    os << c.realtime_html;
-    for (const StudySection& s : c.sections) study_section_html(os, s);
+    bool viewers = false;
+    for (const ReportContent::Study& s : c.sections)
+        viewers = study_section_html(os, s.section, s.plots) || viewers;
+    if (viewers) os << flip_viewer_script();
 
     os << "<h2 id=\"metrics\">Metrics</h2>\n<p>What <code>ssslab check</code> compares with the "
           "baselines in <code>results/baselines/</code>: stochastic metrics by z-score with "

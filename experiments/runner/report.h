@@ -29,10 +29,13 @@ struct ReportContent {
     PlotResult plots;
     std::vector<StudyOutput> studies;
     const std::map<std::string, std::string>* engine_files = nullptr;  ///< engines.h tables
-    std::string render_html;    ///< [outputs.render] (render_study.h)
-    std::string realtime_html;  ///< [outputs.realtime] (realtime_study.h)
-    /// The plugin studies' sections (study.h), in the experiment's order.
-    std::vector<StudySection> sections;
+    /// The plugin studies' sections (study.h), in the experiment's order, each with the plots
+    /// the runner drew for it.
+    struct Study {
+        StudySection section;
+        PlotResult plots;
+    };
+    std::vector<Study> sections;
 };
 
 std::string render_report(const ExperimentRun& r, const ReportContent& c);

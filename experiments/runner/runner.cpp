@@ -398,17 +398,11 @@ void print_plan(const ExperimentRun& r, std::ostream& os, bool verbose) {
     if (r.exp.profiles.enabled) os << " profiles";
     if (r.exp.profile_plots.enabled) os << " profile_plots";
     if (r.exp.convergence.enabled) os << " convergence";
-    if (r.exp.render.enabled)
-        os << " render (" << r.exp.render.scenes.size() << " scenes, rendered or reused when run)";
-    if (r.exp.realtime.enabled)
-        os << " realtime (" << r.exp.realtime.scenes.size() << " scenes, "
-           << r.exp.realtime.models.size() << " models; profiles and renders reused or computed "
-           << "when run)";
     for (const auto& s : r.exp.studies) os << " " << s.study->describe();
     os << " report\n";
 }
 
-// What the scene studies (render, realtime) take of a run.
+// What the plugin studies take of a run.
 RenderStudyContext study_context(const ExperimentRun& r, const RunOptions& o) {
     RenderStudyContext ctx;
     ctx.seed = r.exp.seed;
@@ -674,37 +668,15 @@ void run_kernel_studies(ExperimentRun& r, const RunOptions& o, const ArtifactCac
     }
 }
 
-// The studies of scene files and of their own inputs (render, realtime, stiff) and the plugin
-// studies (study.h), in turn; false when one was interrupted (nothing of it is kept).
-bool run_scene_studies(ExperimentRun& r, const RunOptions& o, const ArtifactCache& cache,
-                       const fs::path& stage, ReportContent& report) {
-    if (r.exp.render.enabled) {
-        const RenderStudyContext ctx = study_context(r, o);
-        fs::create_directories(stage / "render");
-        RenderStudyResult rr = run_render_study(r.exp.render, ctx, cache, stage, r.metrics);
-        if (rr.interrupted) {
-            return false;
-        }
-        r.computed += rr.computed;
-        r.reused += rr.reused;
-        report.render_html = std::move(rr.html);
-    }
-    if (r.exp.realtime.enabled) {
-        const RenderStudyContext ctx = study_context(r, o);
-        RealtimeStudyResult rr =
-            run_realtime_study(r.exp.realtime, ctx, cache, o.results_root, stage, r.metrics);
-        if (rr.interrupted) {
-            return false;
-        }
-        r.computed += rr.computed;
-        r.reused += rr.reused;
-        report.realtime_html = std::move(rr.html);
-    }
-    // The plugin studies (study.h): what each returns is written and rendered here.
+// The plugin studies (study.h), in turn: what each returns is written and rendered here; false
+// when one was interrupted (nothing of it is kept).
+bool run_plugin_studies(ExperimentRun& r, const RunOptions& o, const ArtifactCache& cache,
+                        const fs::path& stage, ReportContent& report) {
     for (const auto& s : r.exp.studies) {
         StudyInputs in;
         in.ctx = study_context(r, o);
         in.cache = &cache;
+        in.results_root = o.results_root;
         StudyResult sr = s.study->run(in);
         if (sr.interrupted) {
             return false;
@@ -716,7 +688,10 @@ bool run_scene_studies(ExperimentRun& r, const RunOptions& o, const ArtifactCach
         r.metrics.insert(r.metrics.end(), sr.metrics.begin(), sr.metrics.end());
         if (!o.quiet && !sr.summary.empty())
             std::printf("  %s: %s\n", s.name.c_str(), sr.summary.c_str());
-        report.sections.push_back(std::move(sr.section));
+        // Its plots, once the tables they read are written (an empty request list draws none).
+        PlotResult plots;
+        if (!sr.plots.empty()) plots = draw_plots(sr.plots, stage, cache, o.quiet);
+        report.sections.push_back({std::move(sr.section), std::move(plots)});
     }
     return true;
 }
@@ -769,7 +744,7 @@ bool execute(ExperimentRun& r, const RunOptions& o) {
     std::map<std::string, std::string> engine_files = engine_tables_cached(r, cache);
     for (const auto& [name, content] : engine_files) write_file_atomic(stage / name, content);
     run_kernel_studies(r, o, cache, stage, report);
-    if (!run_scene_studies(r, o, cache, stage, report)) {
+    if (!run_plugin_studies(r, o, cache, stage, report)) {
         fs::remove_all(stage, ec);
         r.interrupted = true;
         return false;

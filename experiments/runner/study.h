@@ -8,13 +8,15 @@
 // (experiments/CMakeLists.txt, by glob); no runner file changes (docs/architecture.md, "Studies as
 // plugins").
 //
-// The older studies (profiles, convergence, the engines' tables, kernel studies, render, realtime,
-// stiff) are still wired into runner.cpp by hand; they move here one by one.
+// The older studies (profiles, convergence, the engines' tables, kernel studies) are still wired
+// into runner.cpp by hand; they read the MCML nodes the runner plans, and move here once that
+// planning is part of this interface (realtime, render, spot_light and stiff are plugins).
 #pragma once
 
 #include "core/config.h"
 #include "experiments/runner/nodes.h"
-#include "experiments/runner/render_study.h"
+#include "experiments/runner/plots.h"
+#include "experiments/runner/scene_renders.h"
 
 #include <filesystem>
 #include <functional>
@@ -25,16 +27,40 @@
 
 namespace ssslab::runner {
 
-/// A study's section of the report, as data: the writer escapes the text and renders the tables
-/// (CSV text, the header its first row) and the images (paths relative to the results folder).
+/// A flip viewer: images of the same size shown one at a time in one place (buttons, the arrow
+/// keys), each with its difference image (a checkbox, the key d) and its cut-outs below, under
+/// one exposure slider. Paths are relative to the results folder.
+struct FlipViewer {
+    std::string id;         ///< the element's id (unique in the page)
+    int width_px = 256;     ///< the shown image's width in the page
+    std::string what;       ///< the caption's first words ("Subsurface layer (...)")
+    std::string diff_of;    ///< what the differences are to ("the screen-space reference (10x)")
+    std::size_t first = 0;  ///< the image shown at first
+    struct Image {
+        std::string caption, path, diff, cut, cut_diff;
+    };
+    std::vector<Image> images;
+};
+
+/// A study's section of the report, as data: the writer escapes the text and renders, in this
+/// order, the paragraphs, the figures of its plot requests (StudyResult::plots whose section is
+/// `plot_section`), the tables (CSV text, the header its first row), the figures (images by path
+/// relative to the results folder, with their captions), the flip viewers and the subsections
+/// (headings one level down, with ids of their own).
 struct StudySection {
     std::string id, title;
     std::vector<std::string> paragraphs;
+    std::string plot_section;
     struct Table {
         std::string title, csv;
     };
     std::vector<Table> tables;
-    std::vector<std::string> images;
+    struct Figure {
+        std::string path, caption;
+    };
+    std::vector<Figure> figures;
+    std::vector<FlipViewer> viewers;
+    std::vector<StudySection> subsections;
 };
 
 struct StudyResult {
@@ -43,15 +69,20 @@ struct StudyResult {
     /// Files relative to results/<experiment>/<name>/ and their content.
     std::map<std::string, std::string> files;
     std::vector<Metric> metrics;
+    /// Figures the runner draws once the files are written (plots.h; their CSVs among the
+    /// files), shown in the sections whose plot_section names them.
+    std::vector<PlotRequest> plots;
     StudySection section;
     std::string summary;  ///< one line for the terminal
 };
 
 /// What a study gets of the run: the scene studies' context (seed, --quick, threads, quiet,
-/// checkpoint interval, cancellation) and the artifact cache.
+/// checkpoint interval, cancellation), the artifact cache and the results root that holds it
+/// (where the runner's MCML profiles are computed or reused: realtime_inputs.h).
 struct StudyInputs {
     RenderStudyContext ctx;
     const ArtifactCache* cache = nullptr;
+    std::filesystem::path results_root;
 };
 
 class Study {

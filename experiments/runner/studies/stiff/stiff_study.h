@@ -51,7 +51,7 @@
 #pragma once
 
 #include "core/config.h"
-#include "experiments/runner/render_study.h"
+#include "experiments/runner/scene_renders.h"
 #include "experiments/runner/study.h"
 
 #include <cstdint>

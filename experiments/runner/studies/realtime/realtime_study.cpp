@@ -1,5 +1,50 @@
-#include "experiments/runner/realtime_study.h"
-
+// [outputs.realtime]: the real-time renderer scored image against image [Freude14 Table 6.4,
+// Figs. 6.11-6.22]. For every scene, every kernel model's frame (realtime/frame.h) against two
+// references: the same pipeline with the exact 2D kernel (the screen-space ground truth:
+// the model's separability error alone) and the path tracer's subsurface layer (the physical
+// ground truth), with the path tracer's noise taken out (core/image_compare.h
+// noise_corrected_rms). A study plugin (experiments/runner/study.h): its files, metrics, plots and
+// report section (with a flip viewer per scene) are returned as data.
+//
+//   [outputs.realtime]
+//   scenes = ["../scenes/skin.toml", ...]   # relative to the config file
+//   models = ["svd:rank=1", "preintegration", "guided:k=1", "manual:table_a1,unit=mm", ...]
+//   taps = 17                     # importance-sampled taps per 1D pass, as the thesis
+//   sweep_models = ["svd:rank=1", "preintegration"]   # error against frame time ...
+//   taps_sweep = [5, 9, 17, 33, 65]                   # ... over these tap counts ...
+//   jitter = 0.33                 # ... with and without this jitter (0: without only)
+//   width = 512                   # every scene at this size (0: the scene camera's)
+//   height = 512
+//   edge = "follow"               # follow | reject | none (realtime/sss_pass.h)
+//   backend = "software"          # software | gl: the SSS pass on the GL twin (realtime/gl)
+//   platform = "auto"             # with gl: auto | osmesa | egl
+//   spp = 252                     # the path tracer's reference (a cached render, role
+//                                 # "realtime"; shared with any study of the same budget)
+//   photons = 1e6                 # MCML photons per channel of each material's profile
+//   light_samples = 16, environment_samples = 64, shadow_map_size = 2048,
+//   environment_map_size = 512    # realtime/lighting.h LightingOptions
+//   reference_samples = 256       # the exact reference's samples per pixel where it samples
+//   quick_factor = 0.125          # --quick: spp and photons times this (spp at least 12) ...
+//   quick_size = 64               # ... and at most this many pixels wide and high
+//   images = true                 # PNG panels, difference images, cut-outs, the flip viewer
+//   munoz = ["layers=4", "layers=8,t=0.001,downsample=2"]   # Munoz11's layered convolution
+//                                 # (approx::parse_munoz) in place of the SSS pass, with the
+//                                 # media's far sides as back samples (surface_frames.h)
+//
+// The scored pixels of a scene are those whose samples all see a medium (material layer); per
+// model and channel: the RMS against the screen-space reference (exact where the reference
+// summed exactly, with the reference's standard error otherwise) and against the path tracer
+// (noise-corrected, with its standard error), both absolute (radiance units) and normalised as
+// Table 6.4 (the largest per-channel error of the table is 1; per scene too).
+//
+// results/<name>/realtime/: table_6_4.csv, error_vs_time.csv, decomposition.csv,
+// thesis_table_6_4.csv (Freude14's numbers beside ours), munoz11.csv (with munoz: per scene and
+// variant the RGB error against the screen-space reference and the path tracer with standard
+// errors, the layered convolution's seconds and counts), and with images <scene>/*.png; per scene
+// results/<name>/plots/realtime_error_vs_time_<scene>.{png,svg}: the RGB error against the
+// screen-space reference and against the path tracer (+-1 SE) over the SSS pass time, log axes
+// (scripts/plot.py "error_vs_time", drawn by the runner from
+// StudyResult::plots and shown in the section).
 #include "approx/model_spec.h"
 #include "approx/munoz.h"
 #include "core/atomic_file.h"
@@ -15,8 +60,10 @@
 #include "experiments/runner/realtime_inputs.h"
 #include "experiments/runner/report.h"
 #include "experiments/runner/runner.h"
+#include "experiments/runner/study.h"
 #include "experiments/runner/surface_frames.h"
 #include "realtime/frame.h"
+#include "realtime/sss_pass.h"
 #if SSSLAB_HAVE_GL
 #include "realtime/gl/sss_pass_gl.h"
 #endif
@@ -40,6 +87,34 @@ namespace ssslab::runner {
 namespace fs = std::filesystem;
 
 namespace {
+
+struct RealtimeStudySpec {
+    std::vector<std::string> scenes;  ///< resolved paths
+    std::vector<std::string> models;  ///< model spec texts (validated)
+    int taps = 17;
+    std::vector<std::string> sweep_models;
+    std::vector<int> taps_sweep;
+    double jitter = 0.33;
+    /// The sweep also runs every tap count with the pass axes rotated per pixel
+    /// (SssParams::rotate, JimenezSupp Fig. S.7), without jitter.
+    bool rotate = false;
+    int width = 512, height = 512;
+    realtime::SssEdgeMode edge = realtime::SssEdgeMode::kFollowSurface;
+    /// The separable pass's backend: "software" (realtime/sss_pass.h) or "gl" (the GL twin,
+    /// realtime/gl) on `platform` ("auto", "osmesa", "egl").
+    std::string backend = "software", platform = "auto";
+    std::int64_t spp = 252;
+    std::int64_t photons = 1'000'000;
+    int light_samples = 16, environment_samples = 64, shadow_map_size = 2048,
+        environment_map_size = 512;
+    int reference_samples = 256;
+    double quick_factor = 0.125;
+    int quick_size = 64;
+    bool images = true;
+    std::vector<std::string> munoz;  ///< Munoz11 variants (approx::parse_munoz texts)
+    /// Jensen-Buhler variants (approx::parse_jensen_buhler texts)
+    std::vector<std::string> jensen_buhler;
+};
 
 /// A model's label as a metric name part (no dots).
 std::string metric_label(const std::string& label) {
@@ -155,6 +230,14 @@ double percentile(std::vector<double> v, double q) {
     return v[k];
 }
 
+/// with_error's text without its HTML entity (the report's table writer escapes cells).
+std::string plain_with_error(double value, double se) {
+    std::string s = with_error(value, se);
+    const size_t at = s.find("&plusmn;");
+    if (at != std::string::npos) s.replace(at, 8, "\u00b1");
+    return s;
+}
+
 /// sRGB PNG (core/film_image.h srgb8, as the previews) of an RGB layer times `gain`, optionally
 /// cropped to [x0, x0 + cw) x [y0, y0 + ch) and magnified `zoom` times (nearest neighbour).
 std::string png_of(const ImageLayer& l, double gain, int x0 = 0, int y0 = 0, int cw = 0, int ch = 0,
@@ -179,11 +262,8 @@ ImageLayer& abs_difference(LayeredImage& out, const ImageLayer& a, const ImageLa
     return d;
 }
 
-}  // namespace
-
 RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_dir) {
     RealtimeStudySpec s;
-    s.enabled = true;
     // Both renderers draw every scene: the path tracer's reference and the real-time frames.
     s.scenes = read_scene_files(t, config_dir, [](const Scene& sc) {
         volpath::check_renderable(sc);
@@ -289,8 +369,6 @@ RealtimeStudySpec read_realtime_study(ConfigTable& t, const std::string& config_
     return s;
 }
 
-namespace {
-
 /// A scene's scores of the table's models at spec.taps, and the scale of its signal.
 struct SceneScores {
     std::string scene;
@@ -336,9 +414,10 @@ struct SceneRun {
     std::map<std::string, realtime::FrameResult> frames;  // the table's models, for images
 };
 
-/// The study's CSV tables as they grow scene by scene, and the flip viewers' HTML.
+/// The study's CSV tables as they grow scene by scene, and the flip viewers' subsections.
 struct RealtimeTables {
-    std::ostringstream table, sweep, decomposition, munoz, jb, approximations, viewers;
+    std::ostringstream table, sweep, decomposition, munoz, jb, approximations;
+    std::vector<StudySection> viewers;
     RealtimeTables() {
         table << "scene,model,label,taps,channel,pixels,rms_vs_reference,rms_vs_reference_se,"
                  "norm_table,norm_scene,rel_rms_vs_reference,rms_vs_volpath,rms_vs_volpath_se,"
@@ -365,19 +444,15 @@ struct RealtimeTables {
 /// One run of the study: scene by scene, then the tables, the plots and the report section.
 class RealtimeRun {
   public:
-    RealtimeRun(const RealtimeStudySpec& spec, const RenderStudyContext& ctx,
-                const ArtifactCache& cache, const fs::path& results_root, const fs::path& stage,
-                std::vector<Metric>& metrics)
+    RealtimeRun(const RealtimeStudySpec& spec, const StudyInputs& in)
         : spec_(spec),
-          ctx_(ctx),
-          cache_(cache),
-          results_root_(results_root),
-          stage_(stage),
-          dir_(stage / "realtime"),
-          metrics_(metrics),
-          arena_(ctx.threads > 0 ? ctx.threads : tbb::task_arena::automatic) {}
+          ctx_(in.ctx),
+          cache_(*in.cache),
+          results_root_(in.results_root),
+          metrics_(res_.metrics),
+          arena_(in.ctx.threads > 0 ? in.ctx.threads : tbb::task_arena::automatic) {}
 
-    RealtimeStudyResult run();
+    StudyResult run();
 
   private:
     bool prepare_scene(const std::string& path, SceneRun& s);
@@ -397,17 +472,17 @@ class RealtimeRun {
     void write_images(const SceneRun& s, const SceneScores& ss);
     std::string write_tables(const std::vector<SceneScores>& all);
     std::vector<PlotRequest> plot_requests(const std::vector<SceneScores>& all) const;
-    std::string section_html(const std::vector<SceneScores>& all, const std::string& ours_vs_thesis,
-                             const PlotResult& plots) const;
+    StudySection section(const std::vector<SceneScores>& all,
+                         const std::string& ours_vs_thesis) const;
 
     const RealtimeStudySpec& spec_;
     const RenderStudyContext& ctx_;
     const ArtifactCache& cache_;
-    const fs::path results_root_, stage_, dir_;
-    std::vector<Metric>& metrics_;
+    const fs::path results_root_;
+    StudyResult res_;
+    std::vector<Metric>& metrics_;  // res_'s
     tbb::task_arena arena_;
     RealtimeTables t_;
-    RealtimeStudyResult res_;
     // The GL twin's SSS pass, where the config names it: one context for the study, on this
     // thread (render_frame calls the pass on the thread that runs the arena's work).
 #if SSSLAB_HAVE_GL
@@ -416,8 +491,7 @@ class RealtimeRun {
 #endif
 };
 
-RealtimeStudyResult RealtimeRun::run() {
-    fs::create_directories(dir_);
+StudyResult RealtimeRun::run() {
 #if SSSLAB_HAVE_GL
     if (spec_.backend == "gl") {
         gl_context_ =
@@ -450,8 +524,8 @@ RealtimeStudyResult RealtimeRun::run() {
         all.push_back(std::move(ss));
     }
     const std::string ours_vs_thesis = write_tables(all);
-    const PlotResult plots = draw_plots(plot_requests(all), stage_, cache_, ctx_.quiet);
-    res_.html = section_html(all, ours_vs_thesis, plots);
+    res_.plots = plot_requests(all);
+    res_.section = section(all, ours_vs_thesis);
     return res_;
 }
 
@@ -815,52 +889,13 @@ void RealtimeRun::decompose(const SceneRun& s, const SceneScores& ss) {
     }
 }
 
-/// A flip viewer's image: its file stem, caption and difference image.
-struct ViewerEntry {
-    std::string name, caption;
-    std::string diff;  // its difference image, if any
-};
-
-/// The flip viewer of a scene's images (the script in flip_viewer_script drives it).
-std::string flip_viewer_html(const std::string& scene, int w,
-                             const std::vector<ViewerEntry>& entries) {
-    std::ostringstream viewers;
-    const std::string id = "flip-" + scene;
-    viewers << "<h3 id=\"realtime-" << esc(scene) << "\">" << esc(scene)
-            << ": flip between images</h3>\n<div class=\"flip\" id=\"" << esc(id)
-            << "\">\n<p class=\"flipbar\">";
-    for (size_t i = 0; i < entries.size(); ++i)
-        viewers << "<button type=\"button\" data-src=\"realtime/" << esc(scene) << "/"
-                << esc(entries[i].name) << ".png\" data-diff=\"realtime/" << esc(scene) << "/"
-                << esc(entries[i].diff) << "\"" << (i == 1 ? " class=\"on\"" : "") << ">"
-                << esc(entries[i].caption) << "</button> ";
-    viewers << "<br><label>exposure <input type=\"range\" class=\"exposure\" min=\"-4\" "
-               "max=\"4\" step=\"0.5\" value=\"0\"> <span class=\"ev\">0</span> "
-               "stops</label> <label><input type=\"checkbox\" class=\"diffmode\"> "
-               "difference to the screen-space reference (10x)</label> (keys: left / "
-               "right flip, d difference)</p>\n<img class=\"view\" src=\"realtime/"
-            << esc(scene) << "/reference.png\" alt=\"" << esc(scene)
-            << " subsurface\" style=\"width:" << std::max(256, std::min(512, w))
-            << "px;image-rendering:pixelated\">\n<p class=\"caption\">Subsurface layer "
-               "(the same exposure for all); showing <span class=\"which\">screen-space "
-               "2D reference</span>.</p>\n<div class=\"cuts\">";
-    for (const ViewerEntry& e : entries)
-        viewers << "<figure><img src=\"realtime/" << esc(scene) << "/cut_" << esc(e.name)
-                << ".png\" alt=\"cut-out " << esc(e.caption) << "\"><br><img src=\"realtime/"
-                << esc(scene) << "/cutdiff_" << esc(e.name) << ".png\" alt=\"difference "
-                << esc(e.caption) << "\"><br>" << esc(e.caption) << "</figure>";
-    viewers << "</div>\n</div>\n";
-    return viewers.str();
-}
-
 /// Images: the same exposure for every image of a scene (the reference's 99th percentile at
 /// 0.8), differences to the reference 10 times brighter; cut-outs, and the flip viewer.
 void RealtimeRun::write_images(const SceneRun& s, const SceneScores& ss) {
     const int w = s.w, h = s.h;
     const std::vector<size_t>& mask = s.mask;
     const realtime::FrameResult& ref = s.ref;
-    const fs::path sd = dir_ / s.scene.name;
-    fs::create_directories(sd);
+    const std::string sd = s.scene.name + "/";  // under realtime/
     std::vector<double> v, var, all_v;
     for (int c = 0; c < 3; ++c) {
         masked(ref.image, "subsurface", mask, c, v, var);
@@ -879,24 +914,35 @@ void RealtimeRun::write_images(const SceneRun& s, const SceneScores& ss) {
     const int cw = std::max(4, w / 3), chh = std::max(4, h / 3);
     const int x0 = std::clamp(static_cast<int>(cx) - cw / 2, 0, w - cw);
     const int y0 = std::clamp(static_cast<int>(cy) - chh / 2, 0, h - chh);
-    std::vector<ViewerEntry> entries;
+    FlipViewer fv;
+    fv.id = "flip-" + s.scene.name;
+    fv.width_px = std::max(256, std::min(512, w));
+    fv.what = "Subsurface layer (the same exposure for all)";
+    fv.diff_of = "the screen-space reference (10x)";
+    fv.first = 1;  // the screen-space reference
+    std::map<std::string, std::string>& files = res_.files;
     auto add_entry = [&](const std::string& name, const std::string& caption, const ImageLayer& l) {
-        write_file_atomic(sd / (name + ".png"), png_of(l, gain));
-        write_file_atomic(sd / ("cut_" + name + ".png"), png_of(l, gain, x0, y0, cw, chh, 3));
+        files[sd + name + ".png"] = png_of(l, gain);
+        files[sd + "cut_" + name + ".png"] = png_of(l, gain, x0, y0, cw, chh, 3);
         LayeredImage diff(w, h);
         const ImageLayer& d = abs_difference(diff, l, ref.image.layer("subsurface"));
-        write_file_atomic(sd / ("diff_" + name + ".png"), png_of(d, 10 * gain));
-        write_file_atomic(sd / ("cutdiff_" + name + ".png"),
-                          png_of(d, 10 * gain, x0, y0, cw, chh, 3));
-        entries.push_back({name, caption, "diff_" + name + ".png"});
+        files[sd + "diff_" + name + ".png"] = png_of(d, 10 * gain);
+        files[sd + "cutdiff_" + name + ".png"] = png_of(d, 10 * gain, x0, y0, cw, chh, 3);
+        const std::string at = "realtime/" + sd;
+        fv.images.push_back({caption, at + name + ".png", at + "diff_" + name + ".png",
+                             at + "cut_" + name + ".png", at + "cutdiff_" + name + ".png"});
     };
     add_entry("volpath", "path tracer (" + std::to_string(s.vp->spp) + " spp)",
               s.vp->image.layer("subsurface"));
     add_entry("reference", "screen-space 2D reference", ref.image.layer("subsurface"));
     for (const Score& sc : ss.scores)
         add_entry(sc.label, sc.model, s.frames.at(sc.label).image.layer("subsurface"));
-    write_file_atomic(sd / "radiance_reference.png", png_of(ref.image.layer("radiance"), gain));
-    t_.viewers << flip_viewer_html(s.scene.name, w, entries);
+    files[sd + "radiance_reference.png"] = png_of(ref.image.layer("radiance"), gain);
+    StudySection sub;
+    sub.id = "realtime-" + s.scene.name;
+    sub.title = s.scene.name + ": flip between images";
+    sub.viewers.push_back(std::move(fv));
+    t_.viewers.push_back(std::move(sub));
 }
 
 /// Table 6.4: normalised by the table's largest per-channel error (vs the screen-space
@@ -908,6 +954,7 @@ std::string RealtimeRun::write_tables(const std::vector<SceneScores>& all) {
         for (const Score& sc : ss.scores)
             for (const auto& e : sc.vs_reference) table_max = std::max(table_max, e.rms);
     std::ostringstream ours_vs_thesis;
+    ours_vs_thesis << "scene / thesis,model,R,G,B,sum,thesis R,thesis G,thesis B,thesis sum\n";
     for (const SceneScores& ss : all) {
         double scene_max = 0;
         for (const Score& sc : ss.scores)
@@ -936,18 +983,15 @@ std::string RealtimeRun::write_tables(const std::vector<SceneScores>& all) {
             }
             for (const ThesisRow& t : thesis_table_6_4())
                 if (t.ours == ss.scene && t.model == sc.model) {
-                    ours_vs_thesis << "<tr><td class=\"l\">" << esc(ss.scene) << " / " << t.scene
-                                   << "</td><td class=\"l\"><code>" << esc(sc.model)
-                                   << "</code></td>";
+                    ours_vs_thesis << csv_field(ss.scene + " / " + t.scene) << ","
+                                   << csv_field(sc.model);
                     for (int c = 0; c < 3; ++c)
                         ours_vs_thesis
-                            << "<td>"
-                            << format_g(sc.vs_reference[static_cast<size_t>(c)].rms / table_max, 3)
-                            << "</td>";
-                    ours_vs_thesis << "<td><b>" << format_g(sum_norm, 3) << "</b></td><td>"
-                                   << format_g(t.r, 3) << "</td><td>" << format_g(t.g, 3)
-                                   << "</td><td>" << format_g(t.b, 3) << "</td><td><b>"
-                                   << format_g(t.sum, 3) << "</b></td></tr>\n";
+                            << ","
+                            << format_g(sc.vs_reference[static_cast<size_t>(c)].rms / table_max, 3);
+                    ours_vs_thesis << "," << format_g(sum_norm, 3) << "," << format_g(t.r, 3) << ","
+                                   << format_g(t.g, 3) << "," << format_g(t.b, 3) << ","
+                                   << format_g(t.sum, 3) << "\n";
                 }
         }
     }
@@ -956,13 +1000,14 @@ std::string RealtimeRun::write_tables(const std::vector<SceneScores>& all) {
     for (const ThesisRow& t : thesis_table_6_4())
         thesis << t.scene << "," << t.ours << ",\"" << t.model << "\"," << t.r << "," << t.g << ","
                << t.b << "," << t.sum << "\n";
-    write_file_atomic(dir_ / "table_6_4.csv", t_.table.str());
-    write_file_atomic(dir_ / "error_vs_time.csv", t_.sweep.str());
-    write_file_atomic(dir_ / "decomposition.csv", t_.decomposition.str());
-    write_file_atomic(dir_ / "thesis_table_6_4.csv", thesis.str());
-    if (!spec_.munoz.empty()) write_file_atomic(dir_ / "munoz11.csv", t_.munoz.str());
-    if (!spec_.jensen_buhler.empty()) write_file_atomic(dir_ / "jensen_buhler.csv", t_.jb.str());
-    write_file_atomic(dir_ / "approximations.csv", t_.approximations.str());
+    std::map<std::string, std::string>& files = res_.files;
+    files["table_6_4.csv"] = t_.table.str();
+    files["error_vs_time.csv"] = t_.sweep.str();
+    files["decomposition.csv"] = t_.decomposition.str();
+    files["thesis_table_6_4.csv"] = thesis.str();
+    if (!spec_.munoz.empty()) files["munoz11.csv"] = t_.munoz.str();
+    if (!spec_.jensen_buhler.empty()) files["jensen_buhler.csv"] = t_.jb.str();
+    files["approximations.csv"] = t_.approximations.str();
     return ours_vs_thesis.str();
 }
 
@@ -1067,132 +1112,120 @@ std::vector<PlotRequest> RealtimeRun::plot_requests(const std::vector<SceneScore
     return plot_requests;
 }
 
-/// The flip viewers' script and style: buttons flip between a scene's images, a checkbox shows
-/// the differences, a slider sets the exposure, the arrow keys and d do the same.
-const char* flip_viewer_script() {
-    return "<script>\n(function () {\n"
-           "  document.querySelectorAll('div.flip').forEach(function (v) {\n"
-           "    var img = v.querySelector('img.view'), which = v.querySelector('span.which');\n"
-           "    var buttons = Array.prototype.slice.call(v.querySelectorAll('button'));\n"
-           "    var range = v.querySelector('input.exposure'), ev = v.querySelector('span.ev');\n"
-           "    var diff = v.querySelector('input.diffmode'), at = 1;\n"
-           "    function show(i) {\n"
-           "      at = (i + buttons.length) % buttons.length;\n"
-           "      buttons.forEach(function (b, k) { b.className = k === at ? 'on' : ''; });\n"
-           "      var b = buttons[at];\n"
-           "      img.src = diff.checked ? b.dataset.diff : b.dataset.src;\n"
-           "      which.textContent = b.textContent + (diff.checked ? ' (difference)' : '');\n"
-           "      v.dataset.showing = img.getAttribute('src');\n"
-           "    }\n"
-           "    buttons.forEach(function (b, k) { b.addEventListener('click', function () { "
-           "show(k); }); });\n"
-           "    diff.addEventListener('change', function () { show(at); });\n"
-           "    range.addEventListener('input', function () {\n"
-           "      ev.textContent = range.value;\n"
-           "      img.style.filter = 'brightness(' + Math.pow(2, range.value) + ')';\n"
-           "    });\n"
-           "    v.tabIndex = 0;\n"
-           "    v.addEventListener('keydown', function (e) {\n"
-           "      if (e.key === 'ArrowRight') show(at + 1);\n"
-           "      else if (e.key === 'ArrowLeft') show(at - 1);\n"
-           "      else if (e.key === 'd') { diff.checked = !diff.checked; show(at); }\n"
-           "    });\n"
-           "    v.dataset.ready = 'yes';\n"
-           "  });\n"
-           "})();\n</script>\n"
-           "<style>div.flip button.on { font-weight: bold; background: #dde; } div.cuts { "
-           "display: flex; flex-wrap: wrap; gap: 4px; } div.cuts figure { margin: 0; width: "
-           "128px; font-size: 80%; } div.cuts img { width: 128px; display: block; "
-           "image-rendering: pixelated; }</style>\n";
+/// The report section: the tables, the figures of the plots and a flip viewer per scene.
+StudySection RealtimeRun::section(const std::vector<SceneScores>& all,
+                                  const std::string& ours_vs_thesis) const {
+    StudySection sec;
+    sec.id = "realtime";
+    sec.title = "Real-time renderer against the ground truth";
+    sec.paragraphs.push_back(
+        "Each scene rasterized and shaded with shadow maps (realtime/frame.h), its subsurface "
+        "light by the separable screen-space pass with each kernel model (" +
+        std::to_string(spec_.taps) +
+        " importance-sampled taps per 1D pass, as the thesis), scored over the pixels that see "
+        "only a medium against the same pipeline with the exact 2D kernel (vs reference: the "
+        "separability error alone) and against the path tracer's subsurface layer (vs volpath: "
+        "everything, its noise taken out: the expected squared difference minus the path "
+        "tracer's variance, with the metric's standard error). Absolute RMS in radiance units; "
+        "Table 6.4's normalisation divides by the largest per-channel error of the table.");
+    StudySection table;
+    table.id = "realtime-table";
+    table.title = "Table 6.4, ours beside the thesis's";
+    table.paragraphs.push_back(
+        "Normalised RMS against the screen-space reference (ours) and the thesis's normalised "
+        "image RMS (against its ground-truth rendering, on its scenes: ours stand in for Dragon "
+        "(marble), Fruit (apple), Head (skin), Ketchup and Milk (wholemilk); the thesis has no "
+        "scene for each of our materials and its normalisation is over its own table, so the "
+        "comparison is of the ranking and the ratios between models, not of the values).");
+    table.tables.push_back(
+        {"Ours beside the thesis's (realtime/thesis_table_6_4.csv)", ours_vs_thesis});
+    sec.subsections.push_back(std::move(table));
+
+    StudySection errors;
+    errors.id = "realtime-errors";
+    errors.title = "Every model, per scene";
+    errors.paragraphs.push_back(
+        "RMS over the medium's pixels in radiance units: against the screen-space reference (the "
+        "separability error) and against the path tracer (noise-corrected, \u00b1 its standard "
+        "error); the sss pass's and the frame's time on this machine. All columns in "
+        "realtime/table_6_4.csv.");
+    for (const SceneScores& ss : all) {
+        std::ostringstream csv;
+        csv << csv_field(ss.scene + " (" + std::to_string(ss.pixels) + " px)")
+            << ",vs ref. R,G,B,vs volpath R,G,B,sss ms,frame ms\n";
+        for (const Score& sc : ss.scores) {
+            csv << csv_field(sc.model);
+            for (const auto& e : sc.vs_reference) csv << "," << format_g(e.rms, 3);
+            for (const auto& e : sc.vs_volpath)
+                csv << "," << csv_field(plain_with_error(e.rms, e.rms_se));
+            csv << "," << format_g(sc.sss_ms, 3) << "," << format_g(sc.frame_ms, 4) << "\n";
+        }
+        errors.tables.push_back({ss.scene, csv.str()});
+    }
+    errors.tables.push_back(
+        {"The error decomposition (realtime/decomposition.csv): "
+         "separability, the screen-space assumption, lighting, total",
+         t_.decomposition.str()});
+    sec.subsections.push_back(std::move(errors));
+
+    StudySection time;
+    time.id = "realtime-time";
+    time.title = "Error against time";
+    time.paragraphs.push_back(
+        "Every model of the table at " + std::to_string(spec_.taps) +
+        " taps, and the swept models over their tap counts with and without jitter" +
+        (spec_.rotate ? " and with rotated pass axes" : "") +
+        ": the error against the time the SSS pass took, per scene (the frame times are in the "
+        "table). Table: realtime/error_vs_time.csv.");
+    time.plot_section = "realtime";
+    time.tables.push_back(
+        {"Error against frame time (realtime/error_vs_time.csv)", t_.sweep.str()});
+    sec.subsections.push_back(std::move(time));
+
+    if (!spec_.munoz.empty() || !spec_.jensen_buhler.empty()) {
+        StudySection in;
+        in.id = "realtime-integrations";
+        in.title =
+            "Integrations over the surfaces: Munoz11, Jensen-Buhler, and every approximation";
+        in.paragraphs.push_back(
+            "The SSS pass replaced by Munoz11's layered convolution (the media's far sides from a "
+            "second raster) and by Jensen-Buhler's hierarchical integration (a Poisson-disk point "
+            "cloud on every surface of the media, lit by pass 1's lights and shadow maps), scored "
+            "like the models. Seconds: Munoz11's layered convolution; Jensen-Buhler's point "
+            "cloud, its lighting and octree, and the queries; the separable models' and the "
+            "reference's SSS pass. Tables: realtime/approximations.csv, realtime/munoz11.csv, "
+            "realtime/jensen_buhler.csv.");
+        in.plot_section = "realtime-integrations";
+        in.tables.push_back(
+            {"Every approximation against the path tracer (realtime/approximations.csv)",
+             t_.approximations.str()});
+        sec.subsections.push_back(std::move(in));
+    }
+    for (const StudySection& v : t_.viewers) sec.subsections.push_back(v);
+    return sec;
 }
 
-/// The report section: the tables, the figures and the flip viewers.
-std::string RealtimeRun::section_html(const std::vector<SceneScores>& all,
-                                      const std::string& ours_vs_thesis,
-                                      const PlotResult& plots) const {
-    std::ostringstream html;
-    const bool integrations = !spec_.munoz.empty() || !spec_.jensen_buhler.empty();
-    html << "<h2 id=\"realtime\">Real-time renderer against the ground truth</h2>\n<p>Each "
-            "scene rasterized and shaded with shadow maps (realtime/frame.h), its subsurface "
-            "light by the separable screen-space pass with each kernel model ("
-         << spec_.taps
-         << " importance-sampled taps per 1D pass, as the thesis), scored over the pixels that "
-            "see only a medium against the same pipeline with the exact 2D kernel "
-            "(<i>vs reference</i>: the separability error alone) and against the path tracer's "
-            "subsurface layer (<i>vs volpath</i>: everything, its noise taken out: the expected "
-            "squared difference minus the path tracer's variance, with the metric's standard "
-            "error). Absolute RMS in radiance units; Table 6.4's normalisation divides by the "
-            "largest per-channel error of the table.</p>\n";
-    html << "<h3 id=\"realtime-table\">Table 6.4, ours beside the thesis's</h3>\n<p>Normalised "
-            "RMS against the screen-space reference (ours) and the thesis's normalised image "
-            "RMS (against its ground-truth rendering, on its scenes: ours stand in for Dragon "
-            "(marble), Fruit (apple), Head (skin), Ketchup and Milk (wholemilk); the thesis "
-            "has no scene for each of our materials and its normalisation is over its own "
-            "table, so the comparison is of the ranking and the ratios between models, not of "
-            "the values).</p>\n<table><tr><th class=\"l\">scene / thesis</th><th "
-            "class=\"l\">model</th><th>R</th><th>G</th><th>B</th><th>sum</th><th>thesis "
-            "R</th><th>G</th><th>B</th><th>sum</th></tr>\n"
-         << ours_vs_thesis << "</table>\n";
-    html << "<h3 id=\"realtime-errors\">Every model, per scene</h3>\n<p>RMS over the medium's "
-            "pixels in radiance units: against the screen-space reference (the separability "
-            "error) and against the path tracer (noise-corrected, &plusmn; its standard error); "
-            "the sss pass's and the frame's time on this machine. All columns in <a "
-            "href=\"realtime/table_6_4.csv\">realtime/table_6_4.csv</a>.</p>\n";
-    for (const SceneScores& ss : all) {
-        html << "<table><tr><th class=\"l\">" << esc(ss.scene) << " (" << ss.pixels
-             << " px)</th><th>vs ref. R</th><th>G</th><th>B</th><th>vs volpath R</th><th>G</th>"
-                "<th>B</th><th>sss ms</th><th>frame ms</th></tr>\n";
-        for (const Score& sc : ss.scores) {
-            html << "<tr><td class=\"l\"><code>" << esc(sc.model) << "</code></td>";
-            for (const auto& e : sc.vs_reference) html << "<td>" << format_g(e.rms, 3) << "</td>";
-            for (const auto& e : sc.vs_volpath)
-                html << "<td>" << with_error(e.rms, e.rms_se) << "</td>";
-            html << "<td>" << format_g(sc.sss_ms, 3) << "</td><td>" << format_g(sc.frame_ms, 4)
-                 << "</td></tr>\n";
-        }
-        html << "</table>\n";
+class RealtimeStudy final : public Study {
+  public:
+    explicit RealtimeStudy(RealtimeStudySpec s) : spec_(std::move(s)) {}
+
+    std::string describe() const override {
+        return "realtime (" + std::to_string(spec_.scenes.size()) + " scenes, " +
+               std::to_string(spec_.models.size()) +
+               " models; profiles and renders reused or computed when run)";
     }
-    csv_table(html, t_.decomposition.str(),
-              "The error decomposition (realtime/decomposition.csv): separability, the "
-              "screen-space assumption, lighting, total");
-    html << "<h3 id=\"realtime-time\">Error against time</h3>\n<p>Every model of the "
-            "table at "
-         << spec_.taps
-         << " taps, and the swept models over their tap counts with and without jitter"
-         << (spec_.rotate ? " and with rotated pass axes" : "")
-         << ": the "
-            "error against the time the SSS pass took, per scene (the frame times are in the "
-            "table). Table: <a "
-            "href=\"realtime/error_vs_time.csv\">realtime/error_vs_time.csv</a>.</p>\n";
-    if (!plots.problem.empty())
-        html << "<p class=\"note\">No plots: " << esc(plots.problem) << "</p>\n";
-    figures(html, plots, "realtime");
-    csv_table(html, t_.sweep.str(), "Error against frame time (realtime/error_vs_time.csv)");
-    if (integrations) {
-        html << "<h3 id=\"realtime-integrations\">Integrations over the surfaces: Munoz11, "
-                "Jensen-Buhler, and every approximation</h3>\n<p>The SSS pass replaced by "
-                "Munoz11's layered convolution (the media's far sides from a second raster) and "
-                "by Jensen-Buhler's hierarchical integration (a Poisson-disk point cloud on every "
-                "surface of the media, lit by pass 1's lights and shadow maps), scored like the "
-                "models. Seconds: Munoz11's layered convolution; Jensen-Buhler's point cloud, its "
-                "lighting and octree, and the queries; the separable models' and the reference's "
-                "SSS pass. Tables: <a href=\"realtime/approximations.csv\">approximations.csv"
-                "</a>, <a href=\"realtime/munoz11.csv\">munoz11.csv</a>, <a "
-                "href=\"realtime/jensen_buhler.csv\">jensen_buhler.csv</a>.</p>\n";
-        figures(html, plots, "realtime-integrations");
-        csv_table(html, t_.approximations.str(),
-                  "Every approximation against the path tracer (realtime/approximations.csv)");
-    }
-    html << t_.viewers.str() << flip_viewer_script();
-    return html.str();
+    double quick_factor() const override { return spec_.quick_factor; }
+    StudyResult run(const StudyInputs& in) const override { return RealtimeRun(spec_, in).run(); }
+
+  private:
+    RealtimeStudySpec spec_;
+};
+
+std::shared_ptr<const Study> read_realtime_plugin(ConfigTable& t, const std::string& config_dir) {
+    return std::make_shared<RealtimeStudy>(read_realtime_study(t, config_dir));
 }
 
 }  // namespace
-
-RealtimeStudyResult run_realtime_study(const RealtimeStudySpec& spec, const RenderStudyContext& ctx,
-                                       const ArtifactCache& cache, const fs::path& results_root,
-                                       const fs::path& stage, std::vector<Metric>& metrics) {
-    return RealtimeRun(spec, ctx, cache, results_root, stage, metrics).run();
-}
-
 }  // namespace ssslab::runner
+
+SSSLAB_REGISTER_STUDY(realtime, ssslab::runner::read_realtime_plugin)
