@@ -15,14 +15,41 @@ rebuilds that scene in Cycles so that both renderers solve the same problem:
 - diffuse: Diffuse BSDF (Lambert, roughness 0);
 - directional light: a Sun with strength = irradiance facing it and angle = twice the angular
   radius (Cycles' sun strength is that irradiance); environment: a constant world colour;
+- point light (intensity I per sr): a Point of radius 0 and power 4 pi max(I) [W], colour
+  I / max(I): Cycles 3.4's point light of power P has the intensity P / (4 pi) (measured: a
+  Lambertian plane under it gives the closed form E = (P / 4 pi) cos / d^2 to 3e-7, float
+  rounding);
+- spot light: the same Point (power 4 pi times the intensity on the axis, radius 0) with a light
+  shader whose Emission strength is KHR_lights_punctual's falloff of core/light.h,
+  clamp((c - cos outer) / max(0.001, cos inner - cos outer), 0, 1)^2, c = Geometry.Normal . axis
+  (the normal of a lamp's shading point in Cycles is the unit vector from the light towards the
+  point lit; measured against the closed form with a tilted axis, ratio 1.0000). Not Cycles'
+  Spot: its intensity is (P / 4 pi) c smoothstep((c - cos(spot_size / 2)) / ((1 - cos) blend)),
+  an extra factor c and a smoothstep instead of a square (measured: 6.7 % off KHR's falloff on
+  the same cone), which no spot_size and spot_blend make equal to KHR's;
+- sphere light (radiance L, radius r): an icosphere of 81,920 faces (vertices on the sphere, area
+  0.999925 of the sphere's) with an Emission shader of strength max(L), colour L / max(L)
+  (Cycles' emission strength is radiance: measured pi L (r / d)^2 cos on a plane), not sampled
+  as a light: BSDF and phase-function rays find it, next-event estimation does not, so Cycles is
+  unbiased here but noisy for small lights. Opaque and black, like ssslab's sphere light, which
+  ends the paths and shadow rays that meet it. Not Cycles' Point with a radius: that is a disc
+  of radius r through the centre facing the shading point, radiance P / (4 pi^2 r^2), so that a
+  surface facing it at distance d receives (P / 4 pi) / (d^2 + r^2) where a sphere of the same
+  intensity gives (P / 4 pi) / d^2 (measured: 0.941 of the sphere's on a plane 1 below a light
+  of radius 0.3), and partly occluded or seen directly it is a disc. Nor the icosphere sampled
+  as a light: with next-event estimation Cycles 3.4's estimate depends on the order of the
+  mesh's faces (measured on 20,480 faces: 0.990 to 1.008 of the closed form for four orders of
+  the same faces, where BSDF sampling alone gives 0.9997 +- 0.0010, the same mean for two
+  orders); the float rounding of its light distribution's cumulative areas explains 1e-5 of that;
 - camera: pinhole, vertical field of view, the scene's up vector; box pixel filter one pixel
   wide (ssslab samples the pixel uniformly);
 - every bounce limit at Cycles' maximum (1024), no clamping, no glossy filter, no adaptive
   sampling, no denoising, light threshold 0; linear EXR output (no view transform).
 
-Point and sphere lights are refused: Cycles 3.4 samples a point light with a radius as a disc
-facing the shading point, not a sphere, and its watt-to-radiance conventions for point lights
-are not what ssslab's scene units say; comparing them would test the conversion, not transport.
+The evidence for the point, spot and sphere conversions is scripts/cycles_light_check.py (a
+Lambertian plane under each light in Cycles against the closed form of its irradiance) and the
+side-by-sides of experiments/scenes/cycles/{point,spot,sphere}-plane.toml against ssslab; both in
+docs/validation/cycles.md, "Point, sphere and spot lights".
 """
 
 import argparse
@@ -54,6 +81,11 @@ def args_after_dashes():
     p.add_argument("--passes", action="store_true",
                    help="multilayer EXR with the light passes (diffuse, glossy, transmission, "
                         "environment; direct and indirect) beside Combined")
+    p.add_argument("--native-lights", action="store_true",
+                   help="a diagnostic, not a reference: spot lights as Cycles' Spot (spot_size 2 x "
+                        "outer, the blend where its ramp spans KHR's, power 4 pi I) and sphere lights "
+                        "as Cycles' Point with their radius (power 4 pi^2 r^2 L), the approximations "
+                        "the default export avoids (docs/validation/cycles.md)")
     return p.parse_args(argv)
 
 
@@ -137,6 +169,105 @@ def diffuse_material(d):
     return m
 
 
+# Cycles 3.4's point light of power P [W] and radius 0 has the intensity P / (4 pi) [W/sr] in
+# every direction (measured, scripts/cycles_light_check.py): ssslab's intensity I is P = 4 pi I.
+POINT_POWER_PER_INTENSITY = 4 * math.pi
+# The sphere light's icosphere: Blender's subdivisions 7, 81,920 faces with their vertices on the
+# sphere, area (= 4 x mean projected area) 0.999925 of the sphere's.
+SPHERE_SUBDIVISIONS = 7
+
+
+def point_light(scene, name, position, intensity, spot=None):
+    """A point light of ssslab intensity I [per sr] (RGB): Cycles' Point, radius 0, power 4 pi
+    max(I), colour I / max(I). With spot = (direction, inner_deg, outer_deg) the light's shader
+    multiplies it by KHR_lights_punctual's factor clamp(c scale + offset, 0, 1)^2 of core/light.h,
+    c = Geometry.Normal . direction: a lamp's normal in Cycles is the unit vector from the light to
+    the shading point. (Not Cycles' Spot: that is the intensity times c times a smoothstep ramp.)"""
+    peak = max(intensity)
+    ld = bpy.data.lights.new(name, type="POINT")
+    ld.energy = POINT_POWER_PER_INTENSITY * peak
+    ld.color = [x / peak for x in intensity] if peak > 0 else (1, 1, 1)
+    ld.shadow_soft_size = 0.0  # Blender's default is 0.25: a disc (see the docstring)
+    if spot is not None:
+        direction, inner_deg, outer_deg = spot
+        ax = [float(x) for x in direction]
+        n = math.sqrt(sum(x * x for x in ax))
+        ax = [x / n for x in ax]
+        ci, co = math.cos(math.radians(inner_deg)), math.cos(math.radians(outer_deg))
+        scale = 1 / max(0.001, ci - co)  # core/light.cpp, the Light constructor
+        ld.use_nodes = True
+        nt = ld.node_tree
+        emission = nt.nodes["Emission"]
+        geo = nt.nodes.new("ShaderNodeNewGeometry")
+        dot = nt.nodes.new("ShaderNodeVectorMath")
+        dot.operation = "DOT_PRODUCT"
+        dot.inputs[1].default_value = ax
+        nt.links.new(geo.outputs["Normal"], dot.inputs[0])
+        ramp = nt.nodes.new("ShaderNodeMath")
+        ramp.operation = "MULTIPLY_ADD"
+        ramp.use_clamp = True
+        ramp.inputs[1].default_value = scale
+        ramp.inputs[2].default_value = -co * scale
+        nt.links.new(dot.outputs["Value"], ramp.inputs[0])
+        square = nt.nodes.new("ShaderNodeMath")
+        square.operation = "MULTIPLY"
+        nt.links.new(ramp.outputs[0], square.inputs[0])
+        nt.links.new(ramp.outputs[0], square.inputs[1])
+        nt.links.new(square.outputs[0], emission.inputs["Strength"])
+    ob = bpy.data.objects.new(name, ld)
+    ob.location = [float(x) for x in position]
+    scene.collection.objects.link(ob)
+    return ob
+
+
+def native_spot_light(scene, name, position, intensity, direction, inner_deg, outer_deg):
+    """--native-lights only: Cycles' own Spot on the same cone, which is not KHR's falloff."""
+    from mathutils import Vector
+
+    peak = max(intensity)
+    ld = bpy.data.lights.new(name, type="SPOT")
+    ld.energy = POINT_POWER_PER_INTENSITY * peak
+    ld.color = [x / peak for x in intensity] if peak > 0 else (1, 1, 1)
+    ld.shadow_soft_size = 0.0
+    ci, co = math.cos(math.radians(inner_deg)), math.cos(math.radians(outer_deg))
+    ld.spot_size = 2 * math.radians(outer_deg)
+    ld.spot_blend = (ci - co) / (1 - co)  # Cycles' ramp spans cos outer .. cos inner
+    ob = bpy.data.objects.new(name, ld)
+    ob.location = [float(x) for x in position]
+    ob.rotation_mode = "QUATERNION"
+    ob.rotation_quaternion = (-Vector(direction)).to_track_quat("Z", "Y")  # shines along -Z
+    scene.collection.objects.link(ob)
+    return ob
+
+
+def sphere_light(scene, name, position, radius, radiance):
+    """A sphere light of radiance L (RGB): an icosphere (SPHERE_SUBDIVISIONS) of an Emission
+    shader of strength max(L) and colour L / max(L) (Cycles' emission strength is radiance), not
+    sampled as a light (material.cycles.sample_as_light off: BSDF and phase-function rays find it,
+    next-event estimation does not; with it Cycles 3.4's estimate depends on the order of the
+    faces by up to 1 %). Opaque and black like ssslab's sphere light, which ends the paths and
+    shadow rays that meet it."""
+    import bmesh
+
+    bm = bmesh.new()
+    bmesh.ops.create_icosphere(bm, subdivisions=SPHERE_SUBDIVISIONS, radius=float(radius))
+    me = bpy.data.meshes.new(name)
+    bm.to_mesh(me)
+    bm.free()
+    peak = max(radiance)
+    m, nt, out = node_material(name)
+    em = nt.nodes.new("ShaderNodeEmission")
+    em.inputs["Color"].default_value = (*([x / peak for x in radiance] if peak > 0 else (1, 1, 1)), 1)
+    em.inputs["Strength"].default_value = peak
+    nt.links.new(em.outputs[0], out.inputs["Surface"])
+    m.cycles.sample_as_light = False
+    me.materials.append(m)
+    ob = bpy.data.objects.new(name, me)
+    ob.location = [float(x) for x in position]
+    scene.collection.objects.link(ob)
+    return ob
+
+
 def look_at_matrix(pos, target, up):
     from mathutils import Matrix, Vector
 
@@ -193,8 +324,22 @@ def main():
             ob.rotation_mode = "QUATERNION"
             ob.rotation_quaternion = Vector(l["direction"]).to_track_quat("Z", "Y")
             scene.collection.objects.link(ob)
+        elif l["type"] == "point":
+            point_light(scene, f"point{i}", l["position"], l["intensity"])
+        elif l["type"] == "spot" and a.native_lights:
+            native_spot_light(scene, f"spot{i}", l["position"], l["intensity"], l["direction"],
+                              l["inner_cone_angle_deg"], l["outer_cone_angle_deg"])
+        elif l["type"] == "spot":
+            point_light(scene, f"spot{i}", l["position"], l["intensity"],
+                        spot=(l["direction"], l["inner_cone_angle_deg"], l["outer_cone_angle_deg"]))
+        elif l["type"] == "sphere" and a.native_lights:
+            ob = point_light(scene, f"sphere{i}", l["position"],
+                             [math.pi * l["radius"] ** 2 * x for x in l["radiance"]])
+            ob.data.shadow_soft_size = l["radius"]
+        elif l["type"] == "sphere":
+            sphere_light(scene, f"sphere{i}", l["position"], l["radius"], l["radiance"])
         else:
-            fail(f"light {i} ({l['type']}): only directional and environment lights are exported")
+            fail(f"light {i} ({l['type']}): not a light type this script knows")
 
     cam = bpy.data.cameras.new("camera")
     cam.lens_unit = "FOV"
@@ -267,4 +412,5 @@ def main():
     print(f"cycles_render.py: render_seconds {seconds:.3f}")
 
 
-main()
+if __name__ == "__main__":
+    main()

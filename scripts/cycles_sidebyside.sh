@@ -7,13 +7,15 @@
 #
 #   scripts/cycles_sidebyside.sh [scene.toml] [--size N] [--spp-ours N] [--spp-cycles N]
 #                                [--runs K] [--block B] [--threads T] [--out DIR]
-#                                [--ours-args "ARGS"]
+#                                [--ours-args "ARGS"] [--cycles-args "ARGS"]
 #
 # Besides the test of sameness it prints each side's efficiency 1/(MSE x time) per channel (MSE
 # the mean pixel variance; time ssslab's whole render and the sum of Cycles' render calls without
 # Blender's start-up), both renderers on the same T threads (default: all). --ours-args passes
 # further options to `ssslab render` (e.g. "--absorption per-channel": an estimator's option
-# against Cycles).
+# against Cycles); --cycles-args further options to scripts/cycles_render.py (e.g.
+# "--native-lights": Cycles' own Spot and radius Point in place of the exact export, to see the
+# difference).
 #
 # Defaults: experiments/scenes/cycles/ketchup-matched.toml, 128 x 128, 16384 spp (ours), 16 runs
 # of 512 spp (Cycles), blocks of 16 pixels, results/cycles/<scene>/. Needs Debian's blender
@@ -22,7 +24,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 scene=experiments/scenes/cycles/ketchup-matched.toml
-size=128 spp_ours=16384 spp_cycles=512 runs=16 block=16 threads=0 out="" ours_args=""
+size=128 spp_ours=16384 spp_cycles=512 runs=16 block=16 threads=0 out="" ours_args="" cycles_args=""
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --size) size=$2; shift 2 ;;
@@ -33,6 +35,7 @@ while [[ $# -gt 0 ]]; do
     --threads) threads=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
     --ours-args) ours_args=$2; shift 2 ;;
+    --cycles-args) cycles_args=$2; shift 2 ;;
     -*) echo "cycles_sidebyside.sh: unknown option $1" >&2; exit 2 ;;
     *) scene=$1; shift ;;
   esac
@@ -52,13 +55,14 @@ start=$(date +%s%N)
 "$ssslab" render "$scene" --width "$size" --height "$size" --spp "$spp_ours" --seed 11 \
   --threads "$threads" --out "$out/ssslab.exr" -q $ours_args
 ours_s=$(awk -v a="$start" -v b="$(date +%s%N)" 'BEGIN { printf "%.1f", (b - a) / 1e9 }')
-echo "Cycles: $runs runs of $spp_cycles spp"
+echo "Cycles: $runs runs of $spp_cycles spp${cycles_args:+, $cycles_args}"
 files=()
 cycles_s=0
 for k in $(seq 1 "$runs"); do
+  # shellcheck disable=SC2086  # cycles_args: options split into words on purpose
   blender -b --factory-startup -P scripts/cycles_render.py -- "$json" "$out/cycles_$k.exr" \
     --spp "$spp_cycles" --seed "$((1000 + k))" --width "$size" --height "$size" \
-    --threads "$threads" > "$out/cycles_$k.log" 2>&1 ||
+    --threads "$threads" $cycles_args > "$out/cycles_$k.log" 2>&1 ||
     { tail -5 "$out/cycles_$k.log" >&2; exit 1; }
   files+=("$out/cycles_$k.exr")
   s=$(sed -n 's/^cycles_render.py: render_seconds //p' "$out/cycles_$k.log")

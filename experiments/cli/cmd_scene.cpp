@@ -48,7 +48,7 @@ std::string rgb(const std::array<double, 3>& v) {
 
 // The scene in world units, for other renderers: media coefficients per world unit, the
 // boundary's GGX alpha, lights in the units of core/scene.h (directional: irradiance facing the
-// light and the disc's angular radius; sphere/environment: radiance; point: intensity).
+// light and the disc's angular radius; sphere/environment: radiance; point and spot: intensity).
 std::string scene_json(const Scene& s) {
     std::ostringstream o;
     const SceneCamera& c = s.camera;
