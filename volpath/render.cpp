@@ -9,13 +9,14 @@
 #include "volpath/mesh_medium.h"
 #include "volpath/microfacet.h"
 #include "volpath/render_guides.h"
+#include "volpath/renderer.h"
 #include "volpath/sampling.h"
 #include "volpath/walk.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <memory>
 
 namespace ssslab::volpath {
@@ -31,905 +32,566 @@ namespace {
 // boundary's own vertices (boundary_guides); 10: and at a diffuse vertex straight after the way
 // out of a guided medium (diffuse_guides); 11: a wide lobe beside each narrow one (wide_lobes).
 constexpr const char* kEngineVersion = "volpath-render-11";
-constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::uint32_t kRenderDomain = rng_domain::kVolpath + 0x100;
 constexpr int kMaxBatchSpp = 3 * 1024;  // the largest automatic batch (RenderOptions::batch_spp)
-using RGB = std::array<double, 3>;
-using namespace render_detail;  // the guides and the media they read (render_guides.h)
 
-struct Renderer {
-    const Scene& scene;
-    const RenderOptions& opt;
-    int width, height;
-    std::unique_ptr<EmbreeScene> es;
-    std::vector<Light> lights;
-    std::vector<int> guide_lights;  // the lights exit guides aim at (exit_guide)
-    std::vector<int> shape_medium;  // per shape: index into media, or -1 (diffuse)
-    std::vector<MediumData> media;
-    // Per shape of a medium (with skip_queries_in_balls): where its walks need no queries.
-    std::vector<std::unique_ptr<SurfaceDistanceGrid>> shape_balls;
-    double eps = 1e-6;
-    bool has_passable = false;  // any index-matched homogeneous medium (shadow rays cross them)
-    std::vector<char> passable_shape;  // per shape: a boundary shadow rays cross (passable())
-    Vec3 cam_pos, cam_f, cam_r, cam_u;
-    double tan_half = 0, aspect = 1;
-    // The probability that NEE samples a given light: 1 when every light is sampled at every
-    // vertex (RenderOptions::nee_all_lights), else 1 / lights (one chosen uniformly).
-    double sel = 1;
+}  // namespace
 
-    Renderer(const Scene& s, const RenderOptions& o) : scene(s), opt(o) {
-        width = o.width > 0 ? o.width : s.camera.width;
-        height = o.height > 0 ? o.height : s.camera.height;
-        std::vector<const TriangleMesh*> meshes;
-        for (const SceneShape& sh : s.shapes) meshes.push_back(&sh.mesh);
-        es = std::make_unique<EmbreeScene>(meshes);
-        eps = es->epsilon();
-        for (const SceneLight& sl : s.lights) lights.emplace_back(sl);
-        sel = o.nee_all_lights || lights.empty() ? 1.0 : 1.0 / static_cast<double>(lights.size());
-        for (std::size_t j = 0; j < lights.size() && guide_lights.size() < kMaxGuides; ++j) {
-            if (lights[j].subtends_cone()) guide_lights.push_back(static_cast<int>(j));
-        }
-        for (const SceneShape& sh : s.shapes) {
-            const SceneMaterial& m = s.materials[static_cast<size_t>(sh.material)];
-            if (m.kind != SceneMaterial::Kind::kMedium) {
-                shape_medium.push_back(-1);
-                continue;
-            }
-            MediumData md;
-            for (int c = 0; c < 3; ++c) {
-                const size_t i = static_cast<size_t>(c);
-                md.sigma_s[i] = s.per_world_unit(m.medium.sigma_s_per_cm[i]);
-                md.sigma_t[i] = md.sigma_s[i] + s.per_world_unit(m.medium.sigma_a_per_cm[i]);
-                md.g[i] = m.medium.g[i];
-            }
-            md.same_g = md.g[0] == md.g[1] && md.g[1] == md.g[2];
-            md.absorption = render_absorption(md.sigma_s.data(), md.sigma_t.data(), o.absorption);
-            md.eta = m.medium.eta;
-            if (!m.density_file.empty()) {
-                try {
-                    md.density = DensityGrid::load(m.density_file, m.density_grid);
-                } catch (const InputError& e) {
-                    throw InputError(m.where, "density_vdb", e.what());
-                }
-            }
-            md.alpha = m.boundary().alpha;
-            md.region = WalkRegion::make(md.sigma_t, md.sigma_s, md.g, md.density.get());
-            md.guided = o.exit_guide && md.eta != 1.0 && md.alpha > 0 && md.same_g && !md.density &&
-                        !guide_lights.empty();
-            shape_medium.push_back(static_cast<int>(media.size()));
-            if (o.skip_queries_in_balls && SurfaceDistanceGrid::pays(md.region, sh.mesh)) {
-                shape_balls.resize(s.shapes.size());
-                shape_balls[shape_medium.size() - 1] =
-                    std::make_unique<SurfaceDistanceGrid>(*es, sh.mesh);
-            }
-            media.push_back(md);
-        }
-        for (int mi : shape_medium) passable_shape.push_back(mi >= 0 && passable(mi) ? 1 : 0);
-        has_passable =
-            std::find(passable_shape.begin(), passable_shape.end(), 1) != passable_shape.end();
-        const SceneCamera& c = s.camera;
-        cam_pos = c.position;
-        cam_f = normalize(c.target - c.position);
-        cam_r = normalize(cross(cam_f, c.up));
-        cam_u = cross(cam_r, cam_f);
-        tan_half = std::tan(0.5 * c.fov_y_deg * kPi / 180);
-        aspect = static_cast<double>(width) / height;
+namespace render_detail {
+
+Renderer::Renderer(const Scene& s, const RenderOptions& o) : scene(s), opt(o) {
+    width = o.width > 0 ? o.width : s.camera.width;
+    height = o.height > 0 ? o.height : s.camera.height;
+    std::vector<const TriangleMesh*> meshes;
+    for (const SceneShape& sh : s.shapes) meshes.push_back(&sh.mesh);
+    es = std::make_unique<EmbreeScene>(meshes);
+    eps = es->epsilon();
+    for (const SceneLight& sl : s.lights) lights.emplace_back(sl);
+    sel = o.nee_all_lights || lights.empty() ? 1.0 : 1.0 / static_cast<double>(lights.size());
+    for (std::size_t j = 0; j < lights.size() && guide_lights.size() < kMaxGuides; ++j) {
+        if (lights[j].subtends_cone()) guide_lights.push_back(static_cast<int>(j));
     }
-
-    // The normal the environment is sampled about at a surface (null: the whole sphere).
-    const Vec3* env_normal(const Vec3* surface_normal) const {
-        return opt.environment_cosine ? surface_normal : nullptr;
+    for (const SceneShape& sh : s.shapes) {
+        const SceneMaterial& m = s.materials[static_cast<size_t>(sh.material)];
+        if (m.kind != SceneMaterial::Kind::kMedium) {
+            shape_medium.push_back(-1);
+            continue;
+        }
+        MediumData md;
+        for (int c = 0; c < 3; ++c) {
+            const size_t i = static_cast<size_t>(c);
+            md.sigma_s[i] = s.per_world_unit(m.medium.sigma_s_per_cm[i]);
+            md.sigma_t[i] = md.sigma_s[i] + s.per_world_unit(m.medium.sigma_a_per_cm[i]);
+            md.g[i] = m.medium.g[i];
+        }
+        md.same_g = md.g[0] == md.g[1] && md.g[1] == md.g[2];
+        md.absorption = render_absorption(md.sigma_s.data(), md.sigma_t.data(), o.absorption);
+        md.eta = m.medium.eta;
+        if (!m.density_file.empty()) {
+            try {
+                md.density = DensityGrid::load(m.density_file, m.density_grid);
+            } catch (const InputError& e) {
+                throw InputError(m.where, "density_vdb", e.what());
+            }
+        }
+        md.alpha = m.boundary().alpha;
+        md.region = WalkRegion::make(md.sigma_t, md.sigma_s, md.g, md.density.get());
+        md.guided = o.exit_guide && md.eta != 1.0 && md.alpha > 0 && md.same_g && !md.density &&
+                    !guide_lights.empty();
+        shape_medium.push_back(static_cast<int>(media.size()));
+        if (o.skip_queries_in_balls && SurfaceDistanceGrid::pays(md.region, sh.mesh)) {
+            shape_balls.resize(s.shapes.size());
+            shape_balls[shape_medium.size() - 1] =
+                std::make_unique<SurfaceDistanceGrid>(*es, sh.mesh);
+        }
+        media.push_back(md);
     }
+    for (int mi : shape_medium) passable_shape.push_back(mi >= 0 && passable(mi) ? 1 : 0);
+    has_passable =
+        std::find(passable_shape.begin(), passable_shape.end(), 1) != passable_shape.end();
+    const SceneCamera& c = s.camera;
+    cam_pos = c.position;
+    cam_f = normalize(c.target - c.position);
+    cam_r = normalize(cross(cam_f, c.up));
+    cam_u = cross(cam_r, cam_f);
+    tan_half = std::tan(0.5 * c.fov_y_deg * kPi / 180);
+    aspect = static_cast<double>(width) / height;
+}
 
-    // Whether shadow and path rays pass through medium mi's boundary unchanged: an
-    // index-matched homogeneous medium (its transmittance is then known in closed form).
-    bool passable(int mi) const {
+// Per-channel transmittance from o along wi up to tmax through index-matched homogeneous
+// media (`start_medium`: the one o is in, or -1); false if a surface blocks the way.
+// `leaving`: the triangle o lies on (skipped), or none. One occlusion query that passes
+// through the passable boundaries and records them (EmbreeScene::crossings); the crossings,
+// in order, attenuate as a ray stepped from each to the next would (the loop of the option
+// off, which restarts eps beyond each boundary, and the fallback for more crossings than
+// the buffer holds).
+bool Renderer::shadow(const Vec3& o, const Vec3& wi, double tmax, int start_medium, RGB& T,
+                      std::uint64_t& rays, TriangleRef leaving) const {
+    T = {1, 1, 1};
+    int inside = start_medium;
+    double t0 = 0;
+    auto attenuate = [&](int mi, double len) {
         const MediumData& md = media[static_cast<size_t>(mi)];
-        return opt.index_matched_nee && md.eta == 1.0 && !md.density;
-    }
-
-    // Per-channel transmittance from o along wi up to tmax through index-matched homogeneous
-    // media (`start_medium`: the one o is in, or -1); false if a surface blocks the way.
-    // `leaving`: the triangle o lies on (skipped), or none. One occlusion query that passes
-    // through the passable boundaries and records them (EmbreeScene::crossings); the crossings,
-    // in order, attenuate as a ray stepped from each to the next would (the loop of the option
-    // off, which restarts eps beyond each boundary, and the fallback for more crossings than
-    // the buffer holds).
-    bool shadow(const Vec3& o, const Vec3& wi, double tmax, int start_medium, RGB& T,
-                std::uint64_t& rays, TriangleRef leaving) const {
-        T = {1, 1, 1};
-        int inside = start_medium;
-        double t0 = 0;
-        auto attenuate = [&](int mi, double len) {
-            const MediumData& md = media[static_cast<size_t>(mi)];
-            for (int c = 0; c < 3; ++c)
-                T[static_cast<size_t>(c)] *= std::exp(-md.sigma_t[static_cast<size_t>(c)] * len);
-        };
-        // A boundary crossed at distance t (its triangle's normal n).
-        auto cross = [&](int mi, double t, const Vec3& n) {
-            if (dot(wi, n) < 0) {  // entering
-                inside = mi;
-                t0 = t;
-            } else {
-                if (inside == mi) attenuate(mi, t - t0);
-                inside = -1;
+        for (int c = 0; c < 3; ++c)
+            T[static_cast<size_t>(c)] *= std::exp(-md.sigma_t[static_cast<size_t>(c)] * len);
+    };
+    // A boundary crossed at distance t (its triangle's normal n).
+    auto cross = [&](int mi, double t, const Vec3& n) {
+        if (dot(wi, n) < 0) {  // entering
+            inside = mi;
+            t0 = t;
+        } else {
+            if (inside == mi) attenuate(mi, t - t0);
+            inside = -1;
+        }
+    };
+    bool stepped = !opt.rays_from_surface;
+    if (!stepped) {
+        constexpr std::size_t kCap = 64;
+        EmbreeScene::Crossing buf[kCap];
+        std::size_t n = 0;
+        ++rays;
+        const auto through = es->crossings(o, wi, 0, tmax, leaving, passable_shape, buf, kCap, n);
+        if (through == EmbreeScene::Through::kBlocked) return false;
+        if (through == EmbreeScene::Through::kTooMany) {
+            stepped = true;
+        } else {
+            std::sort(buf, buf + n, [](const auto& a, const auto& b) {
+                return a.t < b.t ||
+                       (a.t == b.t &&
+                        (a.shape < b.shape || (a.shape == b.shape && a.triangle < b.triangle)));
+            });
+            // As the stepping loop meets them: after a crossing the next query starts at it,
+            // skipping its triangle and the hits within rounding (a hit reported twice too).
+            const EmbreeScene::Crossing* prev = nullptr;
+            for (std::size_t k = 0; k < n; ++k) {
+                const EmbreeScene::Crossing& c = buf[k];
+                if (prev && (!(c.t >= static_cast<float>(prev->t + es->rounding())) ||
+                             (c.shape == prev->shape && c.triangle == prev->triangle)))
+                    continue;
+                cross(shape_medium[c.shape], c.t, es->normal(c.shape, c.triangle));
+                prev = &c;
             }
-        };
-        bool stepped = !opt.rays_from_surface;
-        if (!stepped) {
-            constexpr std::size_t kCap = 64;
-            EmbreeScene::Crossing buf[kCap];
-            std::size_t n = 0;
+        }
+    }
+    if (stepped) {  // nothing crossed yet: T and inside as they started
+        double t = 0;
+        for (int k = 0; k < 10000; ++k) {
             ++rays;
-            const auto through =
-                es->crossings(o, wi, 0, tmax, leaving, passable_shape, buf, kCap, n);
-            if (through == EmbreeScene::Through::kBlocked) return false;
-            if (through == EmbreeScene::Through::kTooMany) {
-                stepped = true;
+            const RayHit hit = es->intersect(o, wi, t, tmax, leaving);
+            if (!hit.hit()) break;
+            const int mi = shape_medium[hit.shape];
+            if (mi < 0 || !passable(mi)) return false;
+            cross(mi, hit.t, hit.normal);
+            // On from the boundary point, its triangle skipped (and hits within rounding);
+            // before volpath-render-7 (the option) eps beyond it, which missed the exit of a
+            // medium thinner than eps.
+            if (opt.rays_from_surface) {
+                t = hit.t;
+                leaving = {hit.shape, hit.triangle};
             } else {
-                std::sort(buf, buf + n, [](const auto& a, const auto& b) {
-                    return a.t < b.t ||
-                           (a.t == b.t &&
-                            (a.shape < b.shape || (a.shape == b.shape && a.triangle < b.triangle)));
-                });
-                // As the stepping loop meets them: after a crossing the next query starts at it,
-                // skipping its triangle and the hits within rounding (a hit reported twice too).
-                const EmbreeScene::Crossing* prev = nullptr;
-                for (std::size_t k = 0; k < n; ++k) {
-                    const EmbreeScene::Crossing& c = buf[k];
-                    if (prev && (!(c.t >= static_cast<float>(prev->t + es->rounding())) ||
-                                 (c.shape == prev->shape && c.triangle == prev->triangle)))
-                        continue;
-                    cross(shape_medium[c.shape], c.t, es->normal(c.shape, c.triangle));
-                    prev = &c;
-                }
+                t = hit.t + eps;
             }
         }
-        if (stepped) {  // nothing crossed yet: T and inside as they started
-            double t = 0;
-            for (int k = 0; k < 10000; ++k) {
-                ++rays;
-                const RayHit hit = es->intersect(o, wi, t, tmax, leaving);
-                if (!hit.hit()) break;
-                const int mi = shape_medium[hit.shape];
-                if (mi < 0 || !passable(mi)) return false;
-                cross(mi, hit.t, hit.normal);
-                // On from the boundary point, its triangle skipped (and hits within rounding);
-                // before volpath-render-7 (the option) eps beyond it, which missed the exit of a
-                // medium thinner than eps.
-                if (opt.rays_from_surface) {
-                    t = hit.t;
-                    leaving = {hit.shape, hit.triangle};
-                } else {
-                    t = hit.t + eps;
-                }
-            }
-        }
-        if (inside >= 0 && std::isfinite(tmax)) attenuate(inside, tmax - t0);
-        return true;
     }
+    if (inside >= 0 && std::isfinite(tmax)) attenuate(inside, tmax - t0);
+    return true;
+}
 
-    // Next-event estimation from p: every light, or one chosen uniformly (nee_all_lights);
-    // `f_of(wi)` gives the BSDF (or phase function) value times |cos| per channel and
-    // `pdf_of(wi)` the sampling density of the other strategy; `at`: the surface p lies on
-    // (the normal of the side the shadow ray leaves from and the triangle), null at a point
-    // inside a medium (`medium` then names it); `share`: the exit guide's part in the MIS of
-    // the lights it aims at (an exit vertex it aimed at), or none.
-    template <class F, class P>
-    void nee(const Vec3& p, const SurfaceAt* at, RngStream& rng, const double* beta, F f_of,
-             P pdf_of, RGB& out, std::uint64_t& rays, int medium = -1,
-             const GuideShare& share = {}) const {
-        if (lights.empty()) return;
-        if (opt.nee_all_lights) {
-            for (const Light& l : lights)
-                nee_light(l, p, at, rng, beta, f_of, pdf_of, out, rays, medium, share);
+// Next-event estimation from p: every light, or one chosen uniformly (nee_all_lights);
+// `f_of(wi)` gives the BSDF (or phase function) value times |cos| per channel and
+// `pdf_of(wi)` the sampling density of the other strategy; `at`: the surface p lies on
+// (the normal of the side the shadow ray leaves from and the triangle), null at a point
+// inside a medium (`medium` then names it); `share`: the exit guide's part in the MIS of
+// the lights it aims at (an exit vertex it aimed at), or none.
+template <class F, class P>
+void Renderer::nee(const Vec3& p, const SurfaceAt* at, RngStream& rng, const double* beta, F f_of,
+                   P pdf_of, RGB& out, std::uint64_t& rays, int medium,
+                   const GuideShare& share) const {
+    if (lights.empty()) return;
+    if (opt.nee_all_lights) {
+        for (const Light& l : lights)
+            nee_light(l, p, at, rng, beta, f_of, pdf_of, out, rays, medium, share);
+        return;
+    }
+    const std::size_t j =
+        std::min(lights.size() - 1,
+                 static_cast<std::size_t>(rng.uniform() * static_cast<double>(lights.size())));
+    nee_light(lights[j], p, at, rng, beta, f_of, pdf_of, out, rays, medium, share);
+}
+
+// One light's shadow ray of nee(), its MIS weight against the other strategies.
+template <class F, class P>
+void Renderer::nee_light(const Light& light, const Vec3& p, const SurfaceAt* at, RngStream& rng,
+                         const double* beta, F& f_of, P& pdf_of, RGB& out, std::uint64_t& rays,
+                         int medium, const GuideShare& share) const {
+    const double u1 = rng.uniform(), u2 = rng.uniform();
+    const LightSample ls = light.sample(p, u1, u2, env_normal(at ? &at->n : nullptr));
+    if (!ls.ok) return;
+    if (at && !(dot(ls.wi, at->n) > 0)) return;
+    const RGB fc = f_of(ls.wi);
+    if (!(fc[0] > 0 || fc[1] > 0 || fc[2] > 0)) return;
+    RGB T{1, 1, 1};
+    if (!reaches(light, p, at, ls, medium, T, rays)) return;
+    double w = 1, pl = 1;
+    if (ls.pdf > 0) {
+        pl = sel * ls.pdf;
+        w = share.weight(&light, pl, pdf_of(ls.wi), ls.pdf);
+    } else {
+        pl = sel;
+    }
+    for (int c = 0; c < 3; ++c)
+        out[static_cast<size_t>(c)] += beta[c] * fc[static_cast<size_t>(c)] *
+                                       ls.value[static_cast<size_t>(c)] * w / pl *
+                                       T[static_cast<size_t>(c)];
+}
+
+// Emission seen by a ray that left `from` in direction d and escaped (no geometry, no sphere
+// light): environment and disc lights, weighted against light sampling if NEE was done.
+void Renderer::add_escape(const Vec3& from, const Vec3* from_normal, const Vec3& d, bool prev_nee,
+                          double prev_pdf, const double* beta, RGB& out,
+                          const GuideShare& share) const {
+    for (const Light& l : lights) {
+        if (l.seen_escaping(d)) {
+            const double pl = l.pdf(from, d, from_normal);
+            const double w = prev_nee ? share.weight(&l, prev_pdf, sel * pl, pl) : 1.0;
+            for (int c = 0; c < 3; ++c)
+                out[static_cast<size_t>(c)] += beta[c] * l.L[static_cast<size_t>(c)] * w;
+        }
+    }
+}
+
+// A surface vertex at p (shape `shape`, its normal n), reached along the path's direction
+// from either side of a medium's boundary or from outside a diffuse surface: the surface
+// model, NEE, the next direction and the throughput roulette. False: the path ends.
+bool Renderer::vertex(CameraPath& c, const Vec3& p, Vec3 n, TriangleRef tri) const {
+    const std::uint32_t shape = tri.shape;
+    const bool guided_arrival = c.guide_armed;
+    c.guide_armed = false;
+    const bool plate_arrival = c.plate_armed, left_guided_arrival = c.left_guided;
+    c.plate_armed = c.left_guided = false;
+    c.exit_share = {};
+    if (opt.max_depth > 0 && c.depth >= opt.max_depth) return false;
+    const int mi = shape_medium[shape];
+    if (mi < 0) {  // diffuse, two-sided
+        if (c.medium >= 0) return false;
+        diffuse_vertex(c, p, n, tri, left_guided_arrival);
+    } else if (!boundary_vertex(c, p, n, tri, mi, guided_arrival, plate_arrival)) {
+        return false;
+    }
+    // Russian roulette on the throughput.
+    double* beta = c.ws.weights.beta;
+    if (c.depth + 1 >= opt.roulette_depth) {
+        const double m = std::max({beta[0], beta[1], beta[2]});
+        if (!(m > 0) || !std::isfinite(m)) return false;
+        if (m < 1) {
+            const double survive = std::max(0.05, m);
+            if (!(c.rng.uniform() < survive)) return false;
+            for (int k = 0; k < 3; ++k) beta[k] /= survive;
+        }
+    }
+    ++c.depth;
+    return true;
+}
+
+// vertex() on a diffuse surface: NEE, the cosine-weighted next direction, and straight from a
+// guided medium's way out the diffuse guide (volpath-render-10).
+void Renderer::diffuse_vertex(CameraPath& c, const Vec3& p, Vec3 n, TriangleRef tri,
+                              bool left_guided_arrival) const {
+    RngStream& rng = c.rng;
+    double* beta = c.ws.weights.beta;
+    Vec3& d = c.ws.w;
+    const Vec3 wo = -d;
+    const SceneMaterial& m = scene.materials[static_cast<size_t>(scene.shapes[tri.shape].material)];
+    if (dot(n, wo) < 0) n = -n;
+    const SurfaceAt at{n, tri};
+    RGB e{};
+    nee(
+        p, &at, rng, beta,
+        [&](const Vec3& wi) {
+            const double cs = std::max(0.0, dot(wi, n)) / kPi;
+            return RGB{m.albedo[0] * cs, m.albedo[1] * cs, m.albedo[2] * cs};
+        },
+        [&](const Vec3& wi) { return std::max(0.0, dot(wi, n)) / kPi; }, e, c.rays);
+    flush(c, e);
+    const double u1 = rng.uniform(), u2 = rng.uniform();
+    const Vec3 wl = sample_cosine_hemisphere(u1, u2);
+    d = Frame(n).world(wl);
+    c.prev_pdf = wl.z / kPi;
+    c.prev_nee = true;
+    c.nee_pos = p;
+    c.nee_normal = n;
+    c.nee_on_surface = true;
+    for (int k = 0; k < 3; ++k) beta[k] *= m.albedo[static_cast<size_t>(k)];
+    // Straight from a guided medium's way out: the diffuse guide (volpath-render-10).
+    if (left_guided_arrival) run_diffuse_guide(c, p, n, tri);
+    leave_outside(c, p, n, tri);
+}
+
+// vertex() on the dielectric boundary of medium mi: a smooth one's Fresnel choice, or a rough
+// one's NEE, exit guide and BSDF sample (rough_boundary); then into the medium or out of it.
+// False: the path ends.
+bool Renderer::boundary_vertex(CameraPath& c, const Vec3& p, const Vec3& n, TriangleRef tri, int mi,
+                               bool guided_arrival, bool plate_arrival) const {
+    const std::uint32_t shape = tri.shape;
+    double* beta = c.ws.weights.beta;
+    Vec3& d = c.ws.w;  // fresnel_reflects and rough_boundary turn it
+    const MediumData& md = media[static_cast<size_t>(mi)];
+    const bool outside = dot(-d, n) > 0;
+    bool transmitted = false, reflected = false;
+    ExitGuide here;  // this vertex's exit guide (rough boundaries)
+    bool here_guided = false;
+    if (md.alpha == 0) {
+        // The smooth boundary of every engine's walk (walk_mesh_medium's too).
+        const double eta = md.eta;  // inside over outside (outside index 1)
+        const double eta_side = outside ? eta : 1 / eta;
+        if (fresnel_reflects(d, outside ? -n : n, eta_side, c.rng)) {
+            reflected = true;
+        } else {
+            for (int k = 0; k < 3; ++k) beta[k] /= eta_side * eta_side;  // radiance
+            transmitted = true;
+        }
+        // An index-matched boundary is no vertex: NEE before it still stands.
+        if (!passable(mi)) c.prev_nee = false;
+    } else if (!rough_boundary(c, p, n, tri, md, outside, guided_arrival, plate_arrival, here,
+                               here_guided, reflected, transmitted)) {
+        return false;
+    }
+    if (c.depth == 0 && reflected) c.specular_path = true;
+    if (transmitted) {
+        if (c.medium < 0) {
+            c.medium = mi;
+            c.medium_shape = static_cast<int>(shape);
+            if (opt.hero == RenderHero::kThroughputAlbedo) {
+                // From the stream, not a Sobol dimension: the walk's first numbers keep the
+                // pairs they had.
+                const double u = c.rng.stream_uniform();
+                c.ws.weights.choose_hero_by_throughput(md.region.albedo,
+                                                       c.entered ? u : (c.hero + u) / 3);
+            }
+            c.entered = true;
+        } else {
+            c.medium = -1;
+            c.medium_shape = -1;
+        }
+    }
+    if (c.medium >= 0) {
+        // Into a medium (entering, or reflected inside): from the surface point itself,
+        // skipping hits closer than eps. An origin moved off the surface would start every
+        // walk eps deep, a bias of sigma_t eps (measured: 3.7 % of the single scattering of
+        // an index-matched half-space with sigma_t 1/mm at eps = 4e-5 of a 1 m scene).
+        c.ws.p = p;
+        c.ws.on_surface = true;
+        // The walk goes on from this vertex of a rough boundary: its exit guide (above)
+        // takes part in the MIS of the exit it reaches straight from here.
+        if (here_guided) {
+            c.guide = here;
+            c.guide_armed = true;
+        }
+    } else {
+        leave_outside(c, p, dot(d, n) > 0 ? n : -n, tri);
+    }
+    return true;
+}
+
+// boundary_vertex() on a rough (GGX) boundary: NEE through it, this vertex's exit guide
+// (here, here_guided), the BSDF sample. False: the path ends.
+bool Renderer::rough_boundary(CameraPath& c, const Vec3& p, const Vec3& n, TriangleRef tri,
+                              const MediumData& md, bool outside, bool guided_arrival,
+                              bool plate_arrival, ExitGuide& here, bool& here_guided,
+                              bool& reflected, bool& transmitted) const {
+    RngStream& rng = c.rng;
+    double* beta = c.ws.weights.beta;
+    Vec3& d = c.ws.w;
+    const Vec3 wo = -d;
+    const Frame fr(n);
+    const Vec3 wo_l = fr.local(wo);
+    const double eta = md.eta;  // inside over outside (outside index 1)
+    // Light sampled at the first boundary from outside is its reflection: the "specular"
+    // layer's (without this it went into "radiance" only).
+    const bool first_reflection = c.depth == 0 && outside && !c.entered;
+    if (first_reflection) c.specular_path = true;
+    const SurfaceAt at{n, tri};
+    // Straight from a guided vertex to this exit: the guide's part.
+    const GuideShare share = guided_arrival && !outside ? arrival_share(c, p, md) : GuideShare{};
+    RGB e{};
+    nee(
+        p, &at, rng, beta,
+        [&](const Vec3& wi) {
+            const double f =
+                rough_dielectric_f(wo_l, fr.local(wi), eta, md.alpha, TransportMode::kRadiance) *
+                std::abs(dot(wi, n));
+            return RGB{f, f, f};
+        },
+        [&](const Vec3& wi) { return rough_dielectric_pdf(wo_l, fr.local(wi), eta, md.alpha); }, e,
+        c.rays, -1, share);
+    flush(c, e);
+    // The exit guide of this vertex (volpath-render-9), whatever the walk's sample below does.
+    here_guided = boundary_guide(c, p, n, tri, md, outside, plate_arrival, here);
+    if (first_reflection) c.specular_path = false;  // decided by the sample below
+    const double uc = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+    const auto smp =
+        sample_rough_dielectric(wo_l, eta, md.alpha, uc, u1, u2, TransportMode::kRadiance);
+    if (!smp) return false;
+    const double wgt = smp->f * std::abs(smp->wi.z) / smp->pdf;
+    for (int k = 0; k < 3; ++k) beta[k] *= wgt;
+    d = fr.world(smp->wi);
+    c.prev_pdf = smp->pdf;
+    c.prev_nee = true;
+    c.nee_pos = p;
+    c.nee_normal = n;
+    c.nee_on_surface = true;
+    reflected = smp->reflection;
+    transmitted = !smp->reflection;
+    if (transmitted && !outside) {
+        c.exit_share = share;
+        c.left_guided = md.guided;
+    }
+    return true;
+}
+
+// Inside a medium: what the walk does at its boundary (vertex()), at its scattering vertices
+// (NEE inside index-matched media, MIS with phase sampling; the exit guide behind rough
+// boundaries) and after sampling the phase function.
+struct Renderer::PathHooks : WalkHooks {
+    const Renderer& R;
+    CameraPath& c;
+    PathHooks(const Renderer& r, CameraPath& path) : R(r), c(path) {}
+    // The density with which phase sampling picks a direction, as the hero MIS sees it: the
+    // mixture of the channels' phase functions weighted by their probabilities to be the
+    // hero times their path densities so far (prob x q), which does not depend on the hero;
+    // the MIS weights of NEE against phase sampling use it, so that they sum to one
+    // whichever channel is the hero (with per-channel g too).
+    double phase_mix(const WalkState<3>& s, double mu_l) const {
+        const MediumData& md = R.media[static_cast<size_t>(c.medium)];
+        if (md.same_g) return hg_pdf(md.g[0], mu_l);
+        const double* qq = s.weights.q;
+        const auto& pr = s.weights.prob;
+        double v = 0, sum = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double wc = pr[static_cast<size_t>(k)] * qq[k];
+            sum += wc;
+            v += wc * hg_pdf(md.g[static_cast<size_t>(k)], mu_l);
+        }
+        return v / sum;
+    }
+    BoundaryAction boundary(WalkState<3>& s, const WalkBoundary& b, RngStream&) {
+        if (!R.vertex(c, s.p, b.n, TriangleRef{b.shape, b.triangle})) return BoundaryAction::kEnd;
+        return c.medium >= 0 ? BoundaryAction::kReflect : BoundaryAction::kExit;
+    }
+    // Analog absorption by the hero's albedo. Where NEE is done at a vertex (index-matched
+    // media) the decision waits until after it, and the NEE carries the survival
+    // probability instead: its expectation over the decision, so that light is collected at
+    // every collision, not only at the few that survive in an absorbing medium. Behind a
+    // rough boundary the exit guide's estimator is done there the same way.
+    bool vertex_nee(const WalkState<3>&) const {
+        return R.passable(c.medium) || R.media[static_cast<size_t>(c.medium)].guided;
+    }
+    void at_vertex(WalkState<3>& s, double survive, RngStream& rng) {
+        const MediumData& md = R.media[static_cast<size_t>(c.medium)];
+        const double* beta = s.weights.beta;
+        const double bs[3] = {beta[0] * survive, beta[1] * survive, beta[2] * survive};
+        const Vec3 din = s.w;
+        RGB e{};
+        if (md.guided) {
+            // The exit it aims at is a surface vertex: none beyond max_depth (where the path
+            // ends at its next vertex, before any use of the guide).
+            if (R.opt.max_depth > 0 && c.depth >= R.opt.max_depth) return;
+            ExitGuide& guide = c.guide;
+            guide.aimed = false;
+            guide.prob = kExitGuideProb;
+            guide.surface = false;
+            guide.tri = TriangleRef{};
+            guide.z = s.p;
+            guide.din = s.w;
+            guide.pq = R.inside_probabilities(s);
+            R.run_exit_guide(guide, md, c.medium_shape, bs, rng, e, c.rays);
+            flush(c, e);
             return;
         }
-        const std::size_t j =
-            std::min(lights.size() - 1,
-                     static_cast<std::size_t>(rng.uniform() * static_cast<double>(lights.size())));
-        nee_light(lights[j], p, at, rng, beta, f_of, pdf_of, out, rays, medium, share);
-    }
-
-    // One light's shadow ray of nee(), its MIS weight against the other strategies.
-    template <class F, class P>
-    void nee_light(const Light& light, const Vec3& p, const SurfaceAt* at, RngStream& rng,
-                   const double* beta, F& f_of, P& pdf_of, RGB& out, std::uint64_t& rays,
-                   int medium, const GuideShare& share) const {
-        const double u1 = rng.uniform(), u2 = rng.uniform();
-        const LightSample ls = light.sample(p, u1, u2, env_normal(at ? &at->n : nullptr));
-        if (!ls.ok) return;
-        if (at && !(dot(ls.wi, at->n) > 0)) return;
-        const RGB fc = f_of(ls.wi);
-        if (!(fc[0] > 0 || fc[1] > 0 || fc[2] > 0)) return;
-        RGB T{1, 1, 1};
-        if (!reaches(light, p, at, ls, medium, T, rays)) return;
-        double w = 1, pl = 1;
-        if (ls.pdf > 0) {
-            pl = sel * ls.pdf;
-            w = share.weight(&light, pl, pdf_of(ls.wi), ls.pdf);
-        } else {
-            pl = sel;
-        }
-        for (int c = 0; c < 3; ++c)
-            out[static_cast<size_t>(c)] += beta[c] * fc[static_cast<size_t>(c)] *
-                                           ls.value[static_cast<size_t>(c)] * w / pl *
-                                           T[static_cast<size_t>(c)];
-    }
-
-    // Whether the shadow ray from p towards the light sample ls reaches the light (`at`: the
-    // surface p lies on, or null inside medium `medium`); T: the transmittance of the
-    // index-matched media it crosses.
-    bool reaches(const Light& light, const Vec3& p, const SurfaceAt* at, const LightSample& ls,
-                 int medium, RGB& T, std::uint64_t& rays) const {
-        // From a surface: from the point itself, its triangle skipped and hits within
-        // single-precision rounding of it (volpath-render-7), or (the option) eps off it along
-        // the normal.
-        const bool offset = at && !opt.rays_from_surface;
-        const Vec3 o = offset ? p + at->n * eps : p;
-        const TriangleRef leaving = at && !offset ? at->triangle : TriangleRef{};
-        const double tmax = std::isfinite(ls.dist) ? ls.dist * (1 - 1e-7) - eps : kInf;
-        // Sphere lights are opaque emitters outside the BVH: one in the way blocks the light
-        // sampled (as it ends a path that meets it). Before volpath-render-4 the environment and
-        // the sun were sampled through them, too bright by their MIS share of the sphere's
-        // solid angle.
-        for (const Light& other : lights)
-            if (&other != &light && other.hit(o, ls.wi) < tmax) return false;
-        T = {1, 1, 1};
-        if (has_passable) return shadow(o, ls.wi, tmax, medium, T, rays, leaving);
-        ++rays;
-        return !es->occluded(o, ls.wi, 0, tmax, leaving);
-    }
-
-    // The hero mixture P(k) q_k of a walk that enters medium md now, with weights ws: the
-    // probabilities the entry will choose the hero with (RenderHero::kThroughputAlbedo), else
-    // the path's own; and of a walk that goes on inside.
-    std::array<double, 3> entry_probabilities(const WalkState<3>& ws, const MediumData& md) const {
-        if (opt.hero == RenderHero::kThroughputAlbedo)
-            return ws.weights.throughput_probabilities(md.region.albedo);
-        return inside_probabilities(ws);
-    }
-    static std::array<double, 3> inside_probabilities(const WalkState<3>& ws) {
-        std::array<double, 3> pq{};
-        for (std::size_t k = 0; k < 3; ++k) pq[k] = ws.weights.prob[k] * ws.weights.q[k];
-        return pq;
-    }
-
-    // The exit guide at vertex g.z of a guided medium md inside `shape` (a scattering vertex, or
-    // one on its boundary from which the walk goes inwards): per guide light whose direction
-    // from the vertex (inwards from a boundary vertex; towards a sphere's
-    // centre, along a disc's axis) leaves the shape within kExitGuideReach of md's smallest
-    // mean free paths, the inside direction that the boundary there refracts along it, and a
-    // concentration from the light's angular radius (shrunk by the refraction) and the spread
-    // of refracted directions over GGX normals of width alpha. A vertex whose ball
-    // (SurfaceDistanceGrid) is wider than the reach has none, without a query.
-    void exit_guide(const MediumData& md, int shape, ExitGuide& g, std::uint64_t& rays) const {
-        g.aimed = true;
-        g.n = 0;
-        const double sigma_min = std::min({md.sigma_t[0], md.sigma_t[1], md.sigma_t[2]});
-        if (!(sigma_min > 0)) return;
-        const double reach = kExitGuideReach / sigma_min;
-        if (!shape_balls.empty()) {
-            if (const auto* balls = shape_balls[static_cast<size_t>(shape)].get()) {
-                Vec3 c;
-                double r = 0;
-                if (balls->ball(g.z, c, r) && r - length(g.z - c) > reach) return;
-            }
-        }
-        const double eta = md.eta;
-        const double spread_rough = 1.5 * md.alpha * std::abs(1 - 1 / eta);
-        for (int j : guide_lights) {
-            Vec3 to;
-            double angle = 0;
-            if (!lights[static_cast<size_t>(j)].cone(g.z, to, angle) || !g.inward(to)) continue;
-            ++rays;
-            const RayHit hit = es->intersect(g.z, to, 0, reach, g.tri);
-            if (!hit.hit() || hit.shape != static_cast<std::uint32_t>(shape)) continue;
-            const Vec3& n = hit.normal;
-            const double cn = dot(to, n);
-            if (!(cn > 0)) continue;
-            Vec3 inside;  // the inside direction that leaves along `to`
-            if (!snell(to, n, 1 / eta, inside)) continue;
-            const double spread = std::max(0.01, std::hypot(angle / eta, spread_rough));  // radians
-            g.light[g.n] = j;
-            g.axis[g.n] = normalize(inside);
-            g.kappa[g.n] = std::min(1e5, 1 / (spread * spread));
-            ++g.n;
-            // A wide lobe about the same axis (volpath-render-11): where the boundary's normal
-            // varies over the lobe's footprint (a bumpy surface), the narrow lobe aims through
-            // one exit point's normal and misses the others that refract towards the light.
-            if (opt.wide_lobes) {
-                g.light[g.n] = j;
-                g.axis[g.n] = g.axis[g.n - 1];
-                g.kappa[g.n] = 1 / (kWideLobeSpread * kWideLobeSpread);
-                ++g.n;
-            }
-        }
-    }
-
-    // The exit guide's estimator at g's vertex, run with probability kExitGuideProb (the one
-    // ExitGuide::density counts): g aimed, its estimate added to out.
-    void run_exit_guide(ExitGuide& g, const MediumData& md, int shape, const double* bs,
-                        RngStream& rng, RGB& out, std::uint64_t& rays) const {
-        if (!(rng.stream_uniform() < kExitGuideProb)) return;
-        exit_guide(md, shape, g, rays);
-        guided_exits(g, md, shape, bs, rng, out, rays);
-    }
-
-    // The guide of diffuse vertex x (normal n, on triangle tri; DiffuseGuide): per guide light,
-    // the direction from x that, refracted into the guided medium it meets first and out of it
-    // again, leaves towards the light: the light's direction corrected kDiffuseGuideAims times
-    // by the difference between it and the way out found (exact for parallel boundaries, close
-    // for a thin medium's). The lobe's width: the light's angular radius and the spread that
-    // GGX normals of width alpha give each refraction (both 1.5 alpha |eta - 1| outside).
-    void diffuse_guide(const Vec3& x, const Vec3& n, TriangleRef tri, DiffuseGuide& g,
-                       std::uint64_t& rays) const {
-        g.n = 0;
-        for (int j : guide_lights) {
-            Vec3 to;
-            double angle = 0;
-            if (!lights[static_cast<size_t>(j)].cone(x, to, angle)) continue;
-            Vec3 a = to;
-            const MediumData* md = nullptr;
-            for (int it = 0; it < kDiffuseGuideAims; ++it) {
-                md = nullptr;
-                if (!(dot(a, n) > 0)) break;
-                ++rays;
-                const RayHit in = es->intersect(x, a, 0, kInf, tri);
-                if (!in.hit()) break;
-                const int mi = shape_medium[in.shape];
-                if (mi < 0 || !media[static_cast<size_t>(mi)].guided) break;
-                const MediumData& m = media[static_cast<size_t>(mi)];
-                const double c1 = dot(a, in.normal);
-                if (!(c1 < 0)) break;
-                Vec3 b;  // a refracted in
-                if (!snell(a, in.normal, 1 / m.eta, b)) break;
-                ++rays;
-                const RayHit out = es->intersect(x + a * in.t, b, 0, kInf, {in.shape, in.triangle});
-                if (!out.hit() || out.shape != in.shape) break;
-                const double c2 = dot(b, out.normal);
-                if (!(c2 > 0)) break;
-                Vec3 c;  // b refracted out
-                if (!snell(b, out.normal, m.eta, c)) break;
-                a = normalize(a + (to - c));
-                md = &m;
-            }
-            if (!md || !(dot(a, n) > 0)) continue;
-            const double rough = 1.5 * md->alpha * std::abs(md->eta - 1);
-            const double spread = std::max(0.01, std::hypot(angle, rough, rough));
-            g.axis[g.n] = a;
-            g.kappa[g.n] = std::min(1e5, 1 / (spread * spread));
-            ++g.n;
-        }
-    }
-
-    // The diffuse guide's estimator at x (the path's weights ws after x's albedo, i.e. times
-    // the diffuse BSDF's value over the cosine's density): per lobe, with probability
-    // kDiffuseGuideProb, a direction w from it; where w meets a guided medium from outside, the
-    // entry's exit guide, every lobe, its density (ExitGuide::prob) that of all the ways to w at x
-    // over the cosine's. An entry beyond max_depth (the diffuse vertex at `depth`, the entry next)
-    // adds nothing.
-    void diffuse_guided(const DiffuseGuide& g, const Vec3& x, const Vec3& n, TriangleRef tri,
-                        const WalkState<3>& ws, int depth, RngStream& rng, RGB& out,
-                        std::uint64_t& rays) const {
-        const bool beyond = opt.max_depth > 0 && depth + 2 >= opt.max_depth;
-        for (int i = 0; i < g.n; ++i) {
-            const double u0 = rng.stream_uniform(), u1 = rng.stream_uniform(),
-                         u2 = rng.stream_uniform();
-            if (beyond || !(u0 < kDiffuseGuideProb)) continue;
-            const Vec3 w = sample_vmf(g.axis[i], g.kappa[i], u1, u2);
-            const double cs = dot(w, n);
-            if (!(cs > 0)) continue;
-            ++rays;
-            const RayHit hit = es->intersect(x, w, 0, kInf, tri);
-            if (!hit.hit()) continue;
-            const int mi = shape_medium[hit.shape];
-            if (mi < 0) continue;
-            const MediumData& md = media[static_cast<size_t>(mi)];
-            if (!md.guided || !(dot(w, hit.normal) < 0)) continue;
-            ExitGuide e =
-                ExitGuide::on_boundary(x + w * hit.t, w, hit.normal, {hit.shape, hit.triangle},
-                                       entry_probabilities(ws, md));
-            exit_guide(md, static_cast<int>(hit.shape), e, rays);
-            if (e.n == 0) continue;
-            e.prob = kExitGuideProb + g.density(w) / (cs / kPi);
-            guided_exits(e, md, static_cast<int>(hit.shape), ws.weights.beta, rng, out, rays);
-        }
-    }
-
-    // The exit guide's estimator at its vertex (weights bs, before the vertex's value, which it
-    // evaluates for its own direction: ExitGuide::value): per lobe, a direction from it, the
-    // flight to the boundary without a collision (the transmittance a weight), NEE of the lobe's
-    // light through the rough boundary there; balance heuristic against the walk's own ways to
-    // the same path (its flight, then NEE or BSDF sampling at the exit).
-    void guided_exits(const ExitGuide& g, const MediumData& md, int shape, const double* bs,
-                      RngStream& rng, RGB& out, std::uint64_t& rays) const {
-        for (int i = 0; i < g.n; ++i) {
-            // From the stream, not a Sobol dimension: the walk's own numbers keep their pairs.
-            const double u1 = rng.stream_uniform(), u2 = rng.stream_uniform(),
-                         u3 = rng.stream_uniform(), u4 = rng.stream_uniform();
-            const Vec3 w = sample_vmf(g.axis[i], g.kappa[i], u1, u2);
-            if (!g.inward(w)) continue;
-            ++rays;
-            const RayHit hit = es->intersect(g.z, w, 0, kInf, g.tri);
-            if (!hit.hit() || hit.shape != static_cast<std::uint32_t>(shape) ||
-                !(dot(w, hit.normal) > 0))
-                continue;
-            const Vec3 x = g.z + w * hit.t;
-            const SurfaceAt at{hit.normal, {hit.shape, hit.triangle}};
-            const Light& light = lights[static_cast<size_t>(g.light[i])];
-            const LightSample ls = light.sample(x, u3, u4, env_normal(&at.n));
-            if (!ls.ok || !(ls.pdf > 0) || !(dot(ls.wi, at.n) > 0)) continue;
-            const Frame fr(at.n);
-            const Vec3 wo_l = fr.local(-w), wi_l = fr.local(ls.wi);
-            const double f =
-                rough_dielectric_f(wo_l, wi_l, md.eta, md.alpha, TransportMode::kRadiance) *
-                std::abs(wi_l.z);
-            if (!(f > 0)) continue;
-            RGB T{1, 1, 1};
-            if (!reaches(light, x, &at, ls, -1, T, rays)) continue;
-            const double denom =
-                g.walk_density(md, w, hit.t) *
-                    (sel * ls.pdf + rough_dielectric_pdf(wo_l, wi_l, md.eta, md.alpha)) +
-                g.density(i, w) * ls.pdf;
-            const double fz = g.value(md, w);
-            for (std::size_t c = 0; c < 3; ++c)
-                out[c] +=
-                    bs[c] * fz * std::exp(-md.sigma_t[c] * hit.t) * f * ls.value[c] * T[c] / denom;
-        }
-    }
-
-    // Emission seen by a ray that left `from` in direction d and escaped (no geometry, no sphere
-    // light): environment and disc lights, weighted against light sampling if NEE was done.
-    void add_escape(const Vec3& from, const Vec3* from_normal, const Vec3& d, bool prev_nee,
-                    double prev_pdf, const double* beta, RGB& out, const GuideShare& share) const {
-        for (const Light& l : lights) {
-            if (l.seen_escaping(d)) {
-                const double pl = l.pdf(from, d, from_normal);
-                const double w = prev_nee ? share.weight(&l, prev_pdf, sel * pl, pl) : 1.0;
-                for (int c = 0; c < 3; ++c)
-                    out[static_cast<size_t>(c)] += beta[c] * l.L[static_cast<size_t>(c)] * w;
-            }
-        }
-    }
-
-    // The state of one camera path (trace): position, direction and weights of the whole path
-    // (ws), where it is, and what the MIS of its next hit needs of the vertex before.
-    struct CameraPath {
-        CameraPath(int hero_, RngStream& rng_, double* T_) : hero(hero_), rng(rng_), T(T_) {}
-        int hero;
-        RngStream& rng;
-        double* T;  // the pixel's tally
-        std::uint64_t rays = 0;
-        WalkState<3> ws;  // position, direction, weights and events of the whole path
-        // Outside media: the triangle the next ray leaves (rays_from_surface), else none.
-        TriangleRef leave;
-        int medium = -1;  // index into media of the medium the path is in
-        int medium_shape = -1;
-        bool prev_nee = false, entered = false, specular_path = false;
-        double prev_pdf = 0;
-        Vec3 nee_pos;     // where NEE was last done (MIS of a light hit found by sampling)
-        Vec3 nee_normal;  // and there the normal of the lit side, if on a surface
-        bool nee_on_surface = false;  // (the environment is sampled about it: Light::sample)
-        int depth = 0;                // surface vertices (medium events do not count)
-        ExitGuide guide;              // of the last vertex a walk went on from (exit_guide)
-        bool guide_armed = false;     // it aims at the boundary the path meets next
-        GuideShare exit_share;        // at the exit the path left by: its part in the next hit
-        bool left_guided = false;     // the path has just left a guided medium (diffuse_guides)
-        DiffuseGuide plate;           // of the last diffuse vertex (diffuse_guides)
-        Vec3 plate_n;                 // and its normal
-        bool plate_armed = false;     // it takes part in the entry the path meets next
-    };
-
-    // Adds a contribution of path c to its pixel's layers. `subsurface`: light that entered a
-    // medium whatever the path so far (an exit guide's estimate at the boundary where the path is
-    // still outside).
-    static void flush(CameraPath& c, const RGB& contribution, bool subsurface = false) {
-        for (int k = 0; k < 3; ++k) {
-            const double v = contribution[static_cast<size_t>(k)];
-            c.T[RenderLayout::kRadiance + k] += v;
-            if (c.entered || subsurface)
-                c.T[RenderLayout::kSubsurface + k] += v;
-            else if (c.specular_path)
-                c.T[RenderLayout::kSpecular + k] += v;
-        }
-    }
-
-    // The next ray outside media leaves the surface at p (triangle tri) on the side of n: from p
-    // itself, that triangle and hits within rounding skipped (volpath-render-7), or (the option)
-    // from eps off it.
-    void leave_outside(CameraPath& c, const Vec3& p, const Vec3& n, TriangleRef tri) const {
-        c.ws.on_surface = false;
-        if (opt.rays_from_surface) {
-            c.ws.p = p;
-            c.leave = tri;
-        } else {
-            c.ws.p = p + n * eps;
-        }
-    }
-
-    // A surface vertex at p (shape `shape`, its normal n), reached along the path's direction
-    // from either side of a medium's boundary or from outside a diffuse surface: the surface
-    // model, NEE, the next direction and the throughput roulette. False: the path ends.
-    bool vertex(CameraPath& c, const Vec3& p, Vec3 n, TriangleRef tri) const {
-        const std::uint32_t shape = tri.shape;
-        const bool guided_arrival = c.guide_armed;
-        c.guide_armed = false;
-        const bool plate_arrival = c.plate_armed, left_guided_arrival = c.left_guided;
-        c.plate_armed = c.left_guided = false;
-        c.exit_share = {};
-        if (opt.max_depth > 0 && c.depth >= opt.max_depth) return false;
-        const int mi = shape_medium[shape];
-        if (mi < 0) {  // diffuse, two-sided
-            if (c.medium >= 0) return false;
-            diffuse_vertex(c, p, n, tri, left_guided_arrival);
-        } else if (!boundary_vertex(c, p, n, tri, mi, guided_arrival, plate_arrival)) {
-            return false;
-        }
-        // Russian roulette on the throughput.
-        double* beta = c.ws.weights.beta;
-        if (c.depth + 1 >= opt.roulette_depth) {
-            const double m = std::max({beta[0], beta[1], beta[2]});
-            if (!(m > 0) || !std::isfinite(m)) return false;
-            if (m < 1) {
-                const double survive = std::max(0.05, m);
-                if (!(c.rng.uniform() < survive)) return false;
-                for (int k = 0; k < 3; ++k) beta[k] /= survive;
-            }
-        }
-        ++c.depth;
-        return true;
-    }
-
-    // vertex() on a diffuse surface: NEE, the cosine-weighted next direction, and straight from a
-    // guided medium's way out the diffuse guide (volpath-render-10).
-    void diffuse_vertex(CameraPath& c, const Vec3& p, Vec3 n, TriangleRef tri,
-                        bool left_guided_arrival) const {
-        RngStream& rng = c.rng;
-        double* beta = c.ws.weights.beta;
-        Vec3& d = c.ws.w;
-        const Vec3 wo = -d;
-        const SceneMaterial& m =
-            scene.materials[static_cast<size_t>(scene.shapes[tri.shape].material)];
-        if (dot(n, wo) < 0) n = -n;
-        const SurfaceAt at{n, tri};
-        RGB e{};
-        nee(
-            p, &at, rng, beta,
+        R.nee(
+            s.p, nullptr, rng, bs,
             [&](const Vec3& wi) {
-                const double cs = std::max(0.0, dot(wi, n)) / kPi;
-                return RGB{m.albedo[0] * cs, m.albedo[1] * cs, m.albedo[2] * cs};
+                const double mu_l = dot(din, wi);
+                return RGB{hg_pdf(md.g[0], mu_l), hg_pdf(md.g[1], mu_l), hg_pdf(md.g[2], mu_l)};
             },
-            [&](const Vec3& wi) { return std::max(0.0, dot(wi, n)) / kPi; }, e, c.rays);
+            [&](const Vec3& wi) { return phase_mix(s, dot(din, wi)); }, e, c.rays, c.medium);
         flush(c, e);
-        const double u1 = rng.uniform(), u2 = rng.uniform();
-        const Vec3 wl = sample_cosine_hemisphere(u1, u2);
-        d = Frame(n).world(wl);
-        c.prev_pdf = wl.z / kPi;
-        c.prev_nee = true;
-        c.nee_pos = p;
-        c.nee_normal = n;
-        c.nee_on_surface = true;
-        for (int k = 0; k < 3; ++k) beta[k] *= m.albedo[static_cast<size_t>(k)];
-        // Straight from a guided medium's way out: the diffuse guide (volpath-render-10).
-        if (left_guided_arrival && opt.diffuse_guides && opt.boundary_guides &&
-            opt.rays_from_surface) {
-            diffuse_guide(p, n, tri, c.plate, c.rays);
-            if (c.plate.n > 0) {
-                RGB g{};
-                diffuse_guided(c.plate, p, n, tri, c.ws, c.depth, rng, g, c.rays);
-                flush(c, g, true);
-                c.plate_n = n;
-                c.plate_armed = true;
-            }
-        }
-        leave_outside(c, p, n, tri);
     }
-
-    // vertex() on the dielectric boundary of medium mi: a smooth one's Fresnel choice, or a rough
-    // one's NEE, exit guide and BSDF sample (rough_boundary); then into the medium or out of it.
-    // False: the path ends.
-    bool boundary_vertex(CameraPath& c, const Vec3& p, const Vec3& n, TriangleRef tri, int mi,
-                         bool guided_arrival, bool plate_arrival) const {
-        const std::uint32_t shape = tri.shape;
-        double* beta = c.ws.weights.beta;
-        Vec3& d = c.ws.w;  // fresnel_reflects and rough_boundary turn it
-        const MediumData& md = media[static_cast<size_t>(mi)];
-        const bool outside = dot(-d, n) > 0;
-        bool transmitted = false, reflected = false;
-        ExitGuide here;  // this vertex's exit guide (rough boundaries)
-        bool here_guided = false;
-        if (md.alpha == 0) {
-            // The smooth boundary of every engine's walk (walk_mesh_medium's too).
-            const double eta = md.eta;  // inside over outside (outside index 1)
-            const double eta_side = outside ? eta : 1 / eta;
-            if (fresnel_reflects(d, outside ? -n : n, eta_side, c.rng)) {
-                reflected = true;
-            } else {
-                for (int k = 0; k < 3; ++k) beta[k] /= eta_side * eta_side;  // radiance
-                transmitted = true;
-            }
-            // An index-matched boundary is no vertex: NEE before it still stands.
-            if (!passable(mi)) c.prev_nee = false;
-        } else if (!rough_boundary(c, p, n, tri, md, outside, guided_arrival, plate_arrival, here,
-                                   here_guided, reflected, transmitted)) {
-            return false;
-        }
-        if (c.depth == 0 && reflected) c.specular_path = true;
-        if (transmitted) {
-            if (c.medium < 0) {
-                c.medium = mi;
-                c.medium_shape = static_cast<int>(shape);
-                if (opt.hero == RenderHero::kThroughputAlbedo) {
-                    // From the stream, not a Sobol dimension: the walk's first numbers keep the
-                    // pairs they had.
-                    const double u = c.rng.stream_uniform();
-                    c.ws.weights.choose_hero_by_throughput(md.region.albedo,
-                                                           c.entered ? u : (c.hero + u) / 3);
-                }
-                c.entered = true;
-            } else {
-                c.medium = -1;
-                c.medium_shape = -1;
-            }
-        }
-        if (c.medium >= 0) {
-            // Into a medium (entering, or reflected inside): from the surface point itself,
-            // skipping hits closer than eps. An origin moved off the surface would start every
-            // walk eps deep, a bias of sigma_t eps (measured: 3.7 % of the single scattering of
-            // an index-matched half-space with sigma_t 1/mm at eps = 4e-5 of a 1 m scene).
-            c.ws.p = p;
-            c.ws.on_surface = true;
-            // The walk goes on from this vertex of a rough boundary: its exit guide (above)
-            // takes part in the MIS of the exit it reaches straight from here.
-            if (here_guided) {
-                c.guide = here;
-                c.guide_armed = true;
-            }
-        } else {
-            leave_outside(c, p, dot(d, n) > 0 ? n : -n, tri);
-        }
-        return true;
-    }
-
-    // boundary_vertex() on a rough (GGX) boundary: NEE through it, this vertex's exit guide
-    // (here, here_guided), the BSDF sample. False: the path ends.
-    bool rough_boundary(CameraPath& c, const Vec3& p, const Vec3& n, TriangleRef tri,
-                        const MediumData& md, bool outside, bool guided_arrival, bool plate_arrival,
-                        ExitGuide& here, bool& here_guided, bool& reflected,
-                        bool& transmitted) const {
-        RngStream& rng = c.rng;
-        double* beta = c.ws.weights.beta;
-        Vec3& d = c.ws.w;
-        const std::uint32_t shape = tri.shape;
-        const Vec3 wo = -d;
-        const Frame fr(n);
-        const Vec3 wo_l = fr.local(wo);
-        const double eta = md.eta;  // inside over outside (outside index 1)
-        // Light sampled at the first boundary from outside is its reflection: the "specular"
-        // layer's (without this it went into "radiance" only).
-        const bool first_reflection = c.depth == 0 && outside && !c.entered;
-        if (first_reflection) c.specular_path = true;
-        const SurfaceAt at{n, tri};
-        // Straight from a guided vertex to this exit: the guide's part.
-        GuideShare share;
-        if (guided_arrival && !outside) {
-            if (!c.guide.aimed) exit_guide(md, c.medium_shape, c.guide, c.rays);
-            share = share_of(c.guide, md, lights, d, length(p - c.guide.z));
-        }
-        RGB e{};
-        nee(
-            p, &at, rng, beta,
-            [&](const Vec3& wi) {
-                const double f = rough_dielectric_f(wo_l, fr.local(wi), eta, md.alpha,
-                                                    TransportMode::kRadiance) *
-                                 std::abs(dot(wi, n));
-                return RGB{f, f, f};
-            },
-            [&](const Vec3& wi) { return rough_dielectric_pdf(wo_l, fr.local(wi), eta, md.alpha); },
-            e, c.rays, -1, share);
-        flush(c, e);
-        // The exit guide of this vertex (volpath-render-9), as at a scattering vertex: the light
-        // that crosses the medium from here to the way out without a collision, an estimator of
-        // its own whatever the walk's sample below does (enter or go on inside, or not). Not
-        // where the exit it aims at would lie beyond max_depth.
-        here_guided = md.guided && opt.boundary_guides &&
-                      !(opt.max_depth > 0 && c.depth + 1 >= opt.max_depth);
-        if (here_guided) {
-            // The hero mixture of the walk from here: the one inside, or the probabilities the
-            // entry will choose the hero with.
-            here = ExitGuide::on_boundary(
-                p, d, n, tri, outside ? entry_probabilities(c.ws, md) : inside_probabilities(c.ws));
-            // An entry straight from a diffuse vertex with a guide: that guide's lobes are one
-            // more way to this guide's paths.
-            if (plate_arrival && outside) {
-                const double pc = std::max(0.0, dot(d, c.plate_n)) / kPi;
-                if (pc > 0) here.prob += c.plate.density(d) / pc;
-            }
-            RGB g{};
-            run_exit_guide(here, md, static_cast<int>(shape), beta, rng, g, c.rays);
-            flush(c, g, true);
-        }
-        if (first_reflection) c.specular_path = false;  // decided by the sample below
-        const double uc = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
-        const auto smp =
-            sample_rough_dielectric(wo_l, eta, md.alpha, uc, u1, u2, TransportMode::kRadiance);
-        if (!smp) return false;
-        const double wgt = smp->f * std::abs(smp->wi.z) / smp->pdf;
-        for (int k = 0; k < 3; ++k) beta[k] *= wgt;
-        d = fr.world(smp->wi);
-        c.prev_pdf = smp->pdf;
-        c.prev_nee = true;
-        c.nee_pos = p;
-        c.nee_normal = n;
-        c.nee_on_surface = true;
-        reflected = smp->reflection;
-        transmitted = !smp->reflection;
-        if (transmitted && !outside) {
-            c.exit_share = share;
-            c.left_guided = md.guided;
-        }
-        return true;
-    }
-
-    // Inside a medium: what the walk does at its boundary (vertex()), at its scattering vertices
-    // (NEE inside index-matched media, MIS with phase sampling; the exit guide behind rough
-    // boundaries) and after sampling the phase function.
-    struct PathHooks : WalkHooks {
-        const Renderer& R;
-        CameraPath& c;
-        PathHooks(const Renderer& r, CameraPath& path) : R(r), c(path) {}
-        // The density with which phase sampling picks a direction, as the hero MIS sees it: the
-        // mixture of the channels' phase functions weighted by their probabilities to be the
-        // hero times their path densities so far (prob x q), which does not depend on the hero;
-        // the MIS weights of NEE against phase sampling use it, so that they sum to one
-        // whichever channel is the hero (with per-channel g too).
-        double phase_mix(const WalkState<3>& s, double mu_l) const {
-            const MediumData& md = R.media[static_cast<size_t>(c.medium)];
-            if (md.same_g) return hg_pdf(md.g[0], mu_l);
-            const double* qq = s.weights.q;
-            const auto& pr = s.weights.prob;
-            double v = 0, sum = 0;
-            for (int k = 0; k < 3; ++k) {
-                const double wc = pr[static_cast<size_t>(k)] * qq[k];
-                sum += wc;
-                v += wc * hg_pdf(md.g[static_cast<size_t>(k)], mu_l);
-            }
-            return v / sum;
-        }
-        BoundaryAction boundary(WalkState<3>& s, const WalkBoundary& b, RngStream&) {
-            if (!R.vertex(c, s.p, b.n, TriangleRef{b.shape, b.triangle}))
-                return BoundaryAction::kEnd;
-            return c.medium >= 0 ? BoundaryAction::kReflect : BoundaryAction::kExit;
-        }
-        // Analog absorption by the hero's albedo. Where NEE is done at a vertex (index-matched
-        // media) the decision waits until after it, and the NEE carries the survival
-        // probability instead: its expectation over the decision, so that light is collected at
-        // every collision, not only at the few that survive in an absorbing medium. Behind a
-        // rough boundary the exit guide's estimator is done there the same way.
-        bool vertex_nee(const WalkState<3>&) const {
-            return R.passable(c.medium) || R.media[static_cast<size_t>(c.medium)].guided;
-        }
-        void at_vertex(WalkState<3>& s, double survive, RngStream& rng) {
-            const MediumData& md = R.media[static_cast<size_t>(c.medium)];
-            const double* beta = s.weights.beta;
-            const double bs[3] = {beta[0] * survive, beta[1] * survive, beta[2] * survive};
-            const Vec3 din = s.w;
-            RGB e{};
-            if (md.guided) {
-                // The exit it aims at is a surface vertex: none beyond max_depth (where the path
-                // ends at its next vertex, before any use of the guide).
-                if (R.opt.max_depth > 0 && c.depth >= R.opt.max_depth) return;
-                ExitGuide& guide = c.guide;
-                guide.aimed = false;
-                guide.prob = kExitGuideProb;
-                guide.surface = false;
-                guide.tri = TriangleRef{};
-                guide.z = s.p;
-                guide.din = s.w;
-                guide.pq = R.inside_probabilities(s);
-                R.run_exit_guide(guide, md, c.medium_shape, bs, rng, e, c.rays);
-                flush(c, e);
-                return;
-            }
-            R.nee(
-                s.p, nullptr, rng, bs,
-                [&](const Vec3& wi) {
-                    const double mu_l = dot(din, wi);
-                    return RGB{hg_pdf(md.g[0], mu_l), hg_pdf(md.g[1], mu_l), hg_pdf(md.g[2], mu_l)};
-                },
-                [&](const Vec3& wi) { return phase_mix(s, dot(din, wi)); }, e, c.rays, c.medium);
-            flush(c, e);
-        }
-        void scattered(const WalkState<3>& s, double mu) {
-            c.guide_armed = R.media[static_cast<size_t>(c.medium)].guided;
-            c.prev_pdf = phase_mix(s, mu);
-            c.prev_nee = R.passable(c.medium);
-            c.nee_pos = s.p;
-            c.nee_on_surface = false;
-        }
-    };
-
-    // One camera path through pixel (x, y); tally += its contributions. Outside media the
-    // loop below; inside a medium the one walk of volpath/walk.h, whose boundary hook is the
-    // same surface vertex as a hit from outside.
-    std::uint64_t trace(int x, int y, int hero, RngStream& rng, double* T) const {
-        CameraPath c(hero, rng, T);
-        const double jx = rng.uniform(), jy = rng.uniform();
-        const double ndc_x = (2 * (x + jx) / width - 1) * tan_half * aspect;
-        const double ndc_y = (1 - 2 * (y + jy) / height) * tan_half;
-        WalkState<3>& ws = c.ws;
-        ws.p = cam_pos;
-        ws.w = normalize(cam_f + cam_r * ndc_x + cam_u * ndc_y);
-        ws.weights.hero = hero;
-        ws.weights.start(1.0);
-        Vec3& o = ws.p;
-        Vec3& d = ws.w;
-        const double* beta = ws.weights.beta;
-        PathHooks hooks(*this, c);
-        WalkRules rules;
-        rules.flight = FlightRule::kResample;
-        rules.long_events = opt.long_path_events;
-
-        while (c.depth < 100000) {
-            if (c.medium >= 0) {
-                MeshGeometry geo;
-                geo.scene = es.get();
-                geo.shape = static_cast<std::uint32_t>(c.medium_shape);
-                geo.inside = media[static_cast<size_t>(c.medium)].region;
-                if (!shape_balls.empty())
-                    geo.balls = shape_balls[static_cast<size_t>(c.medium_shape)].get();
-                rules.absorption = media[static_cast<size_t>(c.medium)].absorption;
-                const std::uint64_t before = ws.queries;
-                const WalkEnd end = walk(geo, ws, rules, rng, hooks);
-                c.rays += ws.queries - before;
-                if (end != WalkEnd::kExited) return c.rays;
-                continue;
-            }
-            ++c.rays;
-            const RayHit hit = es->intersect(o, d, ws.on_surface ? eps : 0.0, kInf, c.leave);
-            c.leave = TriangleRef{};
-            if (c.depth == 0 && hit.hit()) {
-                T[RenderLayout::kDepth] += hit.t;
-                for (int k = 0; k < 3; ++k) T[RenderLayout::kNormal + k] += hit.normal[k];
-            }
-            // Sphere lights are not in the BVH: the nearest of them, if before the geometry.
-            double tl = kInf;
-            const Light* hit_light = nearest_light_surface(lights, o, d, tl);
-            if (hit_light && tl < hit.t) {
-                const double pl = hit_light->pdf(c.nee_pos, d);
-                const double w =
-                    c.prev_nee ? c.exit_share.weight(hit_light, c.prev_pdf, sel * pl, pl) : 1.0;
-                RGB e{};
-                for (int k = 0; k < 3; ++k)
-                    e[static_cast<size_t>(k)] = beta[k] * hit_light->L[static_cast<size_t>(k)] * w;
-                flush(c, e);
-                return c.rays;
-            }
-            if (!hit.hit()) {
-                RGB e{};
-                add_escape(c.nee_pos, env_normal(c.nee_on_surface ? &c.nee_normal : nullptr), d,
-                           c.prev_nee, c.prev_pdf, beta, e, c.exit_share);
-                flush(c, e);
-                return c.rays;
-            }
-            const Vec3 p = o + d * hit.t;
-            if (shape_medium[hit.shape] >= 0 && !(dot(d, hit.normal) < 0)) {
-                // A medium's boundary met from inside while outside. Within a few epsilons: the
-                // restart point slipped across a concave crease of this mesh; cross back and go
-                // on. Farther: a leak; the path ends.
-                if (hit.t < 4 * eps) {
-                    o = p;
-                    ws.on_surface = true;
-                    continue;
-                }
-                return c.rays;
-            }
-            if (!vertex(c, p, hit.normal, TriangleRef{hit.shape, hit.triangle})) return c.rays;
-        }
-        return c.rays;
+    void scattered(const WalkState<3>& s, double mu) {
+        c.guide_armed = R.media[static_cast<size_t>(c.medium)].guided;
+        c.prev_pdf = phase_mix(s, mu);
+        c.prev_nee = R.passable(c.medium);
+        c.nee_pos = s.p;
+        c.nee_on_surface = false;
     }
 };
+
+// One camera path through pixel (x, y); tally += its contributions. Outside media the
+// loop below; inside a medium the one walk of volpath/walk.h, whose boundary hook is the
+// same surface vertex as a hit from outside.
+std::uint64_t Renderer::trace(int x, int y, int hero, RngStream& rng, double* T) const {
+    CameraPath c(hero, rng, T);
+    const double jx = rng.uniform(), jy = rng.uniform();
+    const double ndc_x = (2 * (x + jx) / width - 1) * tan_half * aspect;
+    const double ndc_y = (1 - 2 * (y + jy) / height) * tan_half;
+    WalkState<3>& ws = c.ws;
+    ws.p = cam_pos;
+    ws.w = normalize(cam_f + cam_r * ndc_x + cam_u * ndc_y);
+    ws.weights.hero = hero;
+    ws.weights.start(1.0);
+    Vec3& o = ws.p;
+    Vec3& d = ws.w;
+    const double* beta = ws.weights.beta;
+    PathHooks hooks(*this, c);
+    WalkRules rules;
+    rules.flight = FlightRule::kResample;
+    rules.long_events = opt.long_path_events;
+
+    while (c.depth < 100000) {
+        if (c.medium >= 0) {
+            MeshGeometry geo;
+            geo.scene = es.get();
+            geo.shape = static_cast<std::uint32_t>(c.medium_shape);
+            geo.inside = media[static_cast<size_t>(c.medium)].region;
+            if (!shape_balls.empty())
+                geo.balls = shape_balls[static_cast<size_t>(c.medium_shape)].get();
+            rules.absorption = media[static_cast<size_t>(c.medium)].absorption;
+            const std::uint64_t before = ws.queries;
+            const WalkEnd end = walk(geo, ws, rules, rng, hooks);
+            c.rays += ws.queries - before;
+            if (end != WalkEnd::kExited) return c.rays;
+            continue;
+        }
+        ++c.rays;
+        const RayHit hit = es->intersect(o, d, ws.on_surface ? eps : 0.0, kInf, c.leave);
+        c.leave = TriangleRef{};
+        if (c.depth == 0 && hit.hit()) {
+            T[RenderLayout::kDepth] += hit.t;
+            for (int k = 0; k < 3; ++k) T[RenderLayout::kNormal + k] += hit.normal[k];
+        }
+        // Sphere lights are not in the BVH: the nearest of them, if before the geometry.
+        double tl = kInf;
+        const Light* hit_light = nearest_light_surface(lights, o, d, tl);
+        if (hit_light && tl < hit.t) {
+            const double pl = hit_light->pdf(c.nee_pos, d);
+            const double w =
+                c.prev_nee ? c.exit_share.weight(hit_light, c.prev_pdf, sel * pl, pl) : 1.0;
+            RGB e{};
+            for (int k = 0; k < 3; ++k)
+                e[static_cast<size_t>(k)] = beta[k] * hit_light->L[static_cast<size_t>(k)] * w;
+            flush(c, e);
+            return c.rays;
+        }
+        if (!hit.hit()) {
+            RGB e{};
+            add_escape(c.nee_pos, env_normal(c.nee_on_surface ? &c.nee_normal : nullptr), d,
+                       c.prev_nee, c.prev_pdf, beta, e, c.exit_share);
+            flush(c, e);
+            return c.rays;
+        }
+        const Vec3 p = o + d * hit.t;
+        if (shape_medium[hit.shape] >= 0 && !(dot(d, hit.normal) < 0)) {
+            // A medium's boundary met from inside while outside. Within a few epsilons: the
+            // restart point slipped across a concave crease of this mesh; cross back and go
+            // on. Farther: a leak; the path ends.
+            if (hit.t < 4 * eps) {
+                o = p;
+                ws.on_surface = true;
+                continue;
+            }
+            return c.rays;
+        }
+        if (!vertex(c, p, hit.normal, TriangleRef{hit.shape, hit.triangle})) return c.rays;
+    }
+    return c.rays;
+}
+
+}  // namespace render_detail
+
+namespace {
+
+using render_detail::Renderer;
 
 // Radiance channel i % 3 of pixel i / 3 in the tally (RenderLayout).
 std::size_t radiance_element(std::size_t i) {

@@ -180,9 +180,9 @@ struct RenderOptions : RunControl {
     /// With boundary_guides, a guide at a diffuse vertex that the path reached straight from
     /// the way out of a guided medium: lobes of directions from it that the medium's two
     /// boundaries refract towards a sphere light or a sun disc, each into the entry's exit guide
-    /// (DiffuseGuide in render.cpp). The caustic a thin medium casts on the surface under it,
-    /// seen through the medium, otherwise needs the bounce's cosine to fall into the entry's
-    /// narrow lobe (volpath-render-10; off: volpath-render-9).
+    /// (DiffuseGuide, volpath/render_guides.h). The caustic a thin medium casts on the surface
+    /// under it, seen through the medium, otherwise needs the bounce's cosine to fall into the
+    /// entry's narrow lobe (volpath-render-10; off: volpath-render-9).
     bool diffuse_guides = true;
     /// With exit_guide, beside each guide light's narrow lobe a wide one (0.3 rad) about the
     /// same axis: where the boundary's normal varies over the narrow lobe's footprint (a bumpy

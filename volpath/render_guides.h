@@ -1,17 +1,20 @@
-// The path tracer's guides (volpath/render.cpp): the data of the exit guide behind rough
+// The path tracer's guides (volpath/render_guides.cpp): the data of the exit guide behind rough
 // boundaries (ExitGuide: at scattering vertices, volpath-render-8, and at the boundary's own
 // vertices, volpath-render-9), the share a guide takes in the MIS weights at the exit it aims at
 // (GuideShare, share_of), and the diffuse guide of a vertex straight after the way out of a
 // guided medium (DiffuseGuide, volpath-render-10), with the medium and surface data they read.
-// The renderer's functions that aim and run them (Renderer::exit_guide, run_exit_guide,
-// diffuse_guide, diffuse_guided) are in render.cpp, beside the light sampling they share.
-// Internal to the renderer: included by render.cpp only.
+// The renderer's functions that aim and run them (Renderer::exit_guide, guided_exits,
+// arrival_share, boundary_guide, diffuse_guide, diffuse_guided, run_diffuse_guide) are in
+// render_guides.cpp; run_exit_guide, the coin drawn at every scattering vertex of a guided medium,
+// is inline in renderer.h, as is the shadow ray they share with NEE (Renderer::reaches).
+// Internal to the renderer: included by renderer.h, render.cpp and render_guides.cpp only.
 #pragma once
 
 #include "core/light.h"
 #include "core/vec3.h"
 #include "volpath/density_grid.h"
 #include "volpath/embree_scene.h"
+#include "volpath/microfacet.h"
 #include "volpath/sampling.h"
 #include "volpath/walk.h"
 
