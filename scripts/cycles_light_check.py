@@ -267,33 +267,7 @@ def build(name, a):
     scene.collection.objects.link(co)
     scene.camera = co
 
-    r = scene.render
-    r.engine = "CYCLES"
-    r.resolution_x = r.resolution_y = a.size
-    r.resolution_percentage = 100
-    if a.threads > 0:
-        r.threads_mode = "FIXED"
-        r.threads = a.threads
-    cy = scene.cycles
-    cy.device = "CPU"
-    cy.samples = a.spp
-    cy.use_animated_seed = False
-    cy.use_adaptive_sampling = False
-    cy.use_denoising = False
-    cy.max_bounces = 1024
-    cy.diffuse_bounces = 1024
-    cy.sample_clamp_direct = 0.0
-    cy.sample_clamp_indirect = 0.0
-    cy.light_sampling_threshold = 0.0
-    cy.pixel_filter_type = "BOX"
-    cy.filter_width = 1.0
-    scene.view_settings.view_transform = "Standard"
-    scene.view_settings.look = "None"
-    s = r.image_settings
-    s.file_format = "OPEN_EXR"
-    s.color_depth = "32"
-    s.color_mode = "RGB"
-    r.use_file_extension = False
+    cycles_render.unbiased_settings(scene, a.size, a.size, a.spp, a.threads, 0)
     return scene
 
 

@@ -280,6 +280,54 @@ def look_at_matrix(pos, target, up):
     return m
 
 
+def unbiased_settings(scene, width, height, spp, threads, seed):
+    """Cycles as an unbiased reference (also scripts/cycles_light_check.py): every bounce limit at
+    Cycles' maximum, no clamping, no glossy filter, caustics on, no adaptive sampling, no
+    denoising, light threshold 0, a box pixel filter one pixel wide, linear float EXR output."""
+    r = scene.render
+    r.engine = "CYCLES"
+    r.resolution_x = width
+    r.resolution_y = height
+    r.resolution_percentage = 100
+    r.film_transparent = False
+    r.use_persistent_data = False
+    if threads > 0:
+        r.threads_mode = "FIXED"
+        r.threads = threads
+    cy = scene.cycles
+    cy.device = "CPU"
+    cy.samples = spp
+    cy.seed = seed
+    cy.use_animated_seed = False
+    cy.use_adaptive_sampling = False
+    cy.use_denoising = False
+    cy.max_bounces = 1024
+    cy.diffuse_bounces = 1024
+    cy.glossy_bounces = 1024
+    cy.transmission_bounces = 1024
+    cy.volume_bounces = 1024
+    cy.transparent_max_bounces = 1024
+    cy.sample_clamp_direct = 0.0
+    cy.sample_clamp_indirect = 0.0
+    cy.blur_glossy = 0.0
+    cy.caustics_reflective = True
+    cy.caustics_refractive = True
+    cy.light_sampling_threshold = 0.0
+    cy.pixel_filter_type = "BOX"
+    cy.filter_width = 1.0
+    cy.film_exposure = 1.0
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+    s = r.image_settings
+    s.file_format = "OPEN_EXR"
+    s.color_depth = "32"
+    s.color_mode = "RGB"
+    s.exr_codec = "ZIP"
+    r.use_file_extension = False
+
+
 def main():
     a = args_after_dashes()
     with open(a.scene_json) as f:
@@ -353,42 +401,9 @@ def main():
     scene.collection.objects.link(cob)
     scene.camera = cob
 
+    unbiased_settings(scene, a.width or c["width"], a.height or c["height"], a.spp, a.threads,
+                      a.seed)
     r = scene.render
-    r.engine = "CYCLES"
-    r.resolution_x = a.width or c["width"]
-    r.resolution_y = a.height or c["height"]
-    r.resolution_percentage = 100
-    r.film_transparent = False
-    r.use_persistent_data = False
-    if a.threads > 0:
-        r.threads_mode = "FIXED"
-        r.threads = a.threads
-    cy = scene.cycles
-    cy.device = "CPU"
-    cy.samples = a.spp
-    cy.seed = a.seed
-    cy.use_animated_seed = False
-    cy.use_adaptive_sampling = False
-    cy.use_denoising = False
-    cy.max_bounces = 1024
-    cy.diffuse_bounces = 1024
-    cy.glossy_bounces = 1024
-    cy.transmission_bounces = 1024
-    cy.volume_bounces = 1024
-    cy.transparent_max_bounces = 1024
-    cy.sample_clamp_direct = 0.0
-    cy.sample_clamp_indirect = 0.0
-    cy.blur_glossy = 0.0
-    cy.caustics_reflective = True
-    cy.caustics_refractive = True
-    cy.light_sampling_threshold = 0.0
-    cy.pixel_filter_type = "BOX"
-    cy.filter_width = 1.0
-    cy.film_exposure = 1.0
-    scene.view_settings.view_transform = "Standard"
-    scene.view_settings.look = "None"
-    scene.view_settings.exposure = 0.0
-    scene.view_settings.gamma = 1.0
     s = r.image_settings
     if a.passes:
         vl = scene.view_layers[0]
@@ -399,11 +414,7 @@ def main():
         s.file_format = "OPEN_EXR_MULTILAYER"
     else:
         s.file_format = "OPEN_EXR"
-    s.color_depth = "32"
-    s.color_mode = "RGB"
-    s.exr_codec = "ZIP"
     r.filepath = os.path.abspath(a.out_exr)
-    r.use_file_extension = False
     start = time.monotonic()
     bpy.ops.render.render(write_still=True)
     seconds = time.monotonic() - start
