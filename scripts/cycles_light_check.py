@@ -164,16 +164,7 @@ def build(name, a):
     scene = bpy.context.scene
     from mathutils import Vector
 
-    mat = bpy.data.materials.new("lambert")
-    mat.use_nodes = True
-    nt = mat.node_tree
-    for n in list(nt.nodes):
-        nt.nodes.remove(n)
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
-    bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    bsdf.inputs["Color"].default_value = (RHO, RHO, RHO, 1)
-    bsdf.inputs["Roughness"].default_value = 0.0
-    nt.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    mat = cycles_render.diffuse_material({"name": "lambert", "albedo": (RHO, RHO, RHO)})
     s = 1.5
     me = bpy.data.meshes.new("plane")
     me.from_pydata([(-s, -s, 0), (s, -s, 0), (s, s, 0), (-s, s, 0)], [], [(0, 1, 2, 3)])
@@ -235,12 +226,7 @@ def build(name, a):
             order = np.random.default_rng(a.mesh_shuffle).permutation(len(faces))
             sm = bpy.data.meshes.new("emitter_shuffled")
             sm.from_pydata(verts, [], [faces[i] for i in order])
-        em_mat = bpy.data.materials.new("emission")
-        em_mat.use_nodes = True
-        ent = em_mat.node_tree
-        for n in list(ent.nodes):
-            ent.nodes.remove(n)
-        o2 = ent.nodes.new("ShaderNodeOutputMaterial")
+        em_mat, ent, o2 = cycles_render.node_material("emission")
         em = ent.nodes.new("ShaderNodeEmission")
         em.inputs["Color"].default_value = (1, 1, 1, 1)
         em.inputs["Strength"].default_value = L_MESH
