@@ -319,9 +319,9 @@ std::string with_error(double value, double se) {
     const int digits = std::max(0, 1 - static_cast<int>(std::floor(std::log10(se))));
     char buf[80];
     if (digits > 12)
-        std::snprintf(buf, sizeof buf, "%.3g &plusmn; %.2g", value, se);
+        std::snprintf(buf, sizeof buf, "%.3g \u00b1 %.2g", value, se);
     else
-        std::snprintf(buf, sizeof buf, "%.*f &plusmn; %.*f", digits, value, digits, se);
+        std::snprintf(buf, sizeof buf, "%.*f \u00b1 %.*f", digits, value, digits, se);
     return buf;
 }
 

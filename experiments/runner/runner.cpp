@@ -688,10 +688,9 @@ bool run_plugin_studies(ExperimentRun& r, const RunOptions& o, const ArtifactCac
         r.metrics.insert(r.metrics.end(), sr.metrics.begin(), sr.metrics.end());
         if (!o.quiet && !sr.summary.empty())
             std::printf("  %s: %s\n", s.name.c_str(), sr.summary.c_str());
-        // Its plots, once the tables they read are written (an empty request list draws none).
-        PlotResult plots;
-        if (!sr.plots.empty()) plots = draw_plots(sr.plots, stage, cache, o.quiet);
-        report.sections.push_back({std::move(sr.section), std::move(plots)});
+        // Its plots, once the tables they read are written (none asked for: none drawn).
+        report.sections.push_back(
+            {std::move(sr.section), draw_plots(sr.plots, stage, cache, o.quiet)});
     }
     return true;
 }

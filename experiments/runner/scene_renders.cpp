@@ -7,8 +7,6 @@
 #include "core/hash.h"
 #include "core/provenance.h"
 #include "core/scene.h"
-#include "core/stats.h"
-#include "experiments/runner/report.h"
 #include "experiments/runner/runner.h"
 #include "volpath/render.h"
 

@@ -47,7 +47,6 @@
 // StudyResult::plots and shown in the section).
 #include "approx/model_spec.h"
 #include "approx/munoz.h"
-#include "core/atomic_file.h"
 #include "core/build_info.h"
 #include "core/error.h"
 #include "core/film_image.h"
@@ -228,14 +227,6 @@ double percentile(std::vector<double> v, double q) {
     const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())));
     std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
     return v[k];
-}
-
-/// with_error's text without its HTML entity (the report's table writer escapes cells).
-std::string plain_with_error(double value, double se) {
-    std::string s = with_error(value, se);
-    const size_t at = s.find("&plusmn;");
-    if (at != std::string::npos) s.replace(at, 8, "\u00b1");
-    return s;
 }
 
 /// sRGB PNG (core/film_image.h srgb8, as the previews) of an RGB layer times `gain`, optionally
@@ -1157,7 +1148,7 @@ StudySection RealtimeRun::section(const std::vector<SceneScores>& all,
             csv << csv_field(sc.model);
             for (const auto& e : sc.vs_reference) csv << "," << format_g(e.rms, 3);
             for (const auto& e : sc.vs_volpath)
-                csv << "," << csv_field(plain_with_error(e.rms, e.rms_se));
+                csv << "," << csv_field(with_error(e.rms, e.rms_se));
             csv << "," << format_g(sc.sss_ms, 3) << "," << format_g(sc.frame_ms, 4) << "\n";
         }
         errors.tables.push_back({ss.scene, csv.str()});
